@@ -1,0 +1,79 @@
+# texel: the Single-Pitch Texel generator, one code base for CPython (numpy),
+# MicroPython (with or without ulab) and CircuitPython.
+#
+#   texel.render(params, draws=None, engine=None)  -> friction map in [0, 1]
+#   texel.render_u16(params, ...)                   -> uint16 map (0..65535)
+#   texel.plan(params, draws=None)                  -> per-texel pitches/phases
+#   texel.engines()                                 -> engines usable here
+#   texel.reference(name, length_samples)           -> reference textures
+from .params import validate, FORMAT_VERSION, DX_MM, NYQUIST_CPMM
+from .plan import Plan
+from . import compat
+
+__version__ = "0.1.0"
+
+_ENGINE_ORDER = ("numpy", "int", "ulab", "pure")
+
+
+def _engine_module(name):
+    if name == "numpy":
+        from . import engine_numpy as m
+        return m if m.AVAILABLE else None
+    if name == "ulab":
+        from . import engine_ulab as m
+        return m if m.available() else None
+    if name == "int":
+        from . import engine_int as m
+        return m
+    if name == "pure":
+        from . import engine_pure as m
+        return m
+    raise ValueError("engine: unknown engine %r (known: %s)" % (name, ", ".join(_ENGINE_ORDER)))
+
+
+def engines():
+    """Names of the engines usable on this interpreter, preferred first:
+    numpy (CPython float64 reference), int (fixed point, viper where the port
+    has it), ulab (float32 vectors), pure (interpreter floats)."""
+    return [n for n in _ENGINE_ORDER if _engine_module(n) is not None]
+
+
+def default_engine():
+    return engines()[0]
+
+
+def _engine(engine):
+    if engine is None:
+        engine = default_engine()
+    m = _engine_module(engine)
+    if m is None:
+        raise ValueError("engine: %r is not available on %s (available: %s)"
+                         % (engine, compat.IMPL, ", ".join(engines())))
+    return m
+
+
+def plan(params, draws=None):
+    """Validate params and compute the per-texel plan (pitches f in cycles/mm,
+    start phases phi in rad, fraction above Nyquist)."""
+    return Plan(validate(params), draws)
+
+
+def render(params, draws=None, engine=None):
+    """The friction map gain*(y+1)/2, length_samples long, values in [0, 1].
+
+    draws=(u, z_sequence) replays logged random draws instead of the seeded
+    generator. The container is the engine's: numpy float64 array (numpy),
+    ulab float array (ulab), array of floats (int, pure)."""
+    m = _engine(engine)
+    return m.render(plan(params, draws))
+
+
+def render_u16(params, draws=None, engine=None, out=None):
+    """The map as uint16, 0..65535 = friction 0..1 (2 bytes/sample)."""
+    m = _engine(engine)
+    return m.render_u16(plan(params, draws), out)
+
+
+def reference(name, length_samples=9600):
+    from .reference import reference as _ref
+    return _ref(name, length_samples)

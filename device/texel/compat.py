@@ -1,0 +1,93 @@
+# Every difference between CPython, MicroPython and CircuitPython lives here.
+# Features are detected, never inferred from version numbers.
+import sys
+
+IMPL = sys.implementation.name          # "cpython", "micropython", "circuitpython"
+ON_DEVICE_RUNTIME = IMPL != "cpython"
+
+try:
+    from micropython import const
+except ImportError:                     # CPython
+    def const(x):
+        return x
+
+try:
+    import micropython as _mp
+except ImportError:
+    _mp = None
+
+# Float precision of the running interpreter: 53 bits (CPython, unix port) or
+# 24 bits (rp2/stm32 MicroPython builds use float32; CircuitPython is 30-bit).
+def _mantissa_bits():
+    x = 1.0
+    bits = 0
+    while 1.0 + x != 1.0 and bits < 80:
+        x = x / 2.0
+        bits += 1
+    return bits
+FLOAT_BITS = _mantissa_bits()
+
+# numpy (CPython) and ulab (MicroPython/CircuitPython builds that include it).
+try:
+    import numpy as numpy_mod
+    if not hasattr(numpy_mod, "float64"):   # a ulab stand-in installed as numpy
+        numpy_mod = None
+except ImportError:
+    numpy_mod = None
+
+
+def ulab_numpy():
+    """ulab's numpy module, or None. Looked up on each call so a test can install
+    a stand-in after import."""
+    try:
+        from ulab import numpy as unp
+        return unp
+    except ImportError:
+        return None
+
+
+def ulab_version():
+    try:
+        import ulab
+        return getattr(ulab, "__version__", "?")
+    except ImportError:
+        return None
+
+
+# viper: compiled integer code (MicroPython with a native emitter). Probe by
+# compiling a tiny function: the decorator exists on ports without an emitter too.
+def _detect_viper():
+    # micropython.viper is not an attribute: the compiler handles it.
+    if _mp is None:
+        return False
+    try:
+        exec("import micropython\n@micropython.viper\ndef _t(a:int)->int:\n    return a+1\n_r=_t(1)")
+        return True
+    except Exception:
+        return False
+HAS_VIPER = _detect_viper()
+
+try:
+    from array import array
+except ImportError:                     # pragma: no cover - every target has array
+    array = None
+
+
+def u16_buffer(n):
+    """A zeroed uint16 buffer of n samples (2 bytes each)."""
+    return array("H", bytes(2 * n))
+
+
+def float_buffer(n):
+    # 'f' is float32 (4 bytes/sample): the board's own precision; 'd' keeps the
+    # host's float64 exact. Use on the host only for long maps.
+    return array("d" if FLOAT_BITS > 24 else "f", bytes((8 if FLOAT_BITS > 24 else 4) * n))
+
+
+def heap_free():
+    try:
+        import gc
+        gc.collect()
+        return gc.mem_free()
+    except (ImportError, AttributeError):
+        return None
