@@ -42,25 +42,37 @@ def _frac_u28(x):
 class Plan:
     """Per-texel pitches and phases of one parameter set."""
 
-    def __init__(self, p, draws=None):
+    def __init__(self, p, draws=None, ftype=float):
+        # ftype: the float type of the plan arithmetic. Python float is the
+        # interpreter's own (float32 on boards); tests pass numpy.float32 on
+        # CPython to run this exact code the way a float32 board does.
         self.params = p
         self.n = p["length_samples"]
         self.L = p["texel_samples"]
         self.count = _params.texel_count(p)
         self.gain = p["gain"]
-        mu = p["pitch_db"] / 10.0                        # log10 of P in c/mm
-        sigma = 10.0 ** (p["irregularity_db"] / 10.0)    # decades
-        q = p["quant_db"] / 10.0                         # decades, 0 = off
+        F = ftype
+        mu = F(p["pitch_db"]) / 10.0                     # log10 of P in c/mm
+        sigma = 10.0 ** (F(p["irregularity_db"]) / 10.0)  # decades
+        q = F(p["quant_db"]) / 10.0                      # decades, 0 = off
         cap = p["band_limit_cpmm"]
+        if cap is not None:
+            cap = F(cap)
         count = self.count
         if draws is None:
             rng = Rng(p["seed"])
             hi, lo = rng.next_hi_lo()
-            u = (hi * 65536.0 + (lo + 0.5)) / 4294967296.0
+            u = (F(hi) * 65536.0 + (lo + 0.5)) / 4294967296.0
             t28 = phase_fraction_u28(hi, lo)
-            draw_z = rng.normal
+            if F is float:
+                draw_z = rng.normal
+            else:
+                def draw_z():
+                    return F(rng.normal())
         else:
             u, zs = _check_draws(draws, count)
+            u = F(u)
+            zs = [F(z) for z in zs]
             t28 = _frac_u28(u)
             draw_z = iter(zs).__next__
         self.u = u
@@ -69,7 +81,7 @@ class Plan:
         self.t28 = ta = _int_buffer(count)       # start phase, 2^-28 turns
         self.d28 = da = _int_buffer(count)       # step per sample, 2^-28 turns
         L = self.L
-        Lf = float(L)
+        Lf = F(L)
         phase = u * _TWO_PI     # MATLAB: rand()*2*pi()
         above = 0
         fprev = 0.0
