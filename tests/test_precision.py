@@ -144,3 +144,17 @@ def test_long_map_integer_phase_does_not_drift_like_float32(refs):
     assert naive_err > 0.5                      # drifted to an unrelated waveform
     assert ours32 < naive_err / 10
     assert ours64 < pr.PWM_STEP
+
+
+@pytest.mark.parametrize("engine", ["int", "pure"])
+def test_out_buffer_checked(engine):
+    from array import array
+    p = {"pitch_db": 6.3, "irregularity_db": -12.9, "length_samples": 100}
+    with pytest.raises(ValueError, match="expected a uint16 buffer"):
+        texel.render_u16(p, engine=engine, out=bytearray(200))
+    with pytest.raises(ValueError, match="holds 50 samples, the map needs 100"):
+        texel.render_u16(p, engine=engine, out=array("H", bytes(100)))
+    buf = array("H", bytes(200))
+    got = texel.render_u16(p, engine=engine, out=buf)
+    assert got is buf
+    assert list(buf) == list(texel.render_u16(p, engine=engine))

@@ -78,6 +78,27 @@ def u16_buffer(n):
     return array("H", bytes(2 * n))
 
 
+def check_u16_out(out, n):
+    """A caller-supplied output buffer must hold n uint16 samples. Probed by
+    writing (the buffer is about to be overwritten anyway): a bytearray or an
+    8-bit array would silently keep only the low byte on MicroPython."""
+    if out is None:
+        return u16_buffer(n)
+    try:
+        m = len(out)
+        out[0] = 65535
+        ok = out[0] == 65535
+        out[0] = 0
+    except (TypeError, ValueError, OverflowError, IndexError):
+        ok = False
+        m = n
+    if not ok:
+        raise ValueError("out: expected a uint16 buffer (array('H')), got %s" % type(out).__name__)
+    if m < n:
+        raise ValueError("out: holds %d samples, the map needs %d" % (m, n))
+    return out
+
+
 def float_buffer(n):
     # 'f' is float32 (4 bytes/sample): the board's own precision; 'd' keeps the
     # host's float64 exact. Use on the host only for long maps.

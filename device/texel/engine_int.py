@@ -16,7 +16,7 @@
 # rounded (<= 0.5 unit per sample, so <= k/2 units after k samples), the start
 # phase t carries <= 0.5 unit per texel boundary; the table adds 2.4e-6 and
 # Q16/Q14 rounding <= 1.5 LSB of 65535 -> see tests/test_precision.py.
-from .compat import HAS_VIPER, u16_buffer
+from .compat import HAS_VIPER, check_u16_out
 from . import sine_table
 
 NAME = "int"
@@ -54,8 +54,7 @@ def gain_q14(gain):
 
 def render_u16(plan, out=None):
     n, L = plan.n, plan.L
-    if out is None:
-        out = u16_buffer(n)
+    out = check_u16_out(out, n)
     tab = sine_table.table()
     g = gain_q14(plan.gain)
     t28, d28 = plan.t28, plan.d28

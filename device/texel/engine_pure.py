@@ -6,7 +6,7 @@
 # render() allocates the float map (4 bytes/sample on float32 boards);
 # render_u16() converts sample by sample into a uint16 buffer instead.
 import math
-from .compat import float_buffer, u16_buffer
+from .compat import float_buffer, check_u16_out
 
 NAME = "pure"
 AVAILABLE = True
@@ -43,8 +43,7 @@ def render(plan):
 
 
 def render_u16(plan, out=None):
-    if out is None:
-        out = u16_buffer(plan.n)
+    out = check_u16_out(out, plan.n)
 
     def put(j, v):
         out[j] = int(v * 65535.0 + 0.5)

@@ -60,15 +60,11 @@ class Plan:
             cap = F(cap)
         count = self.count
         if draws is None:
-            rng = Rng(p["seed"])
+            rng = Rng(p["seed"], F)
             hi, lo = rng.next_hi_lo()
             u = (F(hi) * 65536.0 + (lo + 0.5)) / 4294967296.0
             t28 = phase_fraction_u28(hi, lo)
-            if F is float:
-                draw_z = rng.normal
-            else:
-                def draw_z():
-                    return F(rng.normal())
+            draw_z = rng.normal
         else:
             u, zs = _check_draws(draws, count)
             u = F(u)

@@ -29,7 +29,10 @@ _TWO32 = 4294967296.0
 
 
 class Rng:
-    def __init__(self, seed):
+    def __init__(self, seed, ftype=float):
+        # ftype: float type of u and z (tests pass numpy.float32 to evaluate
+        # them as a float32 board does; Python float is the interpreter's).
+        self.F = ftype
         if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0 or seed > 0xFFFFFFFF:
             raise ValueError("seed: expected an int in [0, 4294967295], got %r" % (seed,))
         # seed >> 16 is safe even when seed is a bigint on MicroPython.
@@ -75,11 +78,19 @@ class Rng:
     def uniform(self):
         """u in (0, 1): (x + 0.5) / 2^32, exact in binary64."""
         hi, lo = self.next_hi_lo()
-        return (hi * 65536.0 + (lo + 0.5)) / _TWO32
+        return (self.F(hi) * 65536.0 + (lo + 0.5)) / _TWO32
 
     def normal(self):
-        """A standard-normal draw: AS241 inverse CDF of one uniform."""
-        return ppnd16(self.uniform())
+        """A standard-normal draw: AS241 inverse CDF of one uniform. The
+        upper tail uses 1 - u computed from the integer draw itself
+        ((2^32 - 1 - x) + 0.5) / 2^32: exact in binary64 (so the same bits as
+        1.0 - u there), while in float32 1.0 - u would keep only ~2^-24 of
+        absolute resolution and lose the tail (pitch errors of 3e-4)."""
+        hi, lo = self.next_hi_lo()
+        F = self.F
+        u = (F(hi) * 65536.0 + (lo + 0.5)) / _TWO32
+        uc = (F(0xFFFF - hi) * 65536.0 + ((0xFFFF - lo) + 0.5)) / _TWO32
+        return ppnd16(u, uc)
 
 
 def phase_fraction_u28(hi, lo):
@@ -99,6 +110,7 @@ def det_log(x):
     """ln(x) for x > 0 from frexp and the atanh series (|s| <= 0.172, 12 terms:
     truncation < 1e-20). Same bits wherever floats are binary64."""
     m, e = math.frexp(x)
+    m = type(x)(m)          # keep the caller's float type (float32 emulation)
     if m < _SQRT_HALF:
         m = m * 2.0
         e -= 1
@@ -140,13 +152,17 @@ def _ratio(num, den, r):
     return n / d
 
 
-def ppnd16(p):
-    """Phi^-1(p) for 0 < p < 1 (AS241)."""
+def ppnd16(p, pc=None):
+    """Phi^-1(p) for 0 < p < 1 (AS241). pc, if given, is 1 - p computed
+    exactly by the caller (used in the upper tail)."""
     q = p - 0.5
     if -0.425 <= q <= 0.425:
         r = 0.180625 - q * q
         return q * _ratio(_A, _B, r)
-    r = p if q < 0.0 else 1.0 - p
+    if q < 0.0:
+        r = p
+    else:
+        r = 1.0 - p if pc is None else pc
     r = math.sqrt(-det_log(r))
     if r <= 5.0:
         v = _ratio(_C, _D, r - 1.6)
