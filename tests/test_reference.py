@@ -1,4 +1,4 @@
-"""Reference textures (device/texel/reference.py): the matching study's nine
+"""Reference textures (device/texel/reference_textures.py): the matching study's nine
 against golden/reference_textures.csv, the stored noise rows, length rules,
 the band-pass family, and the same code under the real MicroPython."""
 import binascii
@@ -20,10 +20,9 @@ ROOT = Path(__file__).resolve().parents[1]
 DEVICE = ROOT / "device"
 sys.path.insert(0, str(DEVICE))
 
-# The module, not texel.reference: importing the submodule rebinds the package
-# attribute texel.reference from the function to the module (see
+# The module (texel.reference is the package-level function) (see
 # test_package_function_survives_submodule_import).
-R = importlib.import_module("texel.reference")
+R = importlib.import_module("texel.reference_textures")
 
 DX = 0.0053
 N = 9600
@@ -219,11 +218,6 @@ def test_package_function(golden):
     assert np.abs(arr(texel.reference("sawtooth")) - golden["sawtooth"]).max() < TOL_CLOSED
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "texel/__init__.py: `from .reference import ...` inside texel.reference() binds "
-    "the submodule as the package attribute texel.reference on first import, "
-    "replacing the function (CPython and MicroPython alike); the second call raises "
-    "TypeError. Needs a fix in __init__.py; remove this marker then."))
 def test_package_function_callable_twice():
     # a fresh interpreter: the rebinding happens only on the first import
     p = subprocess.run(
@@ -424,7 +418,7 @@ def test_bandpass_bad_args(kw, match):
 
 # --- the real MicroPython --------------------------------------------------
 def _mpy_maps(expr_by_name):
-    code = "import binascii\nfrom texel.reference import *\n" + "".join(
+    code = "import binascii\nfrom texel.reference_textures import *\n" + "".join(
         "print(%r, binascii.hexlify(bytes(%s)).decode())\n" % (k, e) for k, e in expr_by_name.items())
     out = {}
     for line in mpy.run(code, timeout=300).split("\n"):
@@ -479,7 +473,7 @@ def test_micropython_bandpass_family():
 
 def test_micropython_errors_name_allowed_values():
     out = mpy.run(
-        "from texel.reference import reference\n"
+        "from texel.reference_textures import reference\n"
         "for a in (('nope', 10), ('2sin', 0)):\n"
         "    try:\n"
         "        reference(*a)\n"
@@ -500,7 +494,7 @@ def test_micropython_u16_needs_only_its_output_buffer():
     # + a 64 B header allowance) for each kind of texture.
     out = mpy.run(
         "import gc\n"
-        "from texel.reference import reference_u16, bandpass_u16\n"
+        "from texel.reference_textures import reference_u16, bandpass_u16\n"
         "for make in (lambda: reference_u16('pink'), lambda: reference_u16('4sin'),\n"
         "             lambda: reference_u16('square'), lambda: bandpass_u16(1, 0.05)):\n"
         "    a = None; gc.collect(); f0 = gc.mem_free()\n"
@@ -528,12 +522,12 @@ def test_micropython_from_mpy_and_absolute_path(tmp_path):
     (lib / "texel" / "reference.py").unlink()
     p = subprocess.run(
         [mpy.micropython_exe(), "-c",
-         "import texel.reference as r\nprint(r.__file__)\nprint(list(r.reference_u16('pink', 5)))"],
+         "import texel.reference_textures as r\nprint(r.__file__)\nprint(list(r.reference_u16('pink', 5)))"],
         capture_output=True, text=True, timeout=60, cwd=str(tmp_path.parent),
         env=dict(os.environ, MICROPYPATH=str(lib)))
     assert p.returncode == 0, p.stderr
     lines = p.stdout.strip().split("\n")
-    assert lines[0].endswith("texel/reference.mpy") and lines[0].startswith("/")
+    assert lines[0].endswith("texel/reference_textures.mpy") and lines[0].startswith("/")
     assert lines[1] == str(list(R.reference_u16("pink", 5)))
 
 

@@ -75,5 +75,19 @@ def render_u16(params, draws=None, engine=None, out=None):
 
 
 def reference(name, length_samples=9600):
-    from .reference import reference as _ref
+    """A reference texture as a float map in [0, 1]: the matching study's nine
+    (2sin 3sin 4sin white pink blue square triangle sawtooth) and the earlier
+    paper's band-pass family (bp-<fc>-<zeta>); see reference_textures.py."""
+    from .reference_textures import reference as _ref
     return _ref(name, length_samples)
+
+
+def reference_u16(name, length_samples=9600, out=None):
+    """The same as uint16 (0..65535), 2 bytes/sample."""
+    from .reference_textures import reference_u16 as _ref
+    return _ref(name, length_samples, out)
+
+
+def reference_names():
+    from .reference_textures import names
+    return names()
