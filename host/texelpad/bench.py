@@ -413,7 +413,7 @@ def _loadavg() -> list[float] | None:
 # --- the whole bench ----------------------------------------------------------
 
 def run(case_names: list[str] | None = None, runtimes: Iterable[str] = RUNTIMES,
-        repeat: int = 5, progress: Progress | None = None) -> BenchResult:
+        repeat: int = 11, progress: Progress | None = None) -> BenchResult:
     progress = progress or (lambda msg: None)
     t_start = time.monotonic()
     started = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")

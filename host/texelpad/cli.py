@@ -106,8 +106,9 @@ def add_bench(sub: Any) -> None:
                         % (len(HARD_CASES), ", ".join(HARD_CASES)))
     p.add_argument("--runtimes", type=csv_list, default=list(RUNTIMES), metavar="R,...",
                    help="runtimes to bench (default: %s)" % ",".join(RUNTIMES))
-    p.add_argument("--repeat", type=positive_int, default=5, metavar="N",
-                   help="timing repeats, the median is reported (default: 5)")
+    p.add_argument("--repeat", type=positive_int, default=11, metavar="N",
+                   help="timing repeats, the median is reported (default: 11; a full map "
+                        "takes milliseconds, and more runs steady the median on a busy host)")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.set_defaults(func=cmd_bench)
 
