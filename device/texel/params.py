@@ -36,7 +36,11 @@ SPEC = {
     "band_limit_cpmm": ("f", None, 0.01, NYQUIST_CPMM),
 }
 
-KEYS = tuple(SPEC)
+# Spelled out, not tuple(SPEC): MicroPython dicts do not keep insertion order,
+# and this order is both the order validate() checks keys in (which bad key is
+# named first) and the list in the unknown-key message.
+KEYS = ("pitch_db", "irregularity_db", "texel_samples", "length_samples", "quant_db",
+        "seed", "gain", "v", "band_limit_cpmm")
 
 
 def _fmt_range(lo, hi):
@@ -81,9 +85,11 @@ def validate(params):
     range. Never changes `params`."""
     if not isinstance(params, dict):
         raise ValueError("texel parameters must be a dict, got %s" % type(params).__name__)
-    for key in params:
-        if key not in SPEC:
-            raise ValueError("unknown key %r (allowed: %s)" % (key, ", ".join(KEYS)))
+    # Several unknown keys: name the smallest repr, not the first in the dict's
+    # iteration order (which differs between CPython and MicroPython).
+    unknown = [repr(key) for key in params if key not in SPEC]
+    if unknown:
+        raise ValueError("unknown key %s (allowed: %s)" % (min(unknown), ", ".join(KEYS)))
     out = {}
     for key in KEYS:
         kind, default, lo, hi = SPEC[key]
