@@ -96,7 +96,8 @@ class Rng:
 def phase_fraction_u28(hi, lo):
     """The start phase of the integer engines, in 2^-28 turns, from the same
     32-bit output as u (top 28 bits, rounded the way (x + 0.5)/2^32 is)."""
-    return ((hi << 12) | (lo >> 4)) + ((lo >> 3) & 1)
+    # x = 2^32 - 1 rounds up to a whole turn: mask it back to 0.
+    return (((hi << 12) | (lo >> 4)) + ((lo >> 3) & 1)) & 0x0FFFFFFF
 
 
 # --- natural log with a fixed operation sequence ---------------------------
