@@ -158,3 +158,10 @@ def test_out_buffer_checked(engine):
     got = texel.render_u16(p, engine=engine, out=buf)
     assert got is buf
     assert list(buf) == list(texel.render_u16(p, engine=engine))
+
+
+def test_sine_table_literal_matches_formula():
+    """tools/gen_sine_table.py wrote the literal; it must equal the formula."""
+    from texel import sine_table
+    exact = [int((math.sin(2 * math.pi * i / 1024) + 1.0) * 32767.5 + 0.5) for i in range(1025)]
+    assert list(sine_table.table()) == exact

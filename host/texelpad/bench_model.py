@@ -137,9 +137,9 @@ PURE = Counts(per_map={"I": 10, "C": 3, "F": 1}, per_texel={"I": 8},
 ULAB = Counts(per_map={"I": 10, "C": 4, "F": 2}, per_texel={"I": 15, "C": 1, "F": 1},
               per_chunk={"I": 15.5, "F": 1, "C": 8}, per_sample={"Us": 1, "Uo": 5})
 
-# one-time (first render after boot): sine_table.table(), 1025 entries of
-# 2*pi*i/SIZE, +1, *32767.5, v+0.5 (6 F), sin, int (2 B), loop and store (3 I).
-SINE_TABLE = Counts(per_map={"F": 1025 * 6, "B": 1025 * 2, "I": 1025 * 3, "C": 1})
+# one-time (first render after boot): sine_table.table() copies the shipped
+# 2 KB literal into an array('H'): one built-in call, no float work.
+SINE_TABLE = Counts(per_map={"B": 1, "C": 1})
 
 SYNTH = {"int": INT_VIPER, "int-py": INT_PY, "pure": PURE, "ulab": ULAB}
 

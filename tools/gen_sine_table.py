@@ -1,0 +1,38 @@
+#!/usr/bin/env python3
+"""Regenerate the sine table literal in device/texel/sine_table.py.
+
+(sin(2*pi*i/1024) + 1) * 32767.5, rounded half up, i = 0..1024, as uint16
+little-endian. Shipped as a literal so a board does not spend 1,025 float sines
+(~150 ms on an emulated RP2040) at its first render. tests/test_precision.py
+checks the literal against this formula.
+"""
+import math
+import re
+import struct
+from pathlib import Path
+
+PATH = Path(__file__).resolve().parents[1] / "device" / "texel" / "sine_table.py"
+SIZE = 1024
+
+
+def values():
+    return [int((math.sin(2 * math.pi * i / SIZE) + 1.0) * 32767.5 + 0.5) for i in range(SIZE + 1)]
+
+
+def literal():
+    raw = struct.pack("<%dH" % (SIZE + 1), *values())
+    lines = []
+    for i in range(0, len(raw), 32):
+        lines.append("    b'" + "".join("\\x%02x" % b for b in raw[i:i + 32]) + "'")
+    return "_RAW = (\n" + "\n".join(lines) + "\n)\n"
+
+
+def main():
+    src = PATH.read_text()
+    new = re.sub(r"_RAW = \(\n.*?\)\n", lambda m: literal(), src, flags=re.S)
+    PATH.write_text(new)
+    print("wrote", PATH)
+
+
+if __name__ == "__main__":
+    main()
