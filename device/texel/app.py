@@ -1,0 +1,253 @@
+# The one entry point, the same on every board and the one the host calls
+# over the REPL:
+#   texel.app.start(board_name, scene=None)  -> status dict
+#   texel.app.push(scene)                    -> status dict (raises ValueError,
+#                                               and the old scene keeps playing)
+#   texel.app.status()                       -> dict
+#   texel.app.stream(n=125, rate_hz=125)     -> [(t_us, position, amplitude), ...]
+#   texel.app.stop()
+# On rp2/stm32 start() returns at once with the refresh running in a hard
+# timer IRQ, so the REPL stays free. On the virtual board time is stepped:
+# texel.app.advance(ms) runs the refresh (or start(..., realtime=True)).
+# CircuitPython has no timer IRQ: run_loop() runs a paced loop that measures
+# and reports its own rate.
+import gc
+import sys
+from . import __version__, compat
+from . import boards as _boards
+from . import scene as _scene
+from .carrier import DutyLaw
+from .refresh import Refresh
+from .sensor import make_sensor
+
+PROTOCOL = 1          # host <-> device contract version (the host checks it)
+
+# The study's split screen (SPEC §5): a reference texture left, a texel
+# rendering right. Played when start() gets no scene.
+DEFAULT_SCENE = {"regions": [
+    {"start_mm": 0, "end_mm": 50.88, "texture": {"kind": "reference", "name": "4sin"}},
+    {"start_mm": 50.88, "end_mm": 101.76,
+     "texture": {"kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7}}]}
+
+_rt = None            # the running runtime (one per board)
+
+
+class _Runtime:
+    pass
+
+
+def _make_hw(board, opts):
+    port = board["port"]
+    if port == "rp2":
+        from .hw_rp2 import Hw
+    elif port == "stm32":
+        from .hw_stm32 import Hw
+    elif port == "circuitpython":
+        from .hw_cpy import Hw
+    elif port == "virtual":
+        from .hw_virtual import VirtualHw
+        return VirtualHw(board, **opts)
+    else:
+        raise ValueError("board %r: unknown port %r" % (board["name"], port))
+    return Hw(board)
+
+
+def _reader(hw, i):
+    if hasattr(hw, "adc_reader"):
+        return hw.adc_reader(i)
+    return lambda: hw.adc_read(i)
+
+
+def _ticks():
+    try:
+        import time
+        return time.ticks_us, time.ticks_diff
+    except AttributeError:
+        from .hw_virtual import _real_ticks, _ticks_diff
+        return _real_ticks(), _ticks_diff
+
+
+def start(board_name, scene=None, realtime=False, **hw_opts):
+    """Start the display on board `board_name` (a file in boards/) playing
+    `scene` (default: the study's split screen). Stops a running display
+    first. Returns status()."""
+    global _rt
+    board = _boards.load(board_name)
+    # build the scene before touching the hardware: a bad scene changes nothing
+    canonical = _scene.validate(DEFAULT_SCENE if scene is None else scene, board["display"])
+    if _rt is not None:
+        stop()
+    hw = _make_hw(board, hw_opts)
+    hw.off()
+    try:
+        rt = _Runtime()
+        rt.board = board
+        rt.hw = hw
+        rt.hz = board["refresh"]["hz"]
+        rt.period_us = 1000000 // rt.hz
+        rt.law = DutyLaw(hw.top, board["carrier"]["duty_cap"])
+        s = board["sensor"]
+        npins = 2 if s["kind"] == "adc_ratio" else 1
+        reads = [_reader(hw, i) for i in range(npins)]
+        rt.sensor = make_sensor(s, reads, board["display"]["positions"], rt.hz)
+        if hasattr(hw, "ticks_us"):
+            ticks, diff = hw.ticks_us, hw.ticks_diff
+        else:
+            ticks, diff = _ticks()
+        idle = board["carrier"].get("idle_amplitude", 0)
+        rt.refresh = Refresh(rt.sensor, rt.law, hw.set_duty, ticks, diff, rt.period_us, idle,
+                             getattr(hw, "cost_ticks", None))
+        rt.started_us = ticks()
+        rt.ticks = ticks
+        rt.diff = diff
+        rt.last_push = None
+        rt.tel_tail = 0
+        rt.pushes = 0
+        _rt = rt
+        _install(canonical)
+        if board["port"] != "circuitpython":
+            hw.start(rt.refresh.step, rt.hz)
+            if realtime and hasattr(hw, "run_realtime"):
+                hw.run_realtime()
+    except Exception:
+        hw.off()
+        _rt = None
+        raise
+    return status()
+
+
+def _install(canonical):
+    rt = _rt
+    disp = rt.board["display"]
+    t0 = rt.ticks()
+    sc = _scene.build(canonical, disp, idle_default=rt.board["carrier"].get("idle_amplitude", 0))
+    t1 = rt.ticks()
+    old = rt.refresh.swap(sc)
+    t2 = rt.ticks()
+    old = None
+    gc.collect()
+    rt.pushes += 1
+    rt.last_push = {"build_us": rt.diff(t1, t0), "swap_us": rt.diff(t2, t1),
+                    "scene_bytes": sc.nbytes}
+    return sc
+
+
+def push(scene):
+    """Validate completely, build (render only what the regions use), then
+    swap in between two refreshes. Any error raises ValueError and the
+    current scene keeps playing untouched."""
+    rt = _running()
+    canonical = _scene.validate(scene, rt.board["display"])
+    try:
+        _install(canonical)
+    except MemoryError:
+        gc.collect()
+        raise ValueError("scene does not fit in memory (%d bytes free); the current scene keeps playing"
+                         % (compat.heap_free() or 0))
+    return status()
+
+
+def _running():
+    if _rt is None:
+        raise ValueError("texel.app is not running: call texel.app.start(board_name) first")
+    return _rt
+
+
+def status():
+    """What is playing and how the loop runs (a dict of literals)."""
+    rt = _rt
+    st = {"protocol": PROTOCOL, "texel": __version__,
+          "firmware": "%s %s" % (sys.implementation.name,
+                                 ".".join(str(x) for x in sys.implementation.version[:3])),
+          "ulab": compat.ulab_version(), "viper": compat.HAS_VIPER,
+          "running": rt is not None, "mem_free": compat.heap_free()}
+    if rt is None:
+        return st
+    r = rt.refresh
+    elapsed = rt.diff(rt.ticks(), rt.started_us)
+    sc = r.scene
+    st.update({
+        "board": rt.board["name"], "port": rt.board["port"],
+        "carrier_hz": rt.hw.freq_hz if hasattr(rt.hw, "freq_hz") else rt.board["carrier"]["freq_hz"],
+        "pwm_top": rt.hw.top, "refresh_hz": rt.hz,
+        "refreshes": r.count, "rate_hz": (r.count * 1000000 // elapsed) if elapsed > 0 else 0,
+        "worst_us": r.worst_us, "overruns": r.overruns, "faults": r.faults,
+        "position": r.pos, "amplitude": r.amp, "duty": r.duty,
+        "scene": sc.describe() if sc is not None else None,
+        "scene_source": sc.source if sc is not None else None,
+        "pushes": rt.pushes, "last_push": rt.last_push})
+    return st
+
+
+def stream(n=125, rate_hz=125):
+    """Telemetry: the next n (t_us, position, amplitude) samples taken by the
+    refresh itself every hz/rate_hz refreshes (so the loop is not disturbed).
+    On the virtual board, call advance() meanwhile or run realtime."""
+    rt = _running()
+    r = rt.refresh
+    every = rt.hz // rate_hz
+    if every < 1:
+        every = 1
+    r.tel_div = 0
+    rt.tel_tail = r.tel_head
+    r.tel_every = every
+    return every
+
+
+def telemetry():
+    """Samples gathered since the last call: (samples, lost)."""
+    rt = _running()
+    out, rt.tel_tail, lost = rt.refresh.telemetry_since(rt.tel_tail)
+    return out, lost
+
+
+def advance(ms):
+    """Virtual board only: run `ms` milliseconds of stepped time."""
+    rt = _running()
+    if not hasattr(rt.hw, "advance"):
+        raise ValueError("advance(): only the virtual board has stepped time")
+    return rt.hw.advance(int(ms * 1000))
+
+
+def finger(keyframes):
+    """Virtual board only: script the finger, [(t_ms, position_mm or None)]."""
+    rt = _running()
+    if not hasattr(rt.hw, "set_finger"):
+        raise ValueError("finger(): only the virtual board has a scripted finger")
+    dx = rt.board["display"]["dx_um"] / 1000.0
+    rt.hw.set_finger([(int(t * 1000), None if p is None else int(p / dx + 0.5)) for t, p in keyframes])
+
+
+def stop():
+    """Stop the refresh and leave the carrier in its safe off state."""
+    global _rt
+    rt = _rt
+    if rt is None:
+        return
+    try:
+        rt.hw.stop()
+    finally:
+        rt.hw.off()
+        _rt = None
+        gc.collect()
+
+
+def run_loop(seconds=None):
+    """CircuitPython (no timer IRQ): a best-effort loop paced to the board's
+    refresh rate; it measures and reports its own rate in status()."""
+    import time
+    rt = _running()
+    step = rt.refresh.step
+    period_ns = 1000000000 // rt.hz
+    t_next = time.monotonic_ns()
+    end = None if seconds is None else t_next + int(seconds * 1e9)
+    try:
+        while end is None or t_next < end:
+            step()
+            t_next += period_ns
+            while time.monotonic_ns() < t_next:
+                pass
+    except KeyboardInterrupt:
+        pass
+    finally:
+        rt.hw.off()
