@@ -1,0 +1,461 @@
+# Boards as data: every board is a JSON file boards/<name>.json (schema in
+# docs/runtime.md). This module finds, reads and checks them, and does the
+# PWM arithmetic the backends share. It runs on MicroPython (rp2, stm32,
+# unix), CircuitPython and CPython, only when a board is loaded (never in the
+# refresh), so floats and allocation are fine here.
+#
+#   load(name, search=None)  -> canonical board dict (every default filled in)
+#   names(search=None)       -> sorted names of the boards found
+#   validate(d, source)      -> canonical dict, or ValueError
+#                               "<source>: <key path>: <what is wrong>"
+#   pwm_top(cpu_hz, freq_hz) -> PWM TOP (counts per carrier period - 1)
+#   actual_hz(cpu_hz, top)   -> the carrier frequency that TOP really gives
+#   board_top(board)         -> pwm_top of a board's clock and carrier
+#
+# Search path (first directory holding <name>.json wins): "/boards" (a board's
+# flash root: `mpremote cp -r boards :`), "boards" (relative to the working
+# directory), then <texel package>/../../boards (the repository's copy, so
+# CPython and the unix port find the shipped boards from anywhere).
+import json
+
+try:
+    import os
+except ImportError:                     # a port without os: load() still works
+    os = None
+
+# Carrier frequency limits, Hz. Piezo/glass friction plates resonate at some
+# tens of kHz; outside 1 kHz .. 200 kHz the frequency is a typo.
+FREQ_MIN_HZ = 1000
+FREQ_MAX_HZ = 200000
+FREQ_DEFAULT_HZ = 34000                 # the TPaD's carrier
+# PWM counts per carrier period: the counters are 16 bit (RP2040 TOP, STM32
+# ARR; no prescaler, which would cost resolution), so at most 65,536. At
+# least 500 counts keep ~9 bits of amplitude resolution and bound the
+# frequency error of nearest-count rounding to 0.5/500 = 0.1 %.
+COUNTS_MIN = 500
+COUNTS_MAX = 65536
+POSITIONS_MAX = 1048576                 # same bound as texel.params LENGTH_MAX
+CPU_HZ_MIN = 1000000
+CPU_HZ_MAX = 1000000000                 # < 2^30: a small int on every port
+U16_MAX = 65535                         # amplitudes and read_u16 raw units
+
+PORTS = ("rp2", "stm32", "circuitpython", "virtual")
+DRIVES = ("single", "bridge")
+SENSOR_KINDS = ("adc_linear", "adc_ratio")
+MODES = ("timer_irq", "core1_viper", "loop", "stepped")
+# The refresh modes each port can run (see docs/runtime.md, refresh/hw_*):
+# CircuitPython has no IRQs, threads or viper; the virtual board steps time.
+PORT_MODES = {"rp2": ("timer_irq", "core1_viper", "loop"),
+              "stm32": ("timer_irq", "loop"),
+              "circuitpython": ("loop",),
+              "virtual": ("stepped",)}
+DEFAULT_MODE = {"rp2": "timer_irq", "stm32": "timer_irq",
+                "circuitpython": "loop", "virtual": "stepped"}
+
+# Keys in a fixed order (MicroPython dicts are unordered): the order keys are
+# checked in, so which bad key is named first is the same on every port.
+# Entries: (key, kind, default); kind: "i" int, "n" number, "s" string,
+# "d" dict, "p" pin list, "e" one of a tuple; default None = required.
+TOP_KEYS = (("name", "s", None), ("port", "s", None), ("title", "s", ""),
+            ("cpu_hz", "i", None), ("carrier", "d", None), ("sensor", "d", None),
+            ("refresh", "d", {}), ("display", "d", {}), ("wiring", "s", ""))
+CARRIER_KEYS = (("freq_hz", "i", FREQ_DEFAULT_HZ), ("duty_cap", "n", 0.5),
+                ("drive", "s", None), ("pins", "p", None), ("pwm", "d", {}),
+                ("idle_amplitude", "i", 0))
+# Calibration defaults for a 100 mm membrane potentiometer on a 3.3 V ADC
+# with a pull-down on the wiper (lifted finger reads ~0): measure per build.
+SENSOR_KEYS = (("kind", "s", None), ("pins", "p", None),
+               ("raw_at_start", "i", 2000), ("raw_at_end", "i", 63000),
+               ("lift_below", "i", 1000), ("filter_shift", "i", 2),
+               ("latency_us", "i", 150))
+REFRESH_KEYS = (("hz", "i", 8333), ("mode", "s", None))
+DISPLAY_KEYS = (("positions", "i", 19200), ("dx_um", "n", 5.3))
+# pwm sub-dict keys per port: RP2040 slice (derived from the pin when
+# missing), STM32 timer and channel; CircuitPython pwmio and the virtual
+# board choose for themselves.
+PWM_KEYS = {"rp2": (("slice", "i", -1),),
+            "stm32": (("timer", "i", None), ("channel", "i", None)),
+            "circuitpython": (), "virtual": ()}
+
+CAL_SPAN_MIN = 256          # |raw_at_end - raw_at_start|, read_u16 units
+FILTER_SHIFT_MAX = 8        # IIR time constant 2^8 refreshes = 31 ms at 8,333 Hz
+LATENCY_US_MAX = 20000
+REFRESH_HZ_MIN = 50
+REFRESH_HZ_MAX = 50000
+DX_UM_MAX = 1000.0
+NAME_MAX = 32
+
+
+# --- PWM arithmetic -----------------------------------------------------------
+def pwm_top(cpu_hz, freq_hz):
+    """TOP (= counts per carrier period - 1) of an edge-aligned PWM clocked
+    at cpu_hz (the timer's input clock, Hz) for a carrier of freq_hz (Hz),
+    rounded to the nearest count: RP2040 125 MHz / 34 kHz = 3,676.5 -> 3675;
+    STM32F405 TIM1/TIM8 168 MHz / 34 kHz = 4,941.2 -> 4940. ValueError when
+    the counts do not fit a 16-bit counter (or leave under 2 levels)."""
+    if not _is_int(cpu_hz) or cpu_hz <= 0:
+        raise ValueError("cpu_hz: %r is not a positive int (Hz)" % (cpu_hz,))
+    if not _is_int(freq_hz) or freq_hz <= 0:
+        raise ValueError("freq_hz: %r is not a positive int (Hz)" % (freq_hz,))
+    counts = (cpu_hz + freq_hz // 2) // freq_hz
+    if counts < 2 or counts > COUNTS_MAX:
+        raise ValueError("freq_hz: %d Hz on a %d Hz clock gives %d PWM counts per period "
+                         "(a 16-bit PWM needs 2 .. %d)" % (freq_hz, cpu_hz, counts, COUNTS_MAX))
+    return counts - 1
+
+
+def actual_hz(cpu_hz, top):
+    """The carrier frequency (Hz, float) a PWM of TOP `top` really runs at."""
+    return cpu_hz / (top + 1)
+
+
+def board_top(board):
+    """pwm_top of a (validated) board's clock and carrier frequency."""
+    return pwm_top(board["cpu_hz"], board["carrier"]["freq_hz"])
+
+
+# --- finding and reading board files ----------------------------------------
+def _norm_up(path, levels):
+    """The directory `levels` levels above directory `path`, by string
+    operations (MicroPython has no os.path, and ".." may not resolve on every
+    VFS): "/a/device/texel" -> "/a"; "texel" -> "."; "." -> "../..".
+    Above "/" stays "/"."""
+    path = path.replace("\\", "/")
+    absolute = path.startswith("/")
+    parts = [p for p in path.split("/") if p and p != "."]
+    for _ in range(levels):
+        if parts and parts[-1] != "..":
+            parts.pop()
+        elif not absolute:
+            parts.append("..")
+    text = "/".join(parts)
+    if absolute:
+        return "/" + text
+    return text or "."
+
+
+def _package_boards():
+    """<texel package>/../../boards, or None without __file__ (frozen)."""
+    try:
+        here = __file__
+    except NameError:
+        return None
+    here = here.replace("\\", "/")
+    cut = here.rfind("/")
+    up = _norm_up(here[:cut] if cut >= 0 else ".", 2)
+    if up == ".":
+        return "boards"
+    return ("" if up == "/" else up) + "/boards"
+
+
+def search_path(search=None):
+    """The directories looked in, in order (search: a directory or a list)."""
+    if search is None:
+        dirs = ["/boards", "boards"]
+        pkg = _package_boards()
+        if pkg:
+            dirs.append(pkg)
+    elif isinstance(search, str):
+        dirs = [search]
+    else:
+        dirs = list(search)
+    out = []
+    for d in dirs:
+        if not isinstance(d, str):
+            raise ValueError("search: directories must be strings, got %r" % (d,))
+        d = d.rstrip("/") or "/"
+        if d not in out:
+            out.append(d)
+    return out
+
+
+def _valid_name(name):
+    if not isinstance(name, str) or not 0 < len(name) <= NAME_MAX:
+        return False
+    for ch in name:
+        if not (("a" <= ch <= "z") or ("0" <= ch <= "9") or ch == "_" or ch == "-"):
+            return False
+    return True
+
+
+def _file(d, name):
+    return ("/" if d == "/" else d + "/") + name + ".json"
+
+
+def names(search=None):
+    """Sorted names of the boards (<name>.json) in the search path."""
+    found = []
+    if os is None:
+        return found
+    for d in search_path(search):
+        try:
+            entries = os.listdir(d)
+        except OSError:
+            continue
+        for fn in entries:
+            if fn.endswith(".json") and _valid_name(fn[:-5]) and fn[:-5] not in found:
+                found.append(fn[:-5])
+    found.sort()
+    return found
+
+
+def load(name, search=None):
+    """Read and validate boards/<name>.json from the first directory of the
+    search path that has it. ValueError when there is none, or when the file
+    is not JSON or not a valid board (naming the file and the key)."""
+    if not _valid_name(name):
+        raise ValueError("board name %r: use 1..%d of a-z, 0-9, _ and -" % (name, NAME_MAX))
+    dirs = search_path(search)
+    for d in dirs:
+        path = _file(d, name)
+        try:
+            f = open(path)
+        except OSError:
+            continue
+        try:
+            try:
+                doc = json.load(f)
+            except ValueError as e:
+                raise ValueError("%s: not valid JSON (%s)" % (path, e))
+        finally:
+            f.close()
+        return validate(doc, path)
+    raise ValueError("board %r: no %s.json in %s (boards found: %s)"
+                     % (name, name, ", ".join(dirs), ", ".join(names(dirs)) or "none"))
+
+
+# --- validation -----------------------------------------------------------------
+class _Ctx:
+    def __init__(self, source):
+        self.source = source
+
+    def fail(self, path, msg):
+        raise ValueError("%s: %s: %s" % (self.source, path, msg))
+
+
+def _is_int(v):
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def _is_num(v):
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return False
+    return v == v and v not in (float("inf"), float("-inf"))
+
+
+_KIND_NAMES = {"i": "an integer", "n": "a finite number", "s": "a string",
+               "d": "an object", "p": "a list of pins"}
+
+
+def _section(c, path, d, keys):
+    """Check d's keys and types against `keys`; return a new dict with the
+    defaults filled in (deep-copied for dicts)."""
+    if not isinstance(d, dict):
+        c.fail(path or "(top level)", "expected an object, got %s" % _tname(d))
+    known = [k[0] for k in keys]
+    unknown = sorted([k for k in d if k not in known])
+    if unknown:
+        c.fail(_join(path, str(unknown[0])),
+               "unknown key (known: %s)" % (", ".join(known) or "none"))
+    out = {}
+    for key, kind, default in keys:
+        p = _join(path, key)
+        if key not in d:
+            if default is None:
+                c.fail(p, "missing (required)")
+            out[key] = dict(default) if isinstance(default, dict) else default
+            continue
+        v = d[key]
+        ok = ((kind == "i" and _is_int(v)) or (kind == "n" and _is_num(v))
+              or (kind == "s" and isinstance(v, str)) or (kind == "d" and isinstance(v, dict))
+              or (kind == "p" and isinstance(v, list)))
+        if not ok:
+            c.fail(p, "expected %s, got %s" % (_KIND_NAMES[kind], _show(v)))
+        out[key] = v
+    return out
+
+
+def _join(path, key):
+    return key if not path else path + "." + key
+
+
+def _tname(v):
+    if v is None:
+        return "null"
+    if isinstance(v, bool):
+        return "a boolean"
+    if isinstance(v, dict):
+        return "an object"
+    if isinstance(v, list):
+        return "a list"
+    if isinstance(v, str):
+        return "a string"
+    return "a number"
+
+
+def _show(v):
+    if isinstance(v, (dict, list)) or v is None or isinstance(v, bool):
+        return _tname(v)
+    return "%s %r" % (_tname(v), v)
+
+
+def _range(c, path, v, lo, hi, unit=""):
+    if v < lo or v > hi:
+        c.fail(path, "%r%s is out of range [%r, %r]" % (v, unit, lo, hi))
+
+
+def _one_of(c, path, v, choices):
+    if v not in choices:
+        c.fail(path, "%r is not one of %s" % (v, ", ".join(choices)))
+
+
+def _pins(c, path, pins, port, n, what, adc):
+    """A pin list: n entries of the port's pin type. rp2: GPIO numbers
+    (ADC: 26..29); stm32: pyb pin names ("Y1", "X19", "PC6");
+    circuitpython: a GPIO number n (= board.GP<n>) or a board attribute name;
+    virtual: small ints (labels)."""
+    if len(pins) != n:
+        c.fail(path, "%s needs %d pin%s, got %d" % (what, n, "" if n == 1 else "s", len(pins)))
+    for i in range(n):
+        v = pins[i]
+        p = "%s[%d]" % (path, i)
+        if port == "stm32" or (port == "circuitpython" and isinstance(v, str)):
+            if not isinstance(v, str) or not v or " " in v:
+                c.fail(p, "expected a pin name such as \"Y1\", got %s" % _show(v))
+            continue
+        if not _is_int(v):
+            c.fail(p, "expected a GPIO number, got %s" % _show(v))
+        if port == "virtual":
+            _range(c, p, v, 0, 255)
+        elif adc:
+            # RP2040 ADC0..ADC3 are GPIO 26..29 (GPIO 29 reads VSYS/3 on a Pico)
+            _range(c, p, v, 26, 29)
+        else:
+            _range(c, p, v, 0, 29)
+
+
+def validate(d, source="board"):
+    """Check a board dict against the schema of docs/runtime.md and return a
+    canonical copy with every default filled in. Errors name the source file
+    and the key path: "boards/x.json: carrier.freq_hz: 500 is out of range
+    [1000, 200000]"."""
+    c = _Ctx(source)
+    b = _section(c, "", d, TOP_KEYS)
+
+    # name: must be the file's name, so load("pico") is the board "pico"
+    name = b["name"]
+    if not _valid_name(name):
+        c.fail("name", "%r: use 1..%d of a-z, 0-9, _ and -" % (name, NAME_MAX))
+    stem = _stem(source)
+    if stem is not None and stem != name:
+        c.fail("name", "%r does not match the file name (%s.json)" % (name, stem))
+    port = b["port"]
+    _one_of(c, "port", port, PORTS)
+    if not b["title"]:
+        b["title"] = name
+    _range(c, "cpu_hz", b["cpu_hz"], CPU_HZ_MIN, CPU_HZ_MAX, " Hz")
+
+    # carrier
+    car = _section(c, "carrier", b["carrier"], CARRIER_KEYS)
+    b["carrier"] = car
+    freq = car["freq_hz"]
+    _range(c, "carrier.freq_hz", freq, FREQ_MIN_HZ, FREQ_MAX_HZ, " Hz")
+    counts = (b["cpu_hz"] + freq // 2) // freq
+    if counts < COUNTS_MIN or counts > COUNTS_MAX:
+        c.fail("carrier.freq_hz", "%d Hz on the %d Hz clock (cpu_hz) gives %d PWM counts per "
+               "period; need %d .. %d (16-bit counter, <= 0.1 %% frequency error)"
+               % (freq, b["cpu_hz"], counts, COUNTS_MIN, COUNTS_MAX))
+    cap = car["duty_cap"]
+    if not 0 < cap <= 0.5:
+        # above 50 % the PWM fundamental (sin(pi*D)) falls again
+        c.fail("carrier.duty_cap", "%r is out of range (0, 0.5]" % (cap,))
+    drive = car["drive"]
+    _one_of(c, "carrier.drive", drive, DRIVES)
+    if drive == "bridge" and port == "circuitpython":
+        c.fail("carrier.drive", "'bridge' needs an inverted (complementary) PWM output, which "
+               "CircuitPython's pwmio cannot make; use 'single'")
+    pins = car["pins"]
+    _pins(c, "carrier.pins", pins, port, 2 if drive == "bridge" else 1,
+          "drive '%s'" % drive, False)
+    car["pins"] = list(pins)
+    _range(c, "carrier.idle_amplitude", car["idle_amplitude"], 0, U16_MAX)
+    pwm = _section(c, "carrier.pwm", car["pwm"], PWM_KEYS[port])
+    car["pwm"] = pwm
+    if port == "rp2":
+        # GPIO n is PWM slice (n >> 1) & 7, channel A (even n) or B (odd n)
+        sl = (pins[0] >> 1) & 7
+        if pwm["slice"] == -1:
+            pwm["slice"] = sl
+        elif pwm["slice"] != sl:
+            c.fail("carrier.pwm.slice", "%r, but GPIO %d is on PWM slice %d"
+                   % (pwm["slice"], pins[0], sl))
+        if drive == "bridge" and (pins[0] & 1 or pins[1] != pins[0] + 1):
+            c.fail("carrier.pins", "%r: a bridge takes channel A and B of one PWM slice "
+                   "(an even GPIO and the next one, e.g. [16, 17])" % (pins,))
+    elif port == "stm32":
+        tim = pwm["timer"]
+        if drive == "bridge":
+            # complementary outputs (CHx / CHxN) with dead time: TIM1, TIM8, CH1..3
+            if tim not in (1, 8):
+                c.fail("carrier.pwm.timer", "%r: complementary outputs (drive 'bridge') need "
+                       "an advanced timer, 1 or 8" % (tim,))
+            _range(c, "carrier.pwm.channel", pwm["channel"], 1, 3)
+        else:
+            if tim < 1 or tim > 14 or tim in (6, 7):
+                c.fail("carrier.pwm.timer", "%r is not a PWM timer (1 .. 14 without 6, 7)"
+                       % (tim,))
+            _range(c, "carrier.pwm.channel", pwm["channel"], 1, 4)
+
+    # sensor
+    s = _section(c, "sensor", b["sensor"], SENSOR_KEYS)
+    b["sensor"] = s
+    kind = s["kind"]
+    _one_of(c, "sensor.kind", kind, SENSOR_KINDS)
+    _pins(c, "sensor.pins", s["pins"], port, 2 if kind == "adc_ratio" else 1,
+          "kind '%s'" % kind, True)
+    s["pins"] = list(s["pins"])
+    for key in ("raw_at_start", "raw_at_end", "lift_below"):
+        _range(c, "sensor." + key, s[key], 0, U16_MAX)
+    a, e = s["raw_at_start"], s["raw_at_end"]
+    if abs(e - a) < CAL_SPAN_MIN:
+        c.fail("sensor.raw_at_end", "%d is within %d of raw_at_start (%d): the calibration "
+               "span is too small" % (e, CAL_SPAN_MIN, a))
+    if kind == "adc_linear" and s["lift_below"] > min(a, e):
+        c.fail("sensor.lift_below", "%d is above the calibrated range (%d .. %d): a finger "
+               "at the end would read as lifted" % (s["lift_below"], min(a, e), max(a, e)))
+    _range(c, "sensor.filter_shift", s["filter_shift"], 0, FILTER_SHIFT_MAX)
+    _range(c, "sensor.latency_us", s["latency_us"], 0, LATENCY_US_MAX, " us")
+    used = list(car["pins"])
+    for i in range(len(s["pins"])):
+        if s["pins"][i] in used:
+            c.fail("sensor.pins[%d]" % i, "pin %r is already used" % (s["pins"][i],))
+        used.append(s["pins"][i])
+
+    # refresh
+    r = _section(c, "refresh", b["refresh"],
+                 (REFRESH_KEYS[0], ("mode", "s", DEFAULT_MODE.get(port, "loop"))))
+    b["refresh"] = r
+    _range(c, "refresh.hz", r["hz"], REFRESH_HZ_MIN, REFRESH_HZ_MAX, " Hz")
+    if r["hz"] > freq:
+        # the duty is latched once per carrier period: faster refreshes are lost
+        c.fail("refresh.hz", "%d Hz is faster than the carrier (%d Hz)" % (r["hz"], freq))
+    _one_of(c, "refresh.mode", r["mode"], MODES)
+    if r["mode"] not in PORT_MODES[port]:
+        c.fail("refresh.mode", "%r is not available on port %r (use %s)"
+               % (r["mode"], port, ", ".join(PORT_MODES[port])))
+
+    # display
+    disp = _section(c, "display", b["display"], DISPLAY_KEYS)
+    b["display"] = disp
+    _range(c, "display.positions", disp["positions"], 1, POSITIONS_MAX)
+    dx = disp["dx_um"]
+    if not 0 < dx <= DX_UM_MAX:
+        c.fail("display.dx_um", "%r is out of range (0, %r]" % (dx, DX_UM_MAX))
+    return b
+
+
+def _stem(source):
+    if not isinstance(source, str) or not source.endswith(".json"):
+        return None
+    cut = max(source.rfind("/"), source.rfind("\\"))
+    return source[cut + 1:-5]
