@@ -165,3 +165,13 @@ def test_sine_table_literal_matches_formula():
     from texel import sine_table
     exact = [int((math.sin(2 * math.pi * i / 1024) + 1.0) * 32767.5 + 0.5) for i in range(1025)]
     assert list(sine_table.table()) == exact
+
+
+def test_numpy_engine_out_buffer():
+    from array import array
+    p = {"pitch_db": 6.3, "irregularity_db": -12.9, "length_samples": 100}
+    buf = array("H", bytes(200))
+    assert texel.render_u16(p, engine="numpy", out=buf) is buf
+    assert list(buf) == list(texel.render_u16(p, engine="numpy"))
+    with pytest.raises(ValueError, match="expected a uint16 buffer"):
+        texel.render_u16(p, engine="numpy", out=bytearray(200))

@@ -173,8 +173,9 @@ def status():
         "refreshes": r.count, "rate_hz": (r.count * 1000000 // elapsed) if elapsed > 0 else 0,
         "worst_us": r.worst_us, "overruns": r.overruns, "faults": r.faults,
         "position": r.pos, "amplitude": r.amp, "duty": r.duty,
+        # describe(), not the source: an uploaded samples region would send
+        # up to 19,200 ints with every status call
         "scene": sc.describe() if sc is not None else None,
-        "scene_source": sc.source if sc is not None else None,
         "pushes": rt.pushes, "last_push": rt.last_push})
     return st
 

@@ -36,6 +36,9 @@ def render_u16(plan, out=None):
     m = render(plan)
     q = np.floor(m * 65535.0 + 0.5).astype(np.uint16)
     if out is not None:
-        out[:] = q
+        # any writable uint16 buffer: ndarray, array('H') (buffer protocol)
+        from .compat import check_u16_out
+        check_u16_out(out, plan.n)
+        np.frombuffer(out, dtype=np.uint16)[: plan.n] = q
         return out
     return q
