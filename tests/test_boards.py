@@ -72,10 +72,15 @@ def test_shipped_board_facts():
     assert virt["port"] == "virtual" and virt["refresh"]["mode"] == "stepped"
     # the arithmetic the wiring notes state
     assert boards.board_top(pico) == 3675                         # 3,676 counts
-    assert boards.board_top(cpy) == 3675                          # pwmio: 3,676 levels
+    assert boards.board_top(bridge) == boards.board_top(virt) == 3675
+    # CircuitPython's pwmio floors: TOP = 125 MHz // 34 kHz = 3676 (3,677 clocks)
+    assert boards.board_top(cpy) == 3676
     assert boards.board_top(pyb) == 4940                          # 4,941 counts
     assert "4,941 counts" in pyb["wiring"] and "3,676 counts" in pico["wiring"]
-    assert "3,676 levels" in cpy["wiring"]
+    assert "= 3676 itself (3,677 clocks per period, actual carrier 33,995.10 Hz" in cpy["wiring"]
+    # the stm32 backend's optional keys, written out
+    assert pyb["carrier"]["deadtime_ns"] == 200 and pyb["refresh"]["timer"] == 7
+    assert "deadtime_ns" not in pico["carrier"] and "timer" not in pico["refresh"]
 
 
 @pytest.mark.parametrize("name", SHIPPED)
@@ -85,9 +90,13 @@ def test_carrier_within_0_1_percent(name):
     f = boards.actual_hz(b["cpu_hz"], top)
     err = f / b["carrier"]["freq_hz"] - 1
     assert abs(err) <= 0.001, (name, top, f, err)
-    # nearest count: no other TOP is closer
-    for t in (top - 1, top + 1):
-        assert abs(b["cpu_hz"] / (t + 1) - b["carrier"]["freq_hz"]) >= abs(f - b["carrier"]["freq_hz"])
+    if b["port"] == "circuitpython":
+        assert top == b["cpu_hz"] // b["carrier"]["freq_hz"]      # pwmio's own rule
+    else:
+        # nearest count: no other TOP is closer
+        for t in (top - 1, top + 1):
+            assert abs(b["cpu_hz"] / (t + 1) - b["carrier"]["freq_hz"]) \
+                >= abs(f - b["carrier"]["freq_hz"])
 
 
 def test_exact_carrier_figures():
@@ -95,15 +104,24 @@ def test_exact_carrier_figures():
     assert boards.actual_hz(125_000_000, 3675) == pytest.approx(34004.3526, abs=1e-4)
     assert boards.pwm_top(168_000_000, 34_000) == 4940
     assert boards.actual_hz(168_000_000, 4940) == pytest.approx(34001.2143, abs=1e-4)
+    assert boards.actual_hz(125_000_000, 3676) == pytest.approx(33995.1047, abs=1e-4)
 
 
-@pytest.mark.parametrize("cpu_hz", [125_000_000, 168_000_000])
-def test_sweep_20_to_60_khz_within_0_1_percent(cpu_hz):
+@pytest.mark.parametrize("port,cpu_hz", [("rp2", 125_000_000), ("stm32", 168_000_000),
+                                         ("circuitpython", 125_000_000)])
+def test_sweep_20_to_60_khz_within_0_1_percent(port, cpu_hz):
+    """Every carrier from 20 to 60 kHz, as each port's PWM programs it."""
+    board = _raw({"rp2": "pico", "stm32": "pyboard", "circuitpython": "pico_cpy"}[port])
     worst = 0.0
     for f in range(20_000, 60_001, 7):          # every 7 Hz: ~5,700 frequencies
-        top = boards.pwm_top(cpu_hz, f)
+        board["carrier"]["freq_hz"] = f
+        top = boards.board_top(board)
+        if port != "circuitpython":
+            assert top == boards.pwm_top(cpu_hz, f)
         worst = max(worst, abs(boards.actual_hz(cpu_hz, top) / f - 1))
-    assert worst <= 0.5 / (cpu_hz / 60_000 - 0.5)      # half a count at the shortest period
+    # half a count (nearest) or one count (floored) at the shortest period
+    counts = cpu_hz / 60_000
+    assert worst <= (1.0 if port == "circuitpython" else 0.5) / (counts - 1)
     assert worst < 0.001
 
 
@@ -118,12 +136,12 @@ def test_validator_accepts_only_carriers_within_0_1_percent(cpu_hz, freq):
     try:
         b = boards.validate(d, "pico.json")
     except ValueError as e:
-        assert "pico.json: carrier.freq_hz: " in str(e) and "PWM counts" in str(e)
+        assert "pico.json: carrier.freq_hz: " in str(e) and "gives PWM TOP" in str(e)
         counts = (cpu_hz + freq // 2) // freq
-        assert counts < boards.COUNTS_MIN or counts > boards.COUNTS_MAX
+        assert counts < boards.COUNTS_MIN or counts - 1 > boards.TOP_MAX
         return
     top = boards.board_top(b)
-    assert top + 1 <= 65536
+    assert boards.COUNTS_MIN - 1 <= top <= boards.TOP_MAX == 16382
     assert abs(boards.actual_hz(cpu_hz, top) / freq - 1) <= 0.001
 
 
@@ -172,13 +190,30 @@ def test_defaults_filled_in():
     assert b["display"] == {"positions": 19200, "dx_um": 5.3}
     for port, mode, pins, spins, pwm in [("circuitpython", "loop", ["GP0"], ["A0"], {}),
                                          ("virtual", "stepped", [0], [1], {}),
-                                         ("stm32", "timer_irq", ["X1"], ["X19"],
-                                          {"timer": 2, "channel": 1})]:
+                                         ("stm32", "timer_irq", ["Y6"], ["X19"],
+                                          {"timer": 1, "channel": 4})]:
         d = {"name": "m", "port": port, "cpu_hz": 84_000_000,
              "carrier": {"drive": "single", "pins": pins, "pwm": pwm},
              "sensor": {"kind": "adc_linear", "pins": spins}}
         b = boards.validate(d, "m.json")
-        assert b["refresh"]["mode"] == mode and b["carrier"]["pwm"] == pwm
+        assert b["refresh"] == {"hz": 8333, "mode": mode}        # optional keys stay out
+        assert b["carrier"]["pwm"] == pwm and "deadtime_ns" not in b["carrier"]
+
+
+def test_accepted_variants():
+    # a bridge may put leg A on channel B (hw_rp2 supports either order)
+    d = _raw("pico_bridge")
+    d["carrier"]["pins"] = [17, 16]
+    assert boards.validate(d, "pico_bridge.json")["carrier"]["pins"] == [17, 16]
+    # the stm32 optional keys at their limits; a single-drive stm32 board on TIM1 CH4
+    d = _raw("pyboard")
+    d["carrier"]["deadtime_ns"] = 6000                  # 1008 ticks at 168 MHz
+    d["refresh"]["timer"] = 14
+    b = boards.validate(d, "pyboard.json")
+    assert b["carrier"]["deadtime_ns"] == 6000 and b["refresh"]["timer"] == 14
+    del d["carrier"]["deadtime_ns"], d["refresh"]["timer"]
+    b = boards.validate(d, "pyboard.json")
+    assert "deadtime_ns" not in b["carrier"] and "timer" not in b["refresh"]
 
 
 def test_first_directory_wins_and_names_merge(tmp_path):
@@ -245,7 +280,8 @@ BAD = [
     ("pico", lambda d: d.update({"zeta": 1, "alpha": 2}),
      "alpha: unknown key (known: name, port, title, cpu_hz, carrier, sensor, refresh, display, wiring)"),
     ("pico", _set("carrier.frq_hz", 34000),
-     "carrier.frq_hz: unknown key (known: freq_hz, duty_cap, drive, pins, pwm, idle_amplitude)"),
+     "carrier.frq_hz: unknown key (known: freq_hz, duty_cap, drive, pins, pwm, idle_amplitude, "
+     "deadtime_ns)"),
     ("pico", _del("port"), "port: missing (required)"),
     ("pico", _set("port", "esp32"), "port: 'esp32' is not one of rp2, stm32, circuitpython, virtual"),
     ("pico", _set("name", "pyboard"), "name: 'pyboard' does not match the file name (bad.json)"),
@@ -262,12 +298,14 @@ BAD = [
      "carrier.freq_hz: expected an integer, got a number 34000.5"),
     ("pico", _set("carrier.freq_hz", True), "carrier.freq_hz: expected an integer, got a boolean"),
     ("pico", _set("carrier.freq_hz", None), "carrier.freq_hz: expected an integer, got null"),
-    ("pico", _set("carrier.freq_hz", 1000),
-     "carrier.freq_hz: 1000 Hz on the 125000000 Hz clock (cpu_hz) gives 125000 PWM counts per "
-     "period; need 500 .. 65536 (16-bit counter, <= 0.1 % frequency error)"),
+    ("pico", _set("carrier.freq_hz", 7000),
+     "carrier.freq_hz: 7000 Hz on the 125000000 Hz clock (cpu_hz) gives PWM TOP 17856; need "
+     "499 .. 16382 (>= 500 counts for resolution and frequency accuracy; compare words within "
+     "small ints)"),
     ("pico", _set("cpu_hz", 1_000_000),
-     "carrier.freq_hz: 34000 Hz on the 1000000 Hz clock (cpu_hz) gives 29 PWM counts per "
-     "period; need 500 .. 65536 (16-bit counter, <= 0.1 % frequency error)"),
+     "carrier.freq_hz: 34000 Hz on the 1000000 Hz clock (cpu_hz) gives PWM TOP 28; need "
+     "499 .. 16382 (>= 500 counts for resolution and frequency accuracy; compare words within "
+     "small ints)"),
     ("pico", _set("carrier.duty_cap", 0), "carrier.duty_cap: 0 is out of range (0, 0.5]"),
     ("pico", _set("carrier.duty_cap", 0.6), "carrier.duty_cap: 0.6 is out of range (0, 0.5]"),
     ("pico", _set("carrier.duty_cap", -0.1), "carrier.duty_cap: -0.1 is out of range (0, 0.5]"),
@@ -286,15 +324,43 @@ BAD = [
      "carrier.idle_amplitude: 70000 is out of range [0, 65535]"),
     ("pico_bridge", _set("carrier.pins", [16]), "carrier.pins: drive 'bridge' needs 2 pins, got 1"),
     ("pico_bridge", _set("carrier.pins", [17, 18]),
-     "carrier.pins: [17, 18]: a bridge takes channel A and B of one PWM slice (an even GPIO "
-     "and the next one, e.g. [16, 17])"),
+     "carrier.pins: [17, 18]: a bridge takes the two channels of one PWM slice (GPIO 2k and "
+     "2k+1, e.g. [16, 17]); leg B is inverted"),
     ("pico_bridge", _set("carrier.pins", [16, 15]),
-     "carrier.pins: [16, 15]: a bridge takes channel A and B of one PWM slice (an even GPIO "
-     "and the next one, e.g. [16, 17])"),
+     "carrier.pins: [16, 15]: a bridge takes the two channels of one PWM slice (GPIO 2k and "
+     "2k+1, e.g. [16, 17]); leg B is inverted"),
+    ("pico_bridge", _set("carrier.pins", [16, 16]),
+     "carrier.pins: [16, 16]: a bridge takes the two channels of one PWM slice (GPIO 2k and "
+     "2k+1, e.g. [16, 17]); leg B is inverted"),
+    ("pico_bridge", _set("carrier.deadtime_ns", 200),
+     "carrier.deadtime_ns: only stm32 timers (TIM1, TIM8) have a dead-time generator; on 'rp2' "
+     "the gate drivers provide it"),
     ("pyboard", _set("carrier.pins", ["Y1", 8]),
      "carrier.pins[1]: expected a pin name such as \"Y1\", got a number 8"),
     ("pyboard", _set("carrier.pwm.timer", 2),
-     "carrier.pwm.timer: 2: complementary outputs (drive 'bridge') need an advanced timer, 1 or 8"),
+     "carrier.pwm.timer: 2: the carrier needs an advanced timer, 1 or 8 (complementary "
+     "outputs, dead time, safe off state)"),
+    ("pyboard", lambda d: d["carrier"].update({"drive": "single", "pins": ["X1"],
+                                                "pwm": {"timer": 2, "channel": 1}}),
+     "carrier.deadtime_ns: applies to drive 'bridge' (complementary outputs) only"),
+    ("pyboard", lambda d: d["carrier"].update({"drive": "single", "pins": ["X1"],
+                                                "pwm": {"timer": 2, "channel": 1},
+                                                "deadtime_ns": 0}) or d["carrier"].pop("deadtime_ns"),
+     "carrier.pwm.timer: 2: the carrier needs an advanced timer, 1 or 8 (complementary "
+     "outputs, dead time, safe off state)"),
+    ("pyboard", _set("carrier.deadtime_ns", 7000),
+     "carrier.deadtime_ns: 7000 ns is 1176 ticks of the 168000000 Hz timer clock; pyb allows "
+     "0 .. 1008"),
+    ("pyboard", _set("carrier.deadtime_ns", -5),
+     "carrier.deadtime_ns: -5 ns: a dead time cannot be negative"),
+    ("pyboard", _set("carrier.deadtime_ns", 2.5),
+     "carrier.deadtime_ns: expected an integer, got a number 2.5"),
+    ("pyboard", _set("refresh.timer", 8),
+     "refresh.timer: 8: need a pyb timer 1 .. 14 other than the carrier timers 1 and 8"),
+    ("pyboard", _set("refresh.timer", 15),
+     "refresh.timer: 15: need a pyb timer 1 .. 14 other than the carrier timers 1 and 8"),
+    ("pico", _set("refresh.timer", 7),
+     "refresh.timer: only stm32 boards choose the refresh timer (pyb.Timer id)"),
     ("pyboard", _set("carrier.pwm.channel", 4), "carrier.pwm.channel: 4 is out of range [1, 3]"),
     ("pyboard", _del("carrier.pwm.timer"), "carrier.pwm.timer: missing (required)"),
     ("pyboard", _set("sensor.pins", ["Y1"]), "sensor.pins[0]: pin 'Y1' is already used"),

@@ -297,3 +297,182 @@ def test_cli_as_a_process():
     p = subprocess.run([sys.executable, "-m", "texelpad.cli", "tank", "-L", "0", "-C", "56n"],
                        capture_output=True, text=True, env=env, timeout=60)
     assert p.returncode == 2 and "must be positive" in p.stderr
+
+
+# --- finding the resonance: hardware/sweep.py -----------------------------------------------
+
+HARDWARE = ROOT / "hardware"
+
+
+def _sweep_module():
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("hw_sweep", HARDWARE / "sweep.py")
+    mod = importlib.util.module_from_spec(spec)
+    assert spec.loader is not None
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _plate(f: float, f0: float = 33800.0, q: float = 25.0) -> int:
+    """A resonance as an envelope detector sees it: amplitude of a driven
+    second-order resonator, scaled to read_u16 units, on a floor of 900."""
+    r = f / f0
+    a = 1.0 / math.sqrt((1 - r * r) ** 2 + (r / q) ** 2)
+    return int(900 + 2000 * a)
+
+
+def test_sweep_finds_peak_and_q():
+    sw = _sweep_module()
+    state = {"f": None, "calls": 0}
+
+    def set_carrier(f):
+        state["f"] = f
+
+    def read():
+        state["calls"] += 1
+        return _plate(state["f"])
+    waits = []
+    pts = sw.sweep(set_carrier, read, 20000, 60000, 50, settle_ms=7, samples=4,
+                   sleep_ms=waits.append)
+    assert pts[0][0] == 20000 and pts[-1][0] == 60000 and len(pts) == 801
+    assert state["calls"] == 4 * 801 and waits == [7] * 801
+    res = sw.analyse(pts)
+    assert res["f0_hz"] == pytest.approx(33800, rel=2e-3)
+    # the -3 dB bandwidth of this resonator is ~ f0 / Q (floor subtracted)
+    assert res["q"] == pytest.approx(25, rel=0.08)
+    assert res["floor"] >= 900 and res["level"] == max(p[1] for p in pts)
+
+
+def test_sweep_edges_and_errors():
+    sw = _sweep_module()
+    # a peak at the edge of the sweep: no bandwidth, no Q
+    pts = [(f, 5000 - f // 10) for f in range(30000, 30500, 100)]
+    res = sw.analyse(pts)
+    assert res["f0_hz"] == 30000 and res["q"] is None and res["bw_hz"] is None
+    flat = [(f, 7) for f in range(30000, 30500, 100)]
+    assert sw.analyse(flat)["q"] is None
+    with pytest.raises(ValueError, match="at least 3"):
+        sw.analyse(pts[:2])
+    for args in [(500, 60000, 100), (20000, 250000, 100), (40000, 30000, 100), (20000, 60000, 0)]:
+        with pytest.raises(ValueError, match="sweep"):
+            sw.sweep(lambda f: None, lambda: 0, *args, sleep_ms=lambda ms: None)
+    # the duty law is texel's: amplitude 1 lands on the cap, 0 on 0
+    assert sw.duty_for(1.0, 0.5) == pytest.approx(0.5)
+    assert sw.duty_for(1.0, 0.3) == pytest.approx(0.3)
+    assert sw.duty_for(0.0) == 0.0
+    assert sw.duty_for(0.2) == pytest.approx(math.asin(0.2) / math.pi)
+    with pytest.raises(ValueError, match="amplitude"):
+        sw.duty_for(1.2)
+
+
+class _FakeMachine:
+    """machine.Pin/PWM/ADC stand-ins recording what run() does."""
+
+    def __init__(self):
+        self.pwms: list = []
+        self.pins: dict = {}
+        self.freq = None
+        fake = self
+
+        class Pin:
+            OUT = 1
+
+            def __init__(self, n, mode=None, value=None):
+                self.n = n
+                if value is not None:
+                    fake.pins[n] = (mode, value)
+
+        class PWM:
+            def __init__(self, pin, freq, duty_u16, invert=False):
+                self.pin, self.invert, self.log = pin.n, invert, [("init", freq, duty_u16)]
+                fake.pwms.append(self)
+
+            def freq(self, f):
+                fake.freq = f
+                self.log.append(("freq", f))
+
+            def duty_u16(self, d):
+                self.log.append(("duty", d))
+
+            def deinit(self):
+                self.log.append(("deinit",))
+
+        class ADC:
+            def __init__(self, pin):
+                self.n = pin.n
+
+            def read_u16(self):
+                return _plate(fake.freq)
+        self.Pin, self.PWM, self.ADC = Pin, PWM, ADC
+
+
+@pytest.mark.parametrize("board", ["pico", "pico_bridge"])
+def test_sweep_run_on_a_fake_rp2(monkeypatch, capsys, board):
+    sw = _sweep_module()
+    fake = _FakeMachine()
+    monkeypatch.setitem(sys.modules, "machine", fake)
+    monkeypatch.setattr(sw, "_sleep_ms", lambda ms: None)
+    res = sw.run(board, pickup_pin=27, f_lo=20000, f_hi=60000, step=50, amplitude=0.2)
+    assert res["f0_hz"] == pytest.approx(33800, rel=2e-3) and res["q"] == pytest.approx(25, rel=0.08)
+    out = capsys.readouterr().out
+    assert "peak %.0f Hz" % res["f0_hz"] in out and "Q = %.1f" % res["q"] in out
+    assert out.count("\n") == 801 + 2                          # the points, peak, Q
+    legs = fake.pwms
+    assert [p.pin for p in legs] == ([16] if board == "pico" else [16, 17])
+    assert [p.invert for p in legs] == ([False] if board == "pico" else [False, True])
+    d = round(math.asin(0.2) / math.pi * 65535)               # 4,195 of 65,535
+    for leg in legs:
+        duties = [e[1] for e in leg.log if e[0] == "duty"]
+        assert set(duties[:-1]) == {d} and duties[-1] == 0     # low amplitude, then off
+        assert leg.log[-1] == ("deinit",)
+    # every carrier pin ends as an output driven low
+    assert fake.pins == {p.pin: (1, 0) for p in legs}
+
+
+def test_sweep_run_refuses_and_still_turns_off(monkeypatch):
+    sw = _sweep_module()
+    fake = _FakeMachine()
+    monkeypatch.setitem(sys.modules, "machine", fake)
+    monkeypatch.setattr(sw, "_sleep_ms", lambda ms: None)
+    with pytest.raises(ValueError, match="amplitude"):
+        sw.run("pico", amplitude=0.8)
+    with pytest.raises(ValueError, match="pickup_pin: GPIO 26 is already used"):
+        sw.run("pico", pickup_pin=26)
+    assert fake.pwms == []                                     # refused before any PWM
+
+    def boom(*a):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(sw, "sweep", boom)
+    with pytest.raises(KeyboardInterrupt):
+        sw.run("pico_bridge")
+    assert all(p.log[-1] == ("deinit",) for p in fake.pwms) and len(fake.pwms) == 2
+    assert fake.pins == {16: (1, 0), 17: (1, 0)}
+
+
+def test_sweep_under_micropython():
+    import mpy
+    code = """
+import sys, json, math
+sys.path.append(%r)
+import sweep
+def plate(f, f0=33800.0, q=25.0):
+    r = f / f0
+    return int(900 + 2000 / math.sqrt((1 - r * r) ** 2 + (r / q) ** 2))
+st = [0]
+def setc(f):
+    st[0] = f
+pts = sweep.sweep(setc, lambda: plate(st[0]), 20000, 60000, 50, samples=2, sleep_ms=lambda ms: None)
+print(json.dumps({"n": len(pts), "res": sweep.analyse(pts), "duty": sweep.duty_for(0.2)}))
+""" % str(HARDWARE)
+    got = mpy.run_json(code)
+    assert got["n"] == 801
+    assert got["res"]["f0_hz"] == pytest.approx(33800, rel=2e-3)
+    assert got["res"]["q"] == pytest.approx(25, rel=0.08)
+    assert got["duty"] == pytest.approx(math.asin(0.2) / math.pi)
+
+
+def test_sweep_compiles_for_boards(tmp_path):
+    import mpy
+    for march in ("armv6m", "armv7emsp", None):
+        p = mpy.mpy_cross(HARDWARE / "sweep.py", tmp_path / "sweep.mpy", march)
+        assert p.returncode == 0, p.stderr

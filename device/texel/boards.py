@@ -10,7 +10,7 @@
 #                               "<source>: <key path>: <what is wrong>"
 #   pwm_top(cpu_hz, freq_hz) -> PWM TOP (counts per carrier period - 1)
 #   actual_hz(cpu_hz, top)   -> the carrier frequency that TOP really gives
-#   board_top(board)         -> pwm_top of a board's clock and carrier
+#   board_top(board)         -> the TOP a board's port really programs
 #
 # Search path (first directory holding <name>.json wins): "/boards" (a board's
 # flash root: `mpremote cp -r boards :`), "boards" (relative to the working
@@ -29,11 +29,16 @@ FREQ_MIN_HZ = 1000
 FREQ_MAX_HZ = 200000
 FREQ_DEFAULT_HZ = 34000                 # the TPaD's carrier
 # PWM counts per carrier period: the counters are 16 bit (RP2040 TOP, STM32
-# ARR; no prescaler, which would cost resolution), so at most 65,536. At
-# least 500 counts keep ~9 bits of amplitude resolution and bound the
-# frequency error of nearest-count rounding to 0.5/500 = 0.1 %.
+# ARR; no prescaler, which would cost resolution), so at most 65,536
+# (pwm_top's limit). A board must also keep TOP <= 16,382: the backends
+# build compare words (counts << 16, (TOP+1) << 16) that stay small ints
+# (< 2^30) on 32-bit ports, so the refresh never allocates. At least 500
+# counts keep ~9 bits of amplitude resolution and bound the frequency error
+# of nearest-count rounding to 0.5/500 = 0.1 % (a floored TOP, CircuitPython,
+# errs by under 1/500 = 0.2 %; at the boards' clocks and 20..60 kHz, < 0.05 %).
 COUNTS_MIN = 500
 COUNTS_MAX = 65536
+TOP_MAX = 16382
 POSITIONS_MAX = 1048576                 # same bound as texel.params LENGTH_MAX
 CPU_HZ_MIN = 1000000
 CPU_HZ_MAX = 1000000000                 # < 2^30: a small int on every port
@@ -55,20 +60,27 @@ DEFAULT_MODE = {"rp2": "timer_irq", "stm32": "timer_irq",
 # Keys in a fixed order (MicroPython dicts are unordered): the order keys are
 # checked in, so which bad key is named first is the same on every port.
 # Entries: (key, kind, default); kind: "i" int, "n" number, "s" string,
-# "d" dict, "p" pin list, "e" one of a tuple; default None = required.
+# "d" dict, "p" pin list; default None = required, OPTIONAL = left out of
+# the canonical dict when absent (the backend has its own default).
+OPTIONAL = "(optional)"
 TOP_KEYS = (("name", "s", None), ("port", "s", None), ("title", "s", ""),
             ("cpu_hz", "i", None), ("carrier", "d", None), ("sensor", "d", None),
             ("refresh", "d", {}), ("display", "d", {}), ("wiring", "s", ""))
 CARRIER_KEYS = (("freq_hz", "i", FREQ_DEFAULT_HZ), ("duty_cap", "n", 0.5),
                 ("drive", "s", None), ("pins", "p", None), ("pwm", "d", {}),
-                ("idle_amplitude", "i", 0))
+                ("idle_amplitude", "i", 0),
+                # stm32 bridge only: dead time between CHx and CHxN, ns
+                # (hw_stm32's default: 200 ns)
+                ("deadtime_ns", "i", OPTIONAL))
 # Calibration defaults for a 100 mm membrane potentiometer on a 3.3 V ADC
 # with a pull-down on the wiper (lifted finger reads ~0): measure per build.
 SENSOR_KEYS = (("kind", "s", None), ("pins", "p", None),
                ("raw_at_start", "i", 2000), ("raw_at_end", "i", 63000),
                ("lift_below", "i", 1000), ("filter_shift", "i", 2),
                ("latency_us", "i", 150))
-REFRESH_KEYS = (("hz", "i", 8333), ("mode", "s", None))
+# refresh.timer: stm32 only, the pyb timer that runs the refresh (hw_stm32's
+# default: 7, a basic timer without outputs)
+REFRESH_KEYS = (("hz", "i", 8333), ("mode", "s", None), ("timer", "i", OPTIONAL))
 DISPLAY_KEYS = (("positions", "i", 19200), ("dx_um", "n", 5.3))
 # pwm sub-dict keys per port: RP2040 slice (derived from the pin when
 # missing), STM32 timer and channel; CircuitPython pwmio and the virtual
@@ -82,6 +94,8 @@ FILTER_SHIFT_MAX = 8        # IIR time constant 2^8 refreshes = 31 ms at 8,333 H
 LATENCY_US_MAX = 20000
 REFRESH_HZ_MIN = 50
 REFRESH_HZ_MAX = 50000
+ADVANCED_TIMERS = (1, 8)    # STM32 TIM1, TIM8
+DEADTIME_TICKS_MAX = 1008   # pyb.Timer(deadtime=...) accepts 0..1008 timer ticks
 DX_UM_MAX = 1000.0
 NAME_MAX = 32
 
@@ -110,8 +124,18 @@ def actual_hz(cpu_hz, top):
 
 
 def board_top(board):
-    """pwm_top of a (validated) board's clock and carrier frequency."""
-    return pwm_top(board["cpu_hz"], board["carrier"]["freq_hz"])
+    """The TOP a (validated) board's PWM really runs with. MicroPython
+    backends program the nearest count (pwm_top); CircuitPython's pwmio
+    programs TOP = cpu_hz // freq_hz itself (raspberrypi port,
+    common-hal/pwmio/PWMOut.c): 125 MHz / 34 kHz -> TOP 3676, 3,677 clocks
+    per period, 33,995.10 Hz."""
+    return _port_top(board["port"], board["cpu_hz"], board["carrier"]["freq_hz"])
+
+
+def _port_top(port, cpu_hz, freq_hz):
+    if port == "circuitpython":
+        return cpu_hz // freq_hz
+    return (cpu_hz + freq_hz // 2) // freq_hz - 1
 
 
 # --- finding and reading board files ----------------------------------------
@@ -263,7 +287,8 @@ def _section(c, path, d, keys):
         if key not in d:
             if default is None:
                 c.fail(p, "missing (required)")
-            out[key] = dict(default) if isinstance(default, dict) else default
+            if default is not OPTIONAL:
+                out[key] = dict(default) if isinstance(default, dict) else default
             continue
         v = d[key]
         ok = ((kind == "i" and _is_int(v)) or (kind == "n" and _is_num(v))
@@ -360,11 +385,12 @@ def validate(d, source="board"):
     b["carrier"] = car
     freq = car["freq_hz"]
     _range(c, "carrier.freq_hz", freq, FREQ_MIN_HZ, FREQ_MAX_HZ, " Hz")
-    counts = (b["cpu_hz"] + freq // 2) // freq
-    if counts < COUNTS_MIN or counts > COUNTS_MAX:
-        c.fail("carrier.freq_hz", "%d Hz on the %d Hz clock (cpu_hz) gives %d PWM counts per "
-               "period; need %d .. %d (16-bit counter, <= 0.1 %% frequency error)"
-               % (freq, b["cpu_hz"], counts, COUNTS_MIN, COUNTS_MAX))
+    top = _port_top(port, b["cpu_hz"], freq)
+    if top < COUNTS_MIN - 1 or top > TOP_MAX:
+        c.fail("carrier.freq_hz", "%d Hz on the %d Hz clock (cpu_hz) gives PWM TOP %d; need "
+               "%d .. %d (>= %d counts for resolution and frequency accuracy; compare words "
+               "within small ints)" % (freq, b["cpu_hz"], top, COUNTS_MIN - 1, TOP_MAX,
+                                        COUNTS_MIN))
     cap = car["duty_cap"]
     if not 0 < cap <= 0.5:
         # above 50 % the PWM fundamental (sin(pi*D)) falls again
@@ -389,22 +415,31 @@ def validate(d, source="board"):
         elif pwm["slice"] != sl:
             c.fail("carrier.pwm.slice", "%r, but GPIO %d is on PWM slice %d"
                    % (pwm["slice"], pins[0], sl))
-        if drive == "bridge" and (pins[0] & 1 or pins[1] != pins[0] + 1):
-            c.fail("carrier.pins", "%r: a bridge takes channel A and B of one PWM slice "
-                   "(an even GPIO and the next one, e.g. [16, 17])" % (pins,))
-    elif port == "stm32":
-        tim = pwm["timer"]
-        if drive == "bridge":
-            # complementary outputs (CHx / CHxN) with dead time: TIM1, TIM8, CH1..3
-            if tim not in (1, 8):
-                c.fail("carrier.pwm.timer", "%r: complementary outputs (drive 'bridge') need "
-                       "an advanced timer, 1 or 8" % (tim,))
-            _range(c, "carrier.pwm.channel", pwm["channel"], 1, 3)
-        else:
-            if tim < 1 or tim > 14 or tim in (6, 7):
-                c.fail("carrier.pwm.timer", "%r is not a PWM timer (1 .. 14 without 6, 7)"
-                       % (tim,))
-            _range(c, "carrier.pwm.channel", pwm["channel"], 1, 4)
+        if drive == "bridge" and (pins[0] >> 1 != pins[1] >> 1 or pins[0] == pins[1]):
+            c.fail("carrier.pins", "%r: a bridge takes the two channels of one PWM slice "
+                   "(GPIO 2k and 2k+1, e.g. [16, 17]); leg B is inverted" % (pins,))
+    if "deadtime_ns" in car:
+        ns = car["deadtime_ns"]
+        if port != "stm32":
+            c.fail("carrier.deadtime_ns", "only stm32 timers (TIM1, TIM8) have a dead-time "
+                   "generator; on %r the gate drivers provide it" % (port,))
+        if drive != "bridge":
+            c.fail("carrier.deadtime_ns", "applies to drive 'bridge' (complementary outputs) only")
+        # ticks as hw_stm32 computes them (cpu_hz is the timer clock on stm32)
+        if ns < 0:
+            c.fail("carrier.deadtime_ns", "%d ns: a dead time cannot be negative" % ns)
+        ticks = (ns * (b["cpu_hz"] // 1000000) + 500) // 1000
+        if ticks > DEADTIME_TICKS_MAX:
+            c.fail("carrier.deadtime_ns", "%d ns is %d ticks of the %d Hz timer clock; pyb "
+                   "allows 0 .. %d" % (ns, ticks, b["cpu_hz"], DEADTIME_TICKS_MAX))
+    if port == "stm32":
+        # an advanced timer, TIM1 or TIM8: complementary outputs (CHx/CHxN,
+        # channels 1..3), dead time, and the MOE safe-off state hw_stm32
+        # relies on for either drive
+        if pwm["timer"] not in ADVANCED_TIMERS:
+            c.fail("carrier.pwm.timer", "%r: the carrier needs an advanced timer, 1 or 8 "
+                   "(complementary outputs, dead time, safe off state)" % (pwm["timer"],))
+        _range(c, "carrier.pwm.channel", pwm["channel"], 1, 3 if drive == "bridge" else 4)
 
     # sensor
     s = _section(c, "sensor", b["sensor"], SENSOR_KEYS)
@@ -433,7 +468,7 @@ def validate(d, source="board"):
 
     # refresh
     r = _section(c, "refresh", b["refresh"],
-                 (REFRESH_KEYS[0], ("mode", "s", DEFAULT_MODE.get(port, "loop"))))
+                 (REFRESH_KEYS[0], ("mode", "s", DEFAULT_MODE[port]), REFRESH_KEYS[2]))
     b["refresh"] = r
     _range(c, "refresh.hz", r["hz"], REFRESH_HZ_MIN, REFRESH_HZ_MAX, " Hz")
     if r["hz"] > freq:
@@ -443,6 +478,12 @@ def validate(d, source="board"):
     if r["mode"] not in PORT_MODES[port]:
         c.fail("refresh.mode", "%r is not available on port %r (use %s)"
                % (r["mode"], port, ", ".join(PORT_MODES[port])))
+    if "timer" in r:
+        if port != "stm32":
+            c.fail("refresh.timer", "only stm32 boards choose the refresh timer (pyb.Timer id)")
+        if r["timer"] < 1 or r["timer"] > 14 or r["timer"] in ADVANCED_TIMERS:
+            c.fail("refresh.timer", "%r: need a pyb timer 1 .. 14 other than the carrier "
+                   "timers 1 and 8" % (r["timer"],))
 
     # display
     disp = _section(c, "display", b["display"], DISPLAY_KEYS)
