@@ -34,8 +34,8 @@ FREQ_DEFAULT_HZ = 34000                 # the TPaD's carrier
 # build compare words (counts << 16, (TOP+1) << 16) that stay small ints
 # (< 2^30) on 32-bit ports, so the refresh never allocates. At least 500
 # counts keep ~9 bits of amplitude resolution and bound the frequency error
-# of nearest-count rounding to 0.5/500 = 0.1 % (a floored TOP, CircuitPython,
-# errs by under 1/500 = 0.2 %; at the boards' clocks and 20..60 kHz, < 0.05 %).
+# of nearest-count rounding to 0.5/500 = 0.1 %. CircuitPython's pwmio floors
+# TOP (an error of up to one count), so there the minimum is 1,000 counts.
 COUNTS_MIN = 500
 COUNTS_MAX = 65536
 TOP_MAX = 16382
@@ -104,7 +104,7 @@ NAME_MAX = 32
 def pwm_top(cpu_hz, freq_hz):
     """TOP (= counts per carrier period - 1) of an edge-aligned PWM clocked
     at cpu_hz (the timer's input clock, Hz) for a carrier of freq_hz (Hz),
-    rounded to the nearest count: RP2040 125 MHz / 34 kHz = 3,676.5 -> 3675;
+    rounded to the nearest count: RP2040 125 MHz / 34 kHz = 3,676.47 -> 3675;
     STM32F405 TIM1/TIM8 168 MHz / 34 kHz = 4,941.2 -> 4940. ValueError when
     the counts do not fit a 16-bit counter (or leave under 2 levels)."""
     if not _is_int(cpu_hz) or cpu_hz <= 0:
@@ -386,11 +386,11 @@ def validate(d, source="board"):
     freq = car["freq_hz"]
     _range(c, "carrier.freq_hz", freq, FREQ_MIN_HZ, FREQ_MAX_HZ, " Hz")
     top = _port_top(port, b["cpu_hz"], freq)
-    if top < COUNTS_MIN - 1 or top > TOP_MAX:
+    least = COUNTS_MIN * (2 if port == "circuitpython" else 1)     # floored TOP: 2x
+    if top < least - 1 or top > TOP_MAX:
         c.fail("carrier.freq_hz", "%d Hz on the %d Hz clock (cpu_hz) gives PWM TOP %d; need "
                "%d .. %d (>= %d counts for resolution and frequency accuracy; compare words "
-               "within small ints)" % (freq, b["cpu_hz"], top, COUNTS_MIN - 1, TOP_MAX,
-                                        COUNTS_MIN))
+               "within small ints)" % (freq, b["cpu_hz"], top, least - 1, TOP_MAX, least))
     cap = car["duty_cap"]
     if not 0 < cap <= 0.5:
         # above 50 % the PWM fundamental (sin(pi*D)) falls again
