@@ -11,6 +11,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 DEVICE = ROOT / "device"
+FAKES = ROOT / "tests" / "fakes"    # recording stand-ins for machine, pyb, pwmio, ...
 
 
 def micropython_exe() -> str:
@@ -24,18 +25,28 @@ def micropython_exe() -> str:
 
 
 def run(code: str, timeout: float = 120.0, heapsize: str | None = None,
-        path: str | os.PathLike | None = None, check: bool = True) -> str:
+        path: str | os.PathLike | None = None, check: bool = True,
+        extra_path=None) -> str:
     """Execute `code` under MicroPython; return stdout, raise on error.
 
     heapsize: e.g. "180k" (a Pico-like heap; the unix port's default is 2 MB).
     path: the directory holding the `texel` package (default device/), e.g. a
     directory of .mpy files made by mpy-cross.
-    check=False returns stdout + stderr instead of raising on failure."""
+    check=False returns stdout + stderr instead of raising on failure.
+    extra_path: a directory (or a list of them) searched before `path`, e.g.
+    tests/fakes (FAKES) so `import machine` / `pyb` / `pwmio` get the
+    recording stand-ins."""
     args = [micropython_exe()]
     if heapsize:
         args += ["-X", f"heapsize={heapsize}"]
     where = Path(path) if path is not None else DEVICE
-    env = dict(os.environ, MICROPYPATH=f"{where}:.frozen")
+    if extra_path is None:
+        extra = []
+    elif isinstance(extra_path, (str, os.PathLike)):
+        extra = [str(extra_path)]
+    else:
+        extra = [str(p) for p in extra_path]
+    env = dict(os.environ, MICROPYPATH=":".join(extra + [str(where), ".frozen"]))
     p = subprocess.run(args + ["-c", code], capture_output=True, text=True,
                        timeout=timeout, env=env, cwd=str(where))
     if not check:
