@@ -51,6 +51,8 @@ PICO = _board("pico", "rp2", 125000000,
               {"drive": "single", "pins": [16], "pwm": {"slice": 0}}, [26])
 PICO_BRIDGE = _board("pico_bridge", "rp2", 125000000,
                      {"drive": "bridge", "pins": [16, 17], "pwm": {"slice": 0}}, [26, 27])
+PICO_BRIDGE_BA = _board("pico_bridge_ba", "rp2", 125000000,   # leg A on channel B
+                        {"drive": "bridge", "pins": [17, 16], "pwm": {"slice": 0}}, [26])
 PYBOARD = _board("pyboard", "stm32", 168000000,
                  {"drive": "single", "pins": ["Y1"], "pwm": {"timer": 8, "channel": 1}}, ["X1"])
 PYBOARD_BRIDGE = _board("pyboard_bridge", "stm32", 168000000,
@@ -203,11 +205,14 @@ def check_suite(r, board, top):
     (PICO, 3675, "direct=False"),
     (PICO_BRIDGE, 3675, "direct=True"),
     (PICO_BRIDGE, 3675, "direct=False"),
+    (PICO_BRIDGE_BA, 3675, "direct=True"),
+    (PICO_BRIDGE_BA, 3675, "direct=False"),
     (PYBOARD, 4940, ""),
     (PYBOARD_BRIDGE, 4940, ""),
     (PICO_CPY, 3676, ""),
 ], ids=["pico-direct", "pico-duty_u16", "pico_bridge-direct", "pico_bridge-duty_u16",
-        "pyboard", "pyboard_bridge", "pico_cpy"])
+        "pico_bridge_ba-direct", "pico_bridge_ba-duty_u16", "pyboard", "pyboard_bridge",
+        "pico_cpy"])
 def test_backend_suite(board, top, kw):
     r = run_mp(SUITE.replace("hw = make(B)", "hw = make(B%s)" % (", " + kw if kw else "")),
                board)
