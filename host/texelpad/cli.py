@@ -322,9 +322,59 @@ def cmd_tank(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+# --- bench-refresh ----------------------------------------------------------
+
+def positive_float(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError("invalid number: %r" % text) from None
+    if not (v > 0 and math.isfinite(v)):
+        raise argparse.ArgumentTypeError("must be a finite number > 0, got %s" % text)
+    return v
+
+
+def add_bench_refresh(sub: Any) -> None:
+    from .refresh_bench import BUDGET_US, DEFAULT_SECONDS, GOAL_US
+    p = sub.add_parser(
+        "bench-refresh", help="what one refresh of the 8,333 Hz loop costs, and scene memory "
+                              "and swap latency",
+        description="Run the device runtime on the virtual board under the MicroPython unix "
+                    "port while a scripted finger swipes across the study's split screen, and "
+                    "time one refresh (Python and, where present, the fused viper refresh; "
+                    "batches timed with ticks_us), its parts (sensor.read, scene.amp, "
+                    "law.duty, hw.set_duty), the memory of five scenes and app.push() split "
+                    "into validate/build/swap. Also prints an op-count ESTIMATE for an "
+                    "emulated RP2040 against the %d us refresh period (goal <= %g us). "
+                    "Progress goes to stderr, the table to stdout." % (BUDGET_US, GOAL_US))
+    p.add_argument("--json", metavar="PATH", help="also write every figure here")
+    p.add_argument("--seconds", type=positive_float, default=DEFAULT_SECONDS, metavar="S",
+                   help="wall time spent timing each refresh variant (components get S/4 "
+                        "each; default %g)" % DEFAULT_SECONDS)
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    p.set_defaults(func=cmd_bench_refresh)
+
+
+def cmd_bench_refresh(args: argparse.Namespace) -> int:
+    from . import refresh_bench
+    progress = None if args.quiet else (lambda m: _stderr("bench-refresh: " + m))
+    res = refresh_bench.run(args.seconds, progress)
+    print(refresh_bench.table(res), flush=True)
+    if args.json:
+        try:
+            refresh_bench.write_json(res, args.json)
+        except OSError as e:
+            raise CliError("--json", "cannot write %s: %s" % (args.json, e.strerror or e),
+                           EXIT_FAIL) from None
+        if progress:
+            progress("wrote %s" % args.json)
+    return EXIT_FAIL if res.failed else EXIT_OK
+
+
 # --- entry point ----------------------------------------------------------------
 
-SUBCOMMANDS: list[Callable[[Any], None]] = [add_bench, add_render, add_tank]
+SUBCOMMANDS: list[Callable[[Any], None]] = [add_bench, add_render, add_tank,
+                                             add_bench_refresh]
 
 
 def build_parser() -> argparse.ArgumentParser:
