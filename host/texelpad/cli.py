@@ -349,8 +349,9 @@ def add_bench_refresh(sub: Any) -> None:
                     "Progress goes to stderr, the table to stdout." % (BUDGET_US, GOAL_US))
     p.add_argument("--json", metavar="PATH", help="also write every figure here")
     p.add_argument("--seconds", type=positive_float, default=DEFAULT_SECONDS, metavar="S",
-                   help="wall time spent timing each refresh variant (components get S/4 "
-                        "each; default %g)" % DEFAULT_SECONDS)
+                   help="wall time spent timing each refresh variant, at most (it also stops "
+                        "at 16,384 batches of 100); each component gets S/4 (at most 4,096 "
+                        "batches). Default %g" % DEFAULT_SECONDS)
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.set_defaults(func=cmd_bench_refresh)
 

@@ -36,7 +36,8 @@ from texel import scene as S
 import mpbench
 
 BATCH = 100                     # calls per timed batch
-MAX_BATCHES = 4096              # per measurement (preallocated: a 2 MB heap)
+MAX_BATCHES = 4096              # per component measurement (preallocated: a 2 MB heap)
+MAX_REFRESH_BATCHES = 16384     # per refresh measurement
 RECORD = 1024                   # duties the virtual board records (cleared every batch)
 PERIOD_US = 120                 # virtual time between refreshes (8,333 Hz)
 # The scripted swipe (app.finger keyframes, ms and mm), repeated for as long
@@ -87,10 +88,10 @@ def _us(t0, t1):
     return time.ticks_diff(t1, t0)
 
 
-def _times():
+def _times(n=MAX_BATCHES):
     from array import array
     gc.collect()
-    return array("i", bytes(4 * MAX_BATCHES)), array("i", bytes(4 * MAX_BATCHES))
+    return array("i", bytes(4 * n)), array("i", bytes(4 * n))
 
 
 def _list(a, k):
@@ -269,12 +270,12 @@ def measure_refresh(seconds):
     r.worst_us = 0
     count0 = r.count
     v0 = t
-    batch_us, empty_us = _times()
+    batch_us, empty_us = _times(MAX_REFRESH_BATCHES)
     k = 0
     gc.collect()
     budget = int(seconds * 1000000)
     w0 = time.ticks_us()
-    while (_us(w0, time.ticks_us()) < budget or k < 5) and k < MAX_BATCHES:
+    while (_us(w0, time.ticks_us()) < budget or k < 5) and k < MAX_REFRESH_BATCHES:
         if t - cycle0 >= CYCLE_US:
             hw.now = t
             app.finger(SWIPE_MS)

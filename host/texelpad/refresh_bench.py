@@ -588,9 +588,9 @@ def table(res: RefreshBenchResult) -> str:
     info = res.info
     load = res.machine.get("load_average")
     mp = res.machine.get("micropython", {})
-    out = ["texelpad bench-refresh: one refresh of the %d Hz loop (budget %d us per refresh, "
+    out = ["texelpad bench-refresh: one refresh of the %s Hz loop (budget %d us per refresh, "
            "goal <= %g us), virtual board, MicroPython %s unix port (viper: %s)"
-           % (REFRESH_HZ, BUDGET_US, GOAL_US, mp.get("version", "?"),
+           % ("{:,}".format(REFRESH_HZ), BUDGET_US, GOAL_US, mp.get("version", "?"),
               "yes" if mp.get("viper") else "no"),
            "host: %s, %s CPUs, load average %s; %.3g s per refresh variant"
            % (res.machine.get("cpu"), res.machine.get("cpu_count"),
