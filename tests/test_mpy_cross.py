@@ -30,7 +30,7 @@ VIPER_FILES = mpy.viper_files()
 # Files allowed to hold viper/native code: each is imported only inside a
 # try/except by a module that has a pure-Python fallback. A new one must be
 # added here on purpose (and guarded the same way).
-NATIVE_ONLY = {DEVICE / "texel" / "fill_viper.py"}
+NATIVE_ONLY = {DEVICE / "texel" / "fill_viper.py", DEVICE / "texel" / "refresh_viper.py"}
 
 # mpy header byte 2 holds the native architecture in its upper 6 bits
 # (py/persistentcode.h: MP_NATIVE_ARCH_*).
@@ -48,6 +48,9 @@ def test_device_tree_and_native_files():
     assert VIPER_FILES <= NATIVE_ONLY, f"viper code outside the guarded modules: {VIPER_FILES - NATIVE_ONLY}"
     src = (DEVICE / "texel" / "engine_int.py").read_text()
     assert "from .fill_viper import fill" in src and "except (ImportError, SyntaxError" in src
+    app = (DEVICE / "texel" / "app.py").read_text()
+    assert "from .refresh_viper import FastRefresh, irq_rp2" in app
+    assert "except (ImportError, SyntaxError)" in app
 
 
 def _compile(tmp_path: Path, src: Path, march: str | None) -> tuple[bytes, str]:

@@ -31,7 +31,7 @@ LIFT_DEBOUNCE = 3
 SWIPE = r"""
 import json
 import texel.app as app
-st0 = app.start("virtual")
+st0 = app.start("virtual", fast=%(fast)s)
 rt = app._rt
 hw = rt.hw
 law = rt.law
@@ -88,12 +88,16 @@ last = hw.rec_d[hw.nrec - 1]
 print(json.dumps({"n": hw.nrec, "exact_n": exact_n, "exact_bad": exact_bad, "tel_lost": tel_lost,
                   "track_n": track_n, "track_bad": track_bad, "lift_late": lift_late,
                   "over_cap": over_cap, "last_duty_after_stop": last, "status": st, "start": st0}))
-""" % {"tol": POS_TOL, "settle": SETTLE, "deb": LIFT_DEBOUNCE}
+"""
 
 
-@pytest.fixture(scope="module")
-def swipe():
-    return mpy.run_json(SWIPE, timeout=300)
+@pytest.fixture(scope="module", params=[True, False], ids=["viper", "python"])
+def swipe(request):
+    code = SWIPE % {"tol": POS_TOL, "settle": SETTLE, "deb": LIFT_DEBOUNCE,
+                    "fast": request.param}
+    r = mpy.run_json(code, timeout=300)
+    r["fast"] = request.param
+    return r
 
 
 def test_swipe_every_refresh_recorded(swipe):
@@ -103,6 +107,7 @@ def test_swipe_every_refresh_recorded(swipe):
     st = swipe["status"]
     assert st["refreshes"] == 9166 and st["faults"] == 0
     assert st["board"] == "virtual" and st["pwm_top"] == 3675 and st["refresh_hz"] == 8333
+    assert st["refresh"] == ("viper" if swipe["fast"] else "python")
 
 
 def test_swipe_plays_map_at_sensed_position_exactly(swipe):
@@ -227,7 +232,7 @@ print(json.dumps(out))
 HEAP = r"""
 import json, micropython
 import texel.app as app
-app.start("virtual")
+app.start("virtual", fast=%(fast)s)
 rt = app._rt
 hw = rt.hw
 app.finger([(0, 10.0), (1000, 90.0), (1100, None), (1200, 30.0)])
@@ -271,8 +276,9 @@ print(json.dumps(res))
 """
 
 
-def test_refresh_allocates_nothing():
-    r = mpy.run_json(HEAP, timeout=120)
+@pytest.mark.parametrize("fast", [True, False], ids=["viper", "python"])
+def test_refresh_allocates_nothing(fast):
+    r = mpy.run_json(HEAP % {"fast": fast}, timeout=120)
     assert r["control"] == "MemoryError"          # the lock is real
     assert r["refresh"] == "ok" and r["n"] == 12499
     assert r["faults"] == 0

@@ -67,10 +67,14 @@ def _ticks():
         return _real_ticks(), _ticks_diff
 
 
-def start(board_name, scene=None, realtime=False, **hw_opts):
+def start(board_name, scene=None, realtime=False, fast=None, **hw_opts):
     """Start the display on board `board_name` (a file in boards/) playing
     `scene` (default: the study's split screen). Stops a running display
-    first. Returns status()."""
+    first. Returns status().
+
+    fast: the fused viper refresh (refresh_viper.py) - default on wherever
+    the port has viper and the sensor is a linear ADC; on an RP2040 its IRQ
+    then reads the ADC and writes the PWM compare register itself."""
     global _rt
     board = _boards.load(board_name)
     # build the scene before touching the hardware: a bad scene changes nothing
@@ -95,8 +99,28 @@ def start(board_name, scene=None, realtime=False, **hw_opts):
         else:
             ticks, diff = _ticks()
         idle = board["carrier"].get("idle_amplitude", 0)
-        rt.refresh = Refresh(rt.sensor, rt.law, hw.set_duty, ticks, diff, rt.period_us, idle,
-                             getattr(hw, "cost_ticks", None))
+        if fast is None:
+            fast = compat.HAS_VIPER and s["kind"] == "adc_linear"
+        callback = None
+        if fast:
+            try:
+                # viper code: a port without a native emitter cannot compile it
+                from .refresh_viper import FastRefresh, irq_rp2
+            except (ImportError, SyntaxError):
+                fast = False
+        if fast:
+            rt.refresh = FastRefresh(rt.sensor, rt.law, hw.set_duty, reads[0], ticks, diff,
+                                     rt.period_us, idle, getattr(hw, "cost_ticks", None))
+            if board["port"] == "rp2" and getattr(hw, "direct", False):
+                rt.refresh.use_rp2_registers(hw._cc, hw._mul, int(s["pins"][0]) - 26)
+                callback = irq_rp2
+            rt.mode = "viper" if callback is None else "viper-irq"
+        else:
+            rt.refresh = Refresh(rt.sensor, rt.law, hw.set_duty, ticks, diff, rt.period_us, idle,
+                                 getattr(hw, "cost_ticks", None))
+            rt.mode = "python"
+        if callback is None:
+            callback = rt.refresh.step
         rt.started_us = ticks()
         rt.ticks = ticks
         rt.diff = diff
@@ -106,7 +130,7 @@ def start(board_name, scene=None, realtime=False, **hw_opts):
         _rt = rt
         _install(canonical)
         if board["port"] != "circuitpython":
-            hw.start(rt.refresh.step, rt.hz)
+            hw.start(callback, rt.hz)
             if realtime and hasattr(hw, "run_realtime"):
                 hw.run_realtime()
     except Exception:
@@ -167,7 +191,7 @@ def status():
     elapsed = rt.diff(rt.ticks(), rt.started_us)
     sc = r.scene
     st.update({
-        "board": rt.board["name"], "port": rt.board["port"],
+        "board": rt.board["name"], "port": rt.board["port"], "refresh": rt.mode,
         "carrier_hz": rt.hw.freq_hz if hasattr(rt.hw, "freq_hz") else rt.board["carrier"]["freq_hz"],
         "pwm_top": rt.hw.top, "refresh_hz": rt.hz,
         "refreshes": r.count, "rate_hz": (r.count * 1000000 // elapsed) if elapsed > 0 else 0,

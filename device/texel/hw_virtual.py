@@ -73,7 +73,7 @@ class Finger:
 class VirtualHw:
     """Hw contract of docs/runtime.md for the virtual board."""
 
-    def __init__(self, board, record=1 << 17, noise_raw=0, seed=1):
+    def __init__(self, board, record=1 << 16, noise_raw=0, seed=1):
         c = board["carrier"]
         self.board = board
         self.freq_hz = c["freq_hz"]

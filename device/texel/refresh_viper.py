@@ -1,0 +1,343 @@
+# The fused refresh: sensor tracking + scene lookup + duty law in one viper
+# function, so a refresh costs a few microseconds on an RP2040 instead of the
+# hundreds a Python-level refresh (about ten calls and a hundred bytecodes)
+# would cost on an emulated one. It computes exactly what Refresh.step with
+# AdcLinearSensor, Scene.amp and DutyLaw.duty compute (tests/test_refresh_viper.py
+# runs both on the same inputs and compares every refresh).
+#
+# Layout. Everything the refresh touches is reached from one array('I'), _W,
+# holding each entry as two 32-bit halves (lo, hi): hi is 0 on 32-bit boards
+# and completes the address on the 64-bit unix port (viper here can load 32-
+# bit words, not machine words). _W holds: the addresses of the state array S (int32 words), the
+# scene's region table and sample buffers, the duty law's fine table, the
+# telemetry ring, and (rp2) the register addresses. A scene swap builds a new
+# word array and replaces _W with one store: the IRQ sees the old scene or the
+# new one, never a mix. The Python objects behind the addresses are kept
+# referenced by FastRefresh while they are in use.
+#
+# Kept alone in this file: a port without a native emitter cannot compile it.
+import micropython
+from array import array
+from micropython import const
+import uctypes
+from .refresh import Refresh, TELEMETRY_SLOTS
+
+# _W: word array indices
+W_S = const(0)          # state S (array 'i')
+W_TAB = const(1)        # scene region table (array 'i', rows start,end,kind,value + sentinel)
+W_FINE = const(2)       # DutyLaw fine table (array 'H')
+W_TEL_T = const(3)      # telemetry ring: time (array 'i')
+W_TEL_P = const(4)      # telemetry ring: position (array 'i')
+W_TEL_A = const(5)      # telemetry ring: amplitude (array 'H')
+W_IDLE = const(6)       # scene idle amplitude (uint16)
+W_TIMER = const(7)      # rp2: TIMERAWL register address (us counter)
+W_ADC = const(8)        # rp2: ADC CS register address (RESULT follows)
+W_CC = const(9)         # rp2: PWM slice CC register address
+W_MUL = const(10)       # rp2: CC word = counts * MUL (leg A, and B for a bridge)
+W_BUF0 = const(11)      # scene buffer k at W_BUF0 + k
+W_FIXED = const(11)
+
+# S: state indices (int32 words; every value non-negative and < 2^30 - the
+# velocity is stored biased by V_BIAS - so 32- and 64-bit viper agree)
+S_TOUCH = const(0)
+S_LOW = const(1)
+S_DEB = const(2)
+S_F = const(3)
+S_V = const(4)
+S_FR = const(5)
+S_VR = const(6)
+S_K = const(7)
+S_KM = const(8)
+S_KV = const(9)
+S_KVM = const(10)
+S_VMAX = const(11)
+S_QMAX = const(12)
+S_REV = const(13)
+S_R0 = const(14)
+S_SPAN = const(15)
+S_SHI = const(16)
+S_SLO = const(17)
+S_LQ8 = const(18)
+S_LIFT = const(19)
+S_POS1 = const(20)      # last position + 1 (0 = lifted)
+S_AMP = const(21)
+S_DUTY = const(22)
+S_COUNT = const(23)
+S_TEL_EVERY = const(24)
+S_TEL_DIV = const(25)
+S_TEL_HEAD = const(26)
+S_Q = const(27)         # DutyLaw q
+S_HALF = const(28)      # DutyLaw rounding offset
+S_MAXC = const(29)      # DutyLaw max_counts
+S_WORST = const(30)
+S_OVR = const(31)
+S_PERIOD = const(32)    # refresh period, us
+S_ADC_CS = const(33)    # rp2: CS word that starts one conversion on the sensor's channel
+S_SIZE = const(34)
+V_BIAS = const(0x10000000)      # 2^28 > any |v| (v <= qmax < 2^28)
+_SLOTS = const(256)             # = refresh.TELEMETRY_SLOTS (checked below)
+
+_W = None
+
+
+@micropython.viper
+def core(raw: int, t: int) -> int:
+    """One refresh from a raw reading (read_u16 units); t: time stamp (us,
+    < 2^30) for telemetry. Returns the duty (PWM counts)."""
+    w = ptr32(_W)
+    s = ptr32((int(w[W_S * 2]) | ((int(w[W_S * 2 + 1]) << 16) << 16)))
+    # --- sensor: AdcLinearSensor.read + _Tracker._track ---------------------
+    p = -1
+    if raw < int(s[S_LIFT]):
+        if int(s[S_TOUCH]):
+            n = int(s[S_LOW]) + 1
+            if n >= int(s[S_DEB]):
+                s[S_TOUCH] = 0
+                s[S_LOW] = 0
+            else:
+                # a dropout: dead-reckon one refresh at the current velocity
+                s[S_LOW] = n
+                v = int(s[S_V]) - V_BIAS
+                nf = int(s[S_F]) + v
+                if nf < 0:
+                    nf = 0
+                elif nf > int(s[S_QMAX]):
+                    nf = int(s[S_QMAX])
+                s[S_F] = nf
+                p = nf + ((v * int(s[S_LQ8]) + 128) >> 8)
+    else:
+        s[S_LOW] = 0
+        if int(s[S_REV]):
+            d = int(s[S_R0]) - raw
+        else:
+            d = raw - int(s[S_R0])
+        if d < 0:
+            d = 0
+        elif d > int(s[S_SPAN]):
+            d = int(s[S_SPAN])
+        x = d * int(s[S_SHI]) + ((d * int(s[S_SLO]) + 8192) >> 14)
+        if x > int(s[S_QMAX]):
+            x = int(s[S_QMAX])
+        if int(s[S_TOUCH]):
+            f = int(s[S_F])
+            e = int(s[S_FR]) + x - f
+            nf = f + (e >> int(s[S_K]))
+            s[S_FR] = e & int(s[S_KM])
+            v = int(s[S_V]) - V_BIAS
+            e = int(s[S_VR]) + (nf - f) - v
+            v += e >> int(s[S_KV])
+            vmax = int(s[S_VMAX])
+            if v > vmax:
+                v = vmax
+                e = 0
+            elif v < 0 - vmax:
+                v = 0 - vmax
+                e = 0
+            s[S_VR] = e & int(s[S_KVM])
+            s[S_F] = nf
+            s[S_V] = v + V_BIAS
+        else:
+            # touch-down: re-seed, no glide and no velocity kick
+            s[S_TOUCH] = 1
+            s[S_F] = x
+            s[S_FR] = 0
+            s[S_V] = V_BIAS
+            s[S_VR] = 0
+            nf = x
+            v = 0
+        p = nf + ((v * int(s[S_LQ8]) + 128) >> 8)
+    if p >= 0 or int(s[S_TOUCH]):
+        if p < 0:
+            p = 0
+        elif p > int(s[S_QMAX]):
+            p = int(s[S_QMAX])
+        p = (p + 128) >> 8
+    # --- scene: Scene.amp ----------------------------------------------------
+    if p < 0:
+        amp = int(w[W_IDLE * 2])
+    else:
+        tab = ptr32((int(w[W_TAB * 2]) | ((int(w[W_TAB * 2 + 1]) << 16) << 16)))
+        i = 1
+        while p >= int(tab[i]):
+            i += 4
+        st = int(tab[i - 1])
+        if p < st:
+            amp = int(w[W_IDLE * 2])
+        elif int(tab[i + 1]):
+            amp = int(ptr16(int(w[(W_BUF0 + int(tab[i + 2])) * 2]) | ((int(w[(W_BUF0 + int(tab[i + 2])) * 2 + 1]) << 16) << 16))[p - st])
+        else:
+            amp = int(tab[i + 2])
+    # --- duty: DutyLaw.duty ----------------------------------------------------
+    fine = ptr16((int(w[W_FINE * 2]) | ((int(w[W_FINE * 2 + 1]) << 16) << 16)))
+    j = amp >> 6
+    lo = int(fine[j])
+    dc = (lo + (((int(fine[j + 1]) - lo) * (amp & 63)) >> 6) + int(s[S_HALF])) >> int(s[S_Q])
+    if dc > int(s[S_MAXC]):
+        dc = int(s[S_MAXC])
+    # --- bookkeeping and telemetry ------------------------------------------------
+    s[S_POS1] = p + 1
+    s[S_AMP] = amp
+    s[S_DUTY] = dc
+    s[S_COUNT] = (int(s[S_COUNT]) + 1) & 0x3FFFFFFF
+    every = int(s[S_TEL_EVERY])
+    if every:
+        n = int(s[S_TEL_DIV]) + 1
+        if n >= every:
+            n = 0
+            h = int(s[S_TEL_HEAD])
+            k = h & (_SLOTS - 1)
+            ptr32((int(w[W_TEL_T * 2]) | ((int(w[W_TEL_T * 2 + 1]) << 16) << 16)))[k] = t
+            ptr32((int(w[W_TEL_P * 2]) | ((int(w[W_TEL_P * 2 + 1]) << 16) << 16)))[k] = p
+            ptr16((int(w[W_TEL_A * 2]) | ((int(w[W_TEL_A * 2 + 1]) << 16) << 16)))[k] = amp
+            s[S_TEL_HEAD] = (h + 1) & 0x3FFFFFFF
+        s[S_TEL_DIV] = n
+    return dc
+
+
+@micropython.viper
+def irq_rp2(timer) -> int:
+    """The whole refresh as an rp2 hard-IRQ callback: ADC, core, CC store,
+    cost bookkeeping - no Python call but core(). Registers are reached
+    through _W (TIMERAWL, ADC CS/RESULT, the slice's CC), so tests can point
+    them at arrays."""
+    w = ptr32(_W)
+    s = ptr32((int(w[W_S * 2]) | ((int(w[W_S * 2 + 1]) << 16) << 16)))
+    clock = ptr32((int(w[W_TIMER * 2]) | ((int(w[W_TIMER * 2 + 1]) << 16) << 16)))
+    t0 = int(clock[0])
+    adc = ptr32((int(w[W_ADC * 2]) | ((int(w[W_ADC * 2 + 1]) << 16) << 16)))
+    adc[0] = s[S_ADC_CS]                    # EN | START_ONCE | AINSEL
+    while (int(adc[0]) & 0x100) == 0:       # READY after ~2 us
+        pass
+    r12 = int(adc[1]) & 0xFFF
+    dc = int(core((r12 << 4) | (r12 >> 8), t0 & 0x3FFFFFFF))   # read_u16 scaling
+    ptr32((int(w[W_CC * 2]) | ((int(w[W_CC * 2 + 1]) << 16) << 16)))[0] = dc * int(w[W_MUL * 2])
+    dt = int(clock[0]) - t0
+    if dt > int(s[S_WORST]):
+        s[S_WORST] = dt
+    if dt > int(s[S_PERIOD]):
+        s[S_OVR] = (int(s[S_OVR]) + 1) & 0x3FFFFFFF
+    return 0
+
+
+def _state(i, bias=0):
+    # a Refresh attribute kept in S[i] (stored + bias: positions may be -1)
+    def get(self):
+        return self._S[i] - bias
+
+    def put(self, v):
+        self._S[i] = v + bias
+    return property(get, put)
+
+
+_RP2_TIMERAWL = const(0x40054028)
+_RP2_ADC_CS = const(0x4004C000)
+
+
+class FastRefresh(Refresh):
+    """Refresh with the fused viper core: same attributes and telemetry API,
+    state kept in S (read back through properties for status())."""
+
+    def __init__(self, sensor, law, set_duty, read, ticks_us, ticks_diff, period_us,
+                 idle_amp=0, cost_ticks=None):
+        self._S = array("i", bytes(4 * S_SIZE))
+        self._keep = None
+        Refresh.__init__(self, sensor, law, set_duty, ticks_us, ticks_diff, period_us,
+                         idle_amp, cost_ticks)
+        S = self._S
+        sn = sensor
+        S[S_DEB] = sn._debounce
+        S[S_K] = sn._k
+        S[S_KM] = sn._km
+        S[S_KV] = sn._kv
+        S[S_KVM] = sn._kvm
+        S[S_VMAX] = sn._vmax
+        S[S_QMAX] = sn._qmax
+        S[S_REV] = 1 if sn._rev else 0
+        S[S_R0] = sn._r0
+        S[S_SPAN] = sn._span
+        S[S_SHI] = sn._s_hi
+        S[S_SLO] = sn._s_lo
+        S[S_LQ8] = sn._lq8
+        S[S_LIFT] = sn._lift
+        S[S_V] = V_BIAS
+        S[S_Q] = law.q
+        S[S_HALF] = law._half
+        S[S_MAXC] = law.max_counts
+        S[S_PERIOD] = period_us
+        self._read = read
+        self._regs = (0, 0, 0, 0)
+        self._adc_cs = 0
+        self._install(None)
+
+    def use_rp2_registers(self, cc_addr, mul, adc_channel, timer_addr=_RP2_TIMERAWL,
+                          adc_addr=_RP2_ADC_CS):
+        """Let irq_rp2 drive the hardware directly (RP2040)."""
+        self._S[S_ADC_CS] = 1 | 4 | (adc_channel << 12)
+        self._regs = (timer_addr, adc_addr, cc_addr, mul)
+        self._install(self.scene)
+
+    def _install(self, scene):
+        global _W
+        bufs = scene.buffers() if scene is not None else ()
+        words = array("I", [0] * (2 * (W_FIXED + len(bufs))))
+
+        def put(k, v):
+            words[2 * k] = v & 0xFFFFFFFF
+            words[2 * k + 1] = (v >> 16) >> 16
+
+        if scene is None:
+            tab = _EMPTY_TABLE
+            put(W_IDLE, self.idle_amp)
+        else:
+            tab = scene._t
+            put(W_IDLE, scene.idle)
+        put(W_S, uctypes.addressof(self._S))
+        put(W_TAB, uctypes.addressof(tab))
+        put(W_FINE, uctypes.addressof(self.law._fine))
+        put(W_TEL_T, uctypes.addressof(self.tel_t))
+        put(W_TEL_P, uctypes.addressof(self.tel_pos))
+        put(W_TEL_A, uctypes.addressof(self.tel_amp))
+        for k in range(4):
+            put(W_TIMER + k, self._regs[k])
+        for k in range(len(bufs)):
+            put(W_BUF0 + k, uctypes.addressof(bufs[k]))
+        keep = (words, scene, tab)
+        old = self._keep
+        self._keep = keep               # referenced before the IRQ can see them
+        _W = words                      # the swap: one store
+        return old
+
+    def swap(self, scene):
+        old = self.scene
+        self._install(scene)
+        self.scene = scene
+        return old
+
+    def step(self, _timer=None):
+        c0 = self.cost_ticks()
+        d = core(self._read(), self.ticks_us() & 0x3FFFFFFF)
+        self.set_duty(d)
+        dt = self.ticks_diff(self.cost_ticks(), c0)
+        S = self._S
+        if dt > S[S_WORST]:
+            S[S_WORST] = dt
+        if dt > self.period_us:
+            S[S_OVR] = (S[S_OVR] + 1) & 0x3FFFFFFF
+
+    # Refresh's attributes, backed by S (read by status() and telemetry)
+    count = _state(S_COUNT)
+    amp = _state(S_AMP)
+    duty = _state(S_DUTY)
+    worst_us = _state(S_WORST)
+    overruns = _state(S_OVR)
+    tel_every = _state(S_TEL_EVERY)
+    tel_div = _state(S_TEL_DIV)
+    tel_head = _state(S_TEL_HEAD)
+    pos = _state(S_POS1, 1)
+
+
+if TELEMETRY_SLOTS != _SLOTS:
+    raise ImportError("refresh_viper: telemetry ring size differs from refresh.py")
+
+# a scene-less table: the sentinel row alone (every position is a gap)
+_EMPTY_TABLE = array("i", [0x3FFFFFFF, 0x3FFFFFFF, 0, 0])
