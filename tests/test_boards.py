@@ -190,7 +190,7 @@ def test_defaults_filled_in():
                             "pwm": {"slice": 2}, "idle_amplitude": 0}   # GPIO 5: slice 2 (B)
     assert b["sensor"] == {"kind": "adc_ratio", "pins": [27, 28], "raw_at_start": 2000,
                            "raw_at_end": 63000, "lift_below": 1000, "filter_shift": 2,
-                           "latency_us": 150}
+                           "latency_us": 150, "velocity_shift": 4, "lift_debounce": 3}
     assert b["refresh"] == {"hz": 8333, "mode": "timer_irq"}
     assert b["display"] == {"positions": 19200, "dx_um": 5.3}
     for port, mode, pins, spins, pwm in [("circuitpython", "loop", ["GP0"], ["A0"], {}),
@@ -402,7 +402,7 @@ BAD = [
     ("pico", _set("sensor.latency_us", -1), "sensor.latency_us: -1 us is out of range [0, 20000]"),
     ("pico", _set("sensor.gain", 2),
      "sensor.gain: unknown key (known: kind, pins, raw_at_start, raw_at_end, lift_below, "
-     "filter_shift, latency_us)"),
+     "filter_shift, latency_us, velocity_shift, lift_debounce)"),
     ("pico", _set("display.positions", 0), "display.positions: 0 is out of range [1, 1048576]"),
     ("pico", _set("display.positions", 1048577),
      "display.positions: 1048577 is out of range [1, 1048576]"),

@@ -351,3 +351,30 @@ def test_pico_start_runs_in_hard_timer_irq_on_fakes():
     assert r["cc"] == r["want"] and r["cc"] > 0
     assert r["cc_lifted"] == 0                                # idle amplitude 0
     assert r["timer_running"] is False and r["cc_stopped"] == 0
+
+
+CPY = r"""
+import json
+import texel.app as app
+st = app.start("pico_cpy")
+loop = app.run_loop(seconds=0.2)
+st2 = app.status()
+app.stop()
+import pwmio
+print(json.dumps({"port": st["port"], "top": st["pwm_top"], "hz": st["refresh_hz"], "loop": loop,
+                  "refreshes": st2["refreshes"], "status_loop": st2["loop"]}))
+"""
+
+
+def test_circuitpython_paced_loop_reports_its_rate():
+    """No timer IRQ on CircuitPython: run_loop() paces the refresh on the
+    board's ticks and reports the rate it achieved (here on the recording
+    pwmio/analogio fakes; the rate is printed, never asserted)."""
+    r = mpy.run_json(CPY, extra_path=FAKES, timeout=120)
+    assert r["port"] == "circuitpython" and r["top"] == 3676
+    loop = r["loop"]
+    assert loop == r["status_loop"]
+    assert loop["refreshes"] == r["refreshes"] > 0
+    # never more refreshes than the schedule allows (k is due at k*1e6//hz)
+    assert loop["refreshes"] <= r["hz"] * loop["seconds"] + 1
+    print("CircuitPython-profile loop on the unix port:", loop)

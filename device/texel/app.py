@@ -143,11 +143,13 @@ def start(board_name, scene=None, realtime=False, fast=None, **hw_opts):
 def _install(canonical):
     rt = _rt
     disp = rt.board["display"]
-    t0 = rt.ticks()
+    # real time, also on the virtual board (whose ticks are stepped)
+    clock = getattr(rt.hw, "cost_ticks", rt.ticks)
+    t0 = clock()
     sc = _scene.build(canonical, disp, idle_default=rt.board["carrier"].get("idle_amplitude", 0))
-    t1 = rt.ticks()
+    t1 = clock()
     old = rt.refresh.swap(sc)
-    t2 = rt.ticks()
+    t2 = clock()
     old = None
     gc.collect()
     rt.pushes += 1
@@ -200,16 +202,22 @@ def status():
         # describe(), not the source: an uploaded samples region would send
         # up to 19,200 ints with every status call
         "scene": sc.describe() if sc is not None else None,
-        "pushes": rt.pushes, "last_push": rt.last_push})
+        "pushes": rt.pushes, "last_push": rt.last_push,
+        "loop": getattr(rt, "loop", None)})
     return st
 
 
-def stream(n=125, rate_hz=125):
-    """Telemetry: the next n (t_us, position, amplitude) samples taken by the
-    refresh itself every hz/rate_hz refreshes (so the loop is not disturbed).
-    On the virtual board, call advance() meanwhile or run realtime."""
+def stream(rate_hz=125):
+    """Start telemetry: the refresh itself records (t_us, position,
+    amplitude) every hz // rate_hz refreshes into a 256-sample ring, so the
+    loop is not disturbed; telemetry() drains it. Returns that divider.
+    rate_hz=0 stops it. On the virtual board, advance() time meanwhile or
+    run realtime."""
     rt = _running()
     r = rt.refresh
+    if not rate_hz:
+        r.tel_every = 0
+        return 0
     every = rt.hz // rate_hz
     if every < 1:
         every = 1
@@ -259,20 +267,35 @@ def stop():
 
 def run_loop(seconds=None):
     """CircuitPython (no timer IRQ): a best-effort loop paced to the board's
-    refresh rate; it measures and reports its own rate in status()."""
-    import time
+    refresh rate on the board's own microsecond ticks. Refresh k is due at
+    start + k*1e6//hz; when the loop falls behind it runs late refreshes back
+    to back (counted as overruns by the refresh when they take too long) and
+    measures the rate it really achieved: status()["rate_hz"] and the
+    "loop" entry. Runs until Ctrl-C, or for `seconds`."""
     rt = _running()
     step = rt.refresh.step
-    period_ns = 1000000000 // rt.hz
-    t_next = time.monotonic_ns()
-    end = None if seconds is None else t_next + int(seconds * 1e9)
+    ticks, diff = rt.ticks, rt.diff
+    hz = rt.hz
+    t0 = ticks()
+    k = 0
+    late = 0
+    limit = None if seconds is None else int(seconds * 1000000)
     try:
-        while end is None or t_next < end:
-            step()
-            t_next += period_ns
-            while time.monotonic_ns() < t_next:
-                pass
+        while True:
+            now = diff(ticks(), t0)
+            if limit is not None and now >= limit:
+                break
+            due = (k * 1000000) // hz
+            if now >= due:
+                if now - due > rt.period_us:
+                    late += 1
+                step()
+                k += 1
     except KeyboardInterrupt:
         pass
     finally:
         rt.hw.off()
+    el = diff(ticks(), t0)
+    rt.loop = {"refreshes": k, "seconds": el / 1e6, "rate_hz": (k * 1000000 // el) if el > 0 else 0,
+               "late": late}
+    return rt.loop

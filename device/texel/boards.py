@@ -77,7 +77,10 @@ CARRIER_KEYS = (("freq_hz", "i", FREQ_DEFAULT_HZ), ("duty_cap", "n", 0.5),
 SENSOR_KEYS = (("kind", "s", None), ("pins", "p", None),
                ("raw_at_start", "i", 2000), ("raw_at_end", "i", 63000),
                ("lift_below", "i", 1000), ("filter_shift", "i", 2),
-               ("latency_us", "i", 150))
+               ("latency_us", "i", 150),
+               # sensor.py's defaults: velocity IIR shift 4, lift after 3
+               # consecutive no-finger samples
+               ("velocity_shift", "i", 4), ("lift_debounce", "i", 3))
 # refresh.timer: stm32 only, the pyb timer that runs the refresh (hw_stm32's
 # default: 7, a basic timer without outputs)
 REFRESH_KEYS = (("hz", "i", 8333), ("mode", "s", None), ("timer", "i", OPTIONAL))
@@ -460,6 +463,8 @@ def validate(d, source="board"):
                "at the end would read as lifted" % (s["lift_below"], min(a, e), max(a, e)))
     _range(c, "sensor.filter_shift", s["filter_shift"], 0, FILTER_SHIFT_MAX)
     _range(c, "sensor.latency_us", s["latency_us"], 0, LATENCY_US_MAX, " us")
+    _range(c, "sensor.velocity_shift", s["velocity_shift"], 0, FILTER_SHIFT_MAX)
+    _range(c, "sensor.lift_debounce", s["lift_debounce"], 1, 1000)
     used = list(car["pins"])
     for i in range(len(s["pins"])):
         if s["pins"][i] in used:
