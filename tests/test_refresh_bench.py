@@ -118,9 +118,11 @@ def test_scenes_memory_and_push(run):
     rc, stdout, stderr, doc = run
     scenes = {s["key"]: s for s in doc["scenes"]}
     assert list(scenes) == SCENES
-    # Scene.nbytes: 2 bytes per buffered position + 16 bytes per table row
-    assert scenes["split"]["nbytes"] == 2 * 19200 + 16 * 3
-    assert scenes["texel"]["nbytes"] == scenes["reference"]["nbytes"] == 2 * 19200 + 16 * 2
+    # Scene.nbytes: 2 bytes per buffered position, 8 per texel of a texel
+    # region played from its plan, + 16 bytes per table row
+    assert scenes["split"]["nbytes"] == 2 * 9600 + 8 * 192 + 16 * 3
+    assert scenes["texel"]["nbytes"] == 8 * 384 + 16 * 2
+    assert scenes["reference"]["nbytes"] == 2 * 19200 + 16 * 2
     assert scenes["constant"]["nbytes"] == 32 and scenes["constant"]["buffer_bytes"] == 0
     assert scenes["regions16"]["regions"] == 16
     assert scenes["regions16"]["table_bytes"] == 16 * 17

@@ -135,8 +135,11 @@ def test_status_reports_scene_and_versions(swipe):
     assert st["protocol"] == 1 and st["running"] is True
     regs = st["scene"]["regions"]
     assert [r["kind"] for r in regs] == ["reference", "texel"]
-    assert st["scene"]["bytes"] == 38448          # two 9,600-sample uint16 maps + table
-    assert st["last_push"]["scene_bytes"] == 38448
+    # the reference half as a 9,600-sample uint16 map, the texel half as its
+    # plan (192 texels x 8 bytes), and the region table
+    assert st["scene"]["bytes"] == 2 * 9600 + 8 * 192 + 48 == 20784
+    assert [r["mode"] for r in st["scene"]["regions"]] == ["map", "plan"]
+    assert st["last_push"]["scene_bytes"] == 20784
     assert st["firmware"].startswith("micropython")
 
 

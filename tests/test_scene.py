@@ -413,16 +413,26 @@ def test_validate_never_mutates_and_copies_lists():
 def test_split_screen_plays_reference_and_texel():
     sc = S.build(S.validate(SPLIT, D), D)
     ref = texel.reference_u16("4sin", 9600)
-    tx = texel.render_u16(dict(TEXEL_RIGHT, length_samples=9600))
+    # the texel half plays from its plan, sample by sample: exactly what the
+    # integer engine (the board's) renders
+    tx = texel.render_u16(dict(TEXEL_RIGHT, length_samples=9600), engine="int")
     amps = [sc.amp(p) for p in range(19200)]
     assert amps[:9600] == list(ref)
     assert amps[9600:] == [int(v) for v in tx]
     assert len(set(amps[9600:])) > 1000 and len(set(amps[:9600])) > 1000   # not a constant
     bufs = sc.buffers()
-    assert [len(b) for b in bufs] == [9600, 9600]
+    assert [len(b) for b in bufs] == [9600]
     assert all(isinstance(b, array) and b.typecode == "H" for b in bufs)
-    assert sc.nbytes == 2 * 19200 + 3 * 4 * 4      # 2 regions + sentinel row of 4 int32
+    (t28, d28, L, g), = sc.plans()
+    assert len(t28) == len(d28) == 192 and L == 50 and g == 16384
+    # 9,600 samples + 192 texels * 8 bytes + 2 regions and a sentinel row of 4 int32
+    assert sc.nbytes == 2 * 9600 + 8 * 192 + 3 * 4 * 4 == 20784
     assert sc.idle == 0
+    # asking for an engine renders the map with it instead
+    scn = S.build(S.validate(SPLIT, D), D, engine="numpy")
+    assert [len(b) for b in scn.buffers()] == [9600, 9600] and scn.plans() == ()
+    txn = texel.render_u16(dict(TEXEL_RIGHT, length_samples=9600), engine="numpy")
+    assert [scn.amp(p) for p in range(9600, 19200)] == [int(v) for v in txn]
     for p in (-1, -1000, 19200, 19201, 10 ** 6, 2 ** 30 - 2, -(2 ** 30)):
         assert sc.amp(p) == 0
     # every table value (sentinel included) is a small int on a 32-bit board
@@ -433,10 +443,10 @@ def test_split_screen_plays_reference_and_texel():
     d = sc.describe()
     assert d["count"] == 2 and d["bytes"] == sc.nbytes and d["positions"] == 19200
     assert d["regions"][0] == {"kind": "reference", "name": "4sin", "start": 0, "end": 9600,
-                               "start_mm": 0.0, "end_mm": 50.88, "bytes": 19200}
+                               "start_mm": 0.0, "end_mm": 50.88, "bytes": 19200, "mode": "map"}
     r1 = d["regions"][1]
-    assert (r1["kind"], r1["start"], r1["end"], r1["start_mm"], r1["end_mm"], r1["bytes"]) == \
-        ("texel", 9600, 19200, 50.88, 101.76, 19200)
+    assert (r1["kind"], r1["start"], r1["end"], r1["start_mm"], r1["end_mm"], r1["bytes"],
+            r1["mode"]) == ("texel", 9600, 19200, 50.88, 101.76, 8 * 192, "plan")
     assert (r1["pitch_db"], r1["irregularity_db"], r1["seed"]) == (6.3, -12.9, 7)
     json.dumps(d)                                   # literals only
 
@@ -584,6 +594,8 @@ def test_samples_stretch_full_screen_small_ints():
 # Memory
 # --------------------------------------------------------------------------
 
+FULL_REFERENCE = {"regions": [{"start_mm": 0, "end_mm": 101.76,
+                               "texture": {"kind": "reference", "name": "pink"}}]}
 FULL_TEXEL = {"regions": [{"start_mm": 0, "end_mm": 101.76, "texture": {
     "kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7}}]}
 
@@ -606,30 +618,34 @@ def test_memory_per_scene():
                         ("16 small regions", SIXTEEN), ("gaps+constants", GAPS)):
         sc = S.build(scene, D)
         spans = [(s, e, k) for s, e, k, _ in sc.spans()]
-        want_buf = sum(2 * (e - s) for s, e, k in spans if k == S.K_BUF)
-        assert sc.buffer_bytes == want_buf == sum(2 * len(b) for b in sc.buffers())
+        want_buf = (sum(2 * (e - s) for s, e, k in spans if k == S.K_BUF)
+                    + sum(8 * len(pl[0]) for pl in sc.plans()))
+        assert sc.buffer_bytes == want_buf == (sum(2 * len(b) for b in sc.buffers())
+                                               + sum(8 * len(pl[0]) for pl in sc.plans()))
         assert sc.table_bytes == 16 * (len(spans) + 1)
         assert sc.nbytes == want_buf + sc.table_bytes == S.buffer_bytes(scene, D)
         figures[name] = sc.nbytes
     print("\nscene memory (bytes held):", json.dumps(figures))
-    assert figures["split screen"] == 38448
-    assert figures["full-screen texel"] == 38432
-    # 16 regions of 5 mm (943 or 944 positions): 12 hold buffers, 4 are constants
+    assert figures["split screen"] == 2 * 9600 + 8 * 192 + 48 == 20784
+    assert figures["full-screen texel"] == 8 * 384 + 32 == 3104      # plan only: no map
+    # 16 regions of 5 mm (943 or 944 positions): 4 constants, 4 texel regions
+    # played from their plans, 8 buffers (references and samples)
     sc = S.build(SIXTEEN, D)
     lens = [e - s for s, e, k, _ in sc.spans() if k == S.K_BUF]
-    assert len(lens) == 12 and set(lens) <= {943, 944}
-    assert figures["16 small regions"] == 2 * sum(lens) + 17 * 16 == 22912
+    texels = [len(pl[0]) for pl in sc.plans()]
+    assert len(lens) == 8 and set(lens) <= {943, 944} and len(texels) == 4
+    assert figures["16 small regions"] == 2 * sum(lens) + 8 * sum(texels) + 17 * 16
 
 
 def test_max_bytes_budget():
     need = S.buffer_bytes(SPLIT, D)
-    assert need == 38448
+    assert need == 20784
     sc = S.build(SPLIT, D, max_bytes=need)
     assert sc.nbytes == need
     with pytest.raises(ValueError) as ei:
         S.build(SPLIT, D, max_bytes=need - 1)
-    assert str(ei.value) == ("scene: needs 38448 bytes (38400 of sample buffers + 48 of region table), "
-                             "over the budget of 38447 bytes")
+    assert str(ei.value) == ("scene: needs 20784 bytes (20736 of sample buffers and plans + 48 of "
+                             "region table), over the budget of 20783 bytes")
     with pytest.raises(ValueError, match=r"^max_bytes: expected an int"):
         S.build(SPLIT, D, max_bytes=1.5)
 
@@ -648,8 +664,9 @@ def test_memory_error_becomes_value_error(monkeypatch):
         return real(code, init)
 
     monkeypatch.setattr(S, "array", failing)
+    # an explicit engine renders both halves into buffers: the second fails
     with pytest.raises(ValueError, match=r"^scene: out of memory while building \(needs 38448 bytes"):
-        S.build(SPLIT, D)
+        S.build(SPLIT, D, engine="int")
     assert len(calls) == 2
 
 
@@ -785,6 +802,10 @@ def check_one(scene, display=SMALL):
         if kind == S.K_BUF:
             assert len(sc.buffers()[val]) == e - s
             held += 2 * (e - s)
+        elif kind == S.K_PLAN:
+            t28, d28, L, g = sc.plans()[val]
+            assert len(t28) == len(d28) == (e - s + L - 1) // L
+            held += 8 * len(t28)
         assert 0 <= sc.amp(s) <= 65535 and 0 <= sc.amp(e - 1) <= 65535
     assert sc.buffer_bytes == held
     assert max(sc._t) < 2 ** 30 and min(sc._t) >= 0             # board small ints
@@ -894,7 +915,7 @@ def _summary(scene, display):
         return ["err", str(e)]
     except Exception as e:                      # noqa: BLE001 - reported, must not happen
         return ["other", type(e).__name__]
-    sc = S.build(c, display, engine="int")
+    sc = S.build(c, display)
     h = 0
     for p in range(-2, display["positions"] + 2):
         h = (h * 31 + sc.amp(p)) & 0xFFFFFFF
@@ -966,7 +987,7 @@ print(json.dumps({"left": left, "right": right, "nbytes": sc.nbytes, "engine": t
     print("\nsplit screen on the unix port:", json.dumps(res))
     assert res["left"] and res["right"]
     assert res["engine"] == "int"
-    assert res["nbytes"] == 38448 and res["lens"] == [9600, 9600]
+    assert res["nbytes"] == 20784 and res["lens"] == [9600]      # texel half: its plan
     assert res["out"] == [0, 0, 0] and res["idle"] == 0
 
 
@@ -1206,29 +1227,48 @@ print(json.dumps(res))
 
 def test_real_memory_error_under_micropython():
     """Real MemoryErrors: with the split screen playing, build a full-screen
-    texel on heaps of 176..272 KB. build() never lets a MemoryError out (it
+    reference (a 38.4 KB map; a full-screen texel plays from its 3 KB plan
+    and always fits - test_full_texel_fits_beside_split_screen) on heaps of
+    176..272 KB. build() never lets a MemoryError out (it
     becomes a ValueError) and the playing scene stays intact; on most of
     these heaps the second 38.4 KB buffer finds no room. (The unix port
     compiles the package from source: its heap fragments badly, e.g. 88 KB
     free but no 38.4 KB block - see the printed table.)"""
-    code = MEMORY_SCRIPT % {"full": FULL_TEXEL}
+    code = MEMORY_SCRIPT % {"full": FULL_REFERENCE}
     rows = {}
     for kb in range(176, 273, 8):
         res = mpy.run_json(code, heapsize=f"{kb}k")
         rows[kb] = res
-        assert res["budget"] == ("scene: needs 38432 bytes (38400 of sample buffers + 32 of region table), "
-                                 "over the budget of 20000 bytes")
+        assert res["budget"] == ("scene: needs 38432 bytes (38400 of sample buffers and plans + 32 of "
+                                 "region table), over the budget of 20000 bytes")
         assert res["budget_alloc"] < 4096                 # no 38 KB buffer was made
         assert res["old_same"], kb
         for k in ("oom", "after_drop"):
             v = res[k]
             assert v in ("built", 38432) or v.startswith(
                 "scene: out of memory while building (needs 38432 bytes: 38400 of sample buffers "
-                "+ 32 of region table; "), (kb, k, v)
-    print("\nfull-screen texel built while the split screen plays (heap KB: outcome, free after):")
+                "and plans + 32 of region table; "), (kb, k, v)
+    print("\nfull-screen reference built while the split screen plays (heap KB: outcome, free after):")
     for kb, res in rows.items():
         print("  %d: %s / after dropping the old: %s" % (kb, res["oom"][:60], str(res["after_drop"])[:40]))
     assert sum(1 for r in rows.values() if r["oom"].startswith("scene: out of memory")) >= 3
+
+
+def test_full_texel_fits_beside_split_screen():
+    """A full-screen texel plays from its plan (384 texels x 8 bytes), so a
+    new one builds beside the playing split screen even on a Pico-sized
+    heap, where a second 38.4 KB map often finds no room."""
+    code = HELPERS + r"""
+import json, gc
+from texel import scene as S
+old = S.build(S.validate(split(), D), D)
+gc.collect()
+new = S.build(S.validate(%(full)r, D), D)
+print(json.dumps({"nbytes": new.nbytes, "plans": len(new.plans()), "free": gc.mem_free()}))
+""" % {"full": FULL_TEXEL}
+    for kb in (176, 180, 200):
+        res = mpy.run_json(code, heapsize=f"{kb}k")
+        assert res["nbytes"] == 8 * 384 + 32 and res["plans"] == 1, (kb, res)
 
 
 def test_pico_heap_split_screen_builds():
@@ -1243,7 +1283,7 @@ print(json.dumps({"nbytes": sc.nbytes, "free": gc.mem_free()}))
 """
     res = mpy.run_json(code, heapsize="180k")
     print("\nsplit screen on a 180k heap:", json.dumps(res))
-    assert res["nbytes"] == 38448
+    assert res["nbytes"] == 20784
 
 
 def test_scene_compiles_for_rp2040(tmp_path):

@@ -21,6 +21,7 @@ from array import array
 from micropython import const
 import uctypes
 from .refresh import Refresh, TELEMETRY_SLOTS
+from . import sine_table
 
 # _W: word array indices
 W_S = const(0)          # state S (array 'i')
@@ -34,8 +35,11 @@ W_TIMER = const(7)      # rp2: TIMERAWL register address (us counter)
 W_ADC = const(8)        # rp2: ADC CS register address (RESULT follows)
 W_CC = const(9)         # rp2: PWM slice CC register address
 W_MUL = const(10)       # rp2: CC word = counts * MUL (leg A, and B for a bridge)
-W_BUF0 = const(11)      # scene buffer k at W_BUF0 + k
-W_FIXED = const(11)
+W_SINE = const(11)      # sine_table (array 'H') for plan-backed texel regions
+W_NBUF = const(12)      # number of scene buffers
+W_BUF0 = const(13)      # scene buffer k at W_BUF0 + k; then plan p at
+                        # W_BUF0 + nbuf + 4p: t28 address, d28 address, L, gain Q14
+W_FIXED = const(13)
 
 # S: state indices (int32 words; every value non-negative and < 2^30 - the
 # velocity is stored biased by V_BIAS - so 32- and 64-bit viper agree)
@@ -163,10 +167,27 @@ def core(raw: int, t: int) -> int:
         st = int(tab[i - 1])
         if p < st:
             amp = int(w[W_IDLE * 2])
-        elif int(tab[i + 1]):
-            amp = int(ptr16(int(w[(W_BUF0 + int(tab[i + 2])) * 2]) | ((int(w[(W_BUF0 + int(tab[i + 2])) * 2 + 1]) << 16) << 16))[p - st])
-        else:
+        elif int(tab[i + 1]) == 1:
+            amp = int(ptr16((int(w[(W_BUF0 + int(tab[i + 2])) * 2]) | ((int(w[(W_BUF0 + int(tab[i + 2])) * 2 + 1]) << 16) << 16)))[p - st])
+        elif int(tab[i + 1]) == 0:
             amp = int(tab[i + 2])
+        else:
+            # plan-backed texel region: engine_int's sample, as Scene.amp
+            b = W_BUF0 + int(w[W_NBUF * 2]) + 4 * int(tab[i + 2])
+            o = p - st
+            ln = int(w[(b + 2) * 2])
+            j = o // ln
+            k = o - j * ln + 1
+            # k*d wraps at the machine word on 32-bit ports: the low 28 bits,
+            # all that is kept, are exact either way
+            t28 = ptr32(int(w[b * 2]) | ((int(w[b * 2 + 1]) << 16) << 16))
+            d28 = ptr32(int(w[(b + 1) * 2]) | ((int(w[(b + 1) * 2 + 1]) << 16) << 16))
+            ph = (int(t28[j]) + k * int(d28[j])) & 0x0FFFFFFF
+            sine = ptr16(int(w[W_SINE * 2]) | ((int(w[W_SINE * 2 + 1]) << 16) << 16))
+            ii = ph >> 18
+            y0 = int(sine[ii])
+            v = y0 + (((int(sine[ii + 1]) - y0) * ((ph >> 2) & 0xFFFF) + 32768) >> 16)
+            amp = (v * int(w[(b + 3) * 2]) + 8192) >> 14
     # --- duty: DutyLaw.duty ----------------------------------------------------
     fine = ptr16((int(w[W_FINE * 2]) | ((int(w[W_FINE * 2 + 1]) << 16) << 16)))
     j = amp >> 6
@@ -279,7 +300,8 @@ class FastRefresh(Refresh):
     def _install(self, scene):
         global _W
         bufs = scene.buffers() if scene is not None else ()
-        words = array("I", [0] * (2 * (W_FIXED + len(bufs))))
+        plans = scene.plans() if scene is not None else ()
+        words = array("I", [0] * (2 * (W_FIXED + len(bufs) + 4 * len(plans))))
 
         def put(k, v):
             words[2 * k] = v & 0xFFFFFFFF
@@ -301,6 +323,15 @@ class FastRefresh(Refresh):
             put(W_TIMER + k, self._regs[k])
         for k in range(len(bufs)):
             put(W_BUF0 + k, uctypes.addressof(bufs[k]))
+        put(W_SINE, uctypes.addressof(sine_table.table()))
+        put(W_NBUF, len(bufs))
+        for k in range(len(plans)):
+            b = W_BUF0 + len(bufs) + 4 * k
+            t28, d28, ln, g = plans[k]
+            put(b, uctypes.addressof(t28))
+            put(b + 1, uctypes.addressof(d28))
+            put(b + 2, ln)
+            put(b + 3, g)
         keep = (words, scene, tab)
         old = self._keep
         self._keep = keep               # referenced before the IRQ can see them

@@ -90,6 +90,13 @@ STRIDE = 4
 SENTINEL = 0x3FFFFFFF
 K_CONST = 0
 K_BUF = 1
+K_PLAN = 2              # texel region played from its integer plan, sample by sample
+# A texel region is kept as its plan (t28, d28: 8 bytes per texel) and
+# evaluated at the finger's position, instead of rendered (2 bytes per
+# sample), when no engine is asked for and its texels are at most PLAN_MAX_L
+# samples long (so k*d stays a small int in 16 x 14-bit limb products) and
+# longer than 4 samples (where the plan is smaller than the map).
+PLAN_MAX_L = 65535
 _ITEM = len(bytes(array("i", [0])))     # bytes per table int (4)
 
 _SHOW = 40                  # characters of a string shown in a message
@@ -429,12 +436,24 @@ def buffer_bytes(canonical, display):
     return _need(c, spans)[0]
 
 
-def _need(c, spans):
+def _on_plan(tex, n, engine):
+    """Whether a region plays from its plan (see K_PLAN)."""
+    if tex["kind"] != "texel" or engine is not None:
+        return False
+    L = tex["texel_samples"]
+    return 4 < L <= PLAN_MAX_L and L < n
+
+
+def _need(c, spans, engine=None):
     regions = c["regions"]
     bufs = 0
     for k in range(len(regions)):
-        if regions[k]["texture"]["kind"] != "constant":
-            bufs += 2 * (spans[k][1] - spans[k][0])
+        tex = regions[k]["texture"]
+        n = spans[k][1] - spans[k][0]
+        if _on_plan(tex, n, engine):
+            bufs += 8 * ((n + tex["texel_samples"] - 1) // tex["texel_samples"])
+        elif tex["kind"] != "constant":
+            bufs += 2 * n
     table = STRIDE * (len(regions) + 1) * _ITEM       # + the sentinel row
     return bufs + table, bufs, table
 
@@ -453,11 +472,11 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None):
         idle = c["idle_amplitude"]
     else:
         idle = _int("idle_default", idle_default, 0, U16_MAX)
-    need, nbuf, ntab = _need(c, spans)
+    need, nbuf, ntab = _need(c, spans, engine)
     if max_bytes is not None:
         max_bytes = _int("max_bytes", max_bytes, 0, _BIG)
         if need > max_bytes:
-            raise ValueError("scene: needs %d bytes (%d of sample buffers + %d of region table), "
+            raise ValueError("scene: needs %d bytes (%d of sample buffers and plans + %d of region table), "
                              "over the budget of %d bytes" % (need, nbuf, ntab, max_bytes))
     regions = c["regions"]
     if engine is not None:
@@ -482,7 +501,7 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None):
         except (ImportError, AttributeError):
             free = None
         raise ValueError("scene: out of memory while building (needs %d bytes: %d of sample "
-                         "buffers + %d of region table; %s bytes free)"
+                         "buffers and plans + %d of region table; %s bytes free)"
                          % (need, nbuf, ntab, "?" if free is None else free))
     return sc
 
@@ -509,6 +528,7 @@ def _make(c, spans, positions, dx_um, idle, engine):
     # 1. every buffer first, while the heap is least fragmented (rendering
     # leaves garbage behind: plans, boxed floats)
     bufs = []
+    plans = []
     for k in range(count):
         s, e = spans[k]
         j = STRIDE * k
@@ -518,6 +538,10 @@ def _make(c, spans, positions, dx_um, idle, engine):
         if tex["kind"] == "constant":
             table[j + 2] = K_CONST
             table[j + 3] = int(tex["level"] * 65535.0 + 0.5)
+        elif _on_plan(tex, e - s, engine):
+            table[j + 2] = K_PLAN
+            table[j + 3] = len(plans)
+            plans.append(_plan_of(tex, e - s))
         else:
             table[j + 2] = K_BUF
             table[j + 3] = len(bufs)
@@ -538,16 +562,34 @@ def _make(c, spans, positions, dx_um, idle, engine):
             reference_u16(tex["name"], n, buf)
         else:
             _fill_samples(tex["u16"], tex["fit"], n, buf)
-    return Scene(table, tuple(bufs), idle, c, spans, positions, dx_um)
+    return Scene(table, tuple(bufs), idle, c, spans, positions, dx_um, tuple(plans))
 
 
-def _render_texel(tex, n, engine, buf):
-    from . import render_u16, default_engine
+def _plan_of(tex, n):
+    """(t28, d28, L, gain_q14) of a texel region n samples long: what
+    engine_int needs to make any one sample (the float parts of the plan are
+    dropped)."""
+    from . import plan as make_plan
+    from .engine_int import gain_q14
     p = {}
     for k in TEXEL_KEYS:
         p[k] = tex[k]
     p["length_samples"] = n
-    if (default_engine() if engine is None else engine) == "numpy":
+    pl = make_plan(p)
+    return (pl.t28, pl.d28, pl.L, gain_q14(pl.gain))
+
+
+def _render_texel(tex, n, engine, buf):
+    from . import render_u16
+    p = {}
+    for k in TEXEL_KEYS:
+        p[k] = tex[k]
+    p["length_samples"] = n
+    # A scene plays what a board plays: the integer engine unless the caller
+    # asks for another (so a scene is the same texture on every runtime).
+    if engine is None:
+        engine = "int"
+    if engine == "numpy":
         # engine_numpy.render_u16 cannot write an ndarray into an array('H')
         # slice (CPython only; memory is no concern there): render, then copy.
         q = render_u16(p, engine="numpy")
@@ -594,9 +636,12 @@ def _fill_samples(vals, fit, n, buf):
 class Scene:
     """A built scene. amp(pos) is the only thing the refresh calls."""
 
-    def __init__(self, table, bufs, idle, source, spans, positions, dx_um):
+    def __init__(self, table, bufs, idle, source, spans, positions, dx_um, plans=()):
+        from . import sine_table
         self._t = table                 # array('i'): (start, end, kind, value) per region + sentinel
         self._bufs = bufs               # tuple of array('H'), fixed
+        self._plans = plans             # tuple of (t28, d28, L, gain_q14), fixed
+        self._sine = sine_table.table()
         self.count = len(table) // STRIDE - 1      # regions (without the sentinel)
         self.idle = idle                # uint16 amplitude in gaps / out of range
         self.source = source            # the canonical dict
@@ -606,6 +651,8 @@ class Scene:
         self.buffer_bytes = 0
         for b in bufs:
             self.buffer_bytes += 2 * len(b)
+        for pl in plans:
+            self.buffer_bytes += 4 * len(pl[0]) + 4 * len(pl[1])
         self.nbytes = self.buffer_bytes + self.table_bytes
 
     def amp(self, pos):
@@ -621,13 +668,36 @@ class Scene:
         s = t[i - 1]
         if pos < s:                     # a gap, before the first region, or past the last
             return self.idle
-        if t[i + 1]:
+        kind = t[i + 1]
+        if kind == K_BUF:
             return self._bufs[t[i + 2]][pos - s]
-        return t[i + 2]
+        if kind == K_CONST:
+            return t[i + 2]
+        # K_PLAN: engine_int's sample k (1-based) of texel j, computed directly:
+        # phase (t28[j] + k*d28[j]) mod 2^28 with k*d in two 14-bit limbs
+        # (k <= PLAN_MAX_L < 2^16: each product < 2^30, a small int), then
+        # the sine table and the Q14 gain exactly as engine_int._fill_py.
+        pl = self._plans[t[i + 2]]
+        o = pos - s
+        L = pl[2]
+        j = o // L
+        k = o - j * L + 1
+        d = pl[1][j]
+        ph = (pl[0][j] + (((k * (d >> 14)) & 0x3FFF) << 14)
+              + ((k * (d & 0x3FFF)) & 0x0FFFFFFF)) & 0x0FFFFFFF
+        tab = self._sine
+        ii = ph >> 18
+        y0 = tab[ii]
+        v = y0 + (((tab[ii + 1] - y0) * ((ph >> 2) & 0xFFFF) + 32768) >> 16)
+        return (v * pl[3] + 8192) >> 14
 
     def buffers(self):
         """The sample buffers, in region order (constants have none)."""
         return self._bufs
+
+    def plans(self):
+        """The plan-backed texel regions' (t28, d28, L, gain_q14), in order."""
+        return self._plans
 
     def spans(self):
         """[(start, end, kind, value)] per region, positions end-exclusive."""
@@ -645,7 +715,9 @@ class Scene:
             tex = src[k]["texture"]
             d = {"kind": tex["kind"], "start": s, "end": e,
                  "start_mm": _mm(s, self.dx_um), "end_mm": _mm(e, self.dx_um),
-                 "bytes": 2 * (e - s) if t[j + 2] == K_BUF else 0}
+                 "bytes": (2 * (e - s) if t[j + 2] == K_BUF else
+                           8 * len(self._plans[t[j + 3]][0]) if t[j + 2] == K_PLAN else 0),
+                 "mode": ("map", "plan")[t[j + 2] - 1] if t[j + 2] else "constant"}
             kind = tex["kind"]
             if kind == "reference":
                 d["name"] = tex["name"]
