@@ -237,10 +237,14 @@ PARTS: dict[str, dict[str, float]] = {
     # two frames, .adc_read, ._adc, [i], .read_u16 (I4), the built-in read (N1)
     # and the conversion it waits for
     "adc_rp2": {"C": 2, "I": 4, "N": 1, "us": ADC_CONVERSION_US},
-    # Scene.amp, 2 regions (split screen): self._t (I1), 1.5 scan tests of 2 I
-    # and 0.5 scan steps of 2 I (I4), t[i-1] (I2), pos < s (I1), t[i+1] (I2),
-    # self._bufs[t[i+2]][pos-s] (I5)
-    "scene.amp": {"C": 1, "I": 15},
+    # Scene.amp, 2 regions (split screen), the swipe half in each: self._t
+    # (I1), 1.5 scan tests of 2 I and 0.5 scan steps of 2 I (I4), t[i-1] (I2),
+    # pos < s (I1), kind = t[i+1] and its test (I3); reference half:
+    # self._bufs[t[i+2]][pos-s] (I5) -> 16 I; texel half (played from its
+    # plan): K_CONST test, plan tuple, texel index j = o // L, k, d, the Q28
+    # phase in two limb products (I12), sine table interpolation (I11), Q14
+    # gain (I5) -> 53 I; mean 35 I
+    "scene.amp": {"C": 1, "I": 35},
     # DutyLaw.duty: amp16 >> 16 (I2), self._fine, >>, t[i] (I3), the
     # interpolation and rounding (I11)
     "law.duty": {"C": 1, "I": 16},
@@ -252,10 +256,12 @@ PARTS: dict[str, dict[str, float]] = {
     # self.set_duty (I1), self._S and S[S_WORST] compare (I3), period test (I2)
     "fast_step": {"I": 13, "N": 4},
     # refresh_viper.core, touching path, split screen: the global _W (I1) and
-    # 130 Vop - sensor 67 (each S address is 5: two 32-bit halves, two shifts,
-    # an or), scene 32 (1.5 scan tests, the buffer address from two halves),
-    # duty 20, bookkeeping 11; the call from Python or viper (C1)
-    "viper_core": {"C": 1, "I": 1, "Vop": 130},
+    # 146 Vop - sensor 67 (each S address is 5: two 32-bit halves, two shifts,
+    # an or), scene 48 (1.5 scan tests; reference half: the buffer address
+    # from two halves, 32; texel half: plan slot, j = o // L, k, the t28/d28
+    # and sine addresses, phase, interpolation, gain, 65), duty 20,
+    # bookkeeping 11; the call from Python or viper (C1)
+    "viper_core": {"C": 1, "I": 1, "Vop": 146},
     # refresh_viper.irq_rp2 minus core: _W and core globals (I2), addresses of
     # S, TIMERAWL, ADC, CC (20 Vop), ADC start/result, clock reads, CC store,
     # worst/overrun tests (19 Vop), and the ADC conversion it polls for
