@@ -272,7 +272,7 @@ def test_model_paths_and_costs():
                                 "law.duty", "set_duty_rp2")
     assert py.counts["us"] == rb.ADC_CONVERSION_US == py.fixed_us
     assert py.est_us == pytest.approx(sum(py.counts[k] * costs[k] for k in rb.CLASSES))
-    assert rows["viper-irq"].counts["Vop"] == 146 + 39        # viper_core + irq_rp2
+    assert rows["viper-irq"].counts["Vop"] == 146 + 39        # the fused body + its register work
     assert [r.path for r in rb.estimates(costs, False)] == ["python"]
     # the unix check prices the same counts with the unix costs
     cal = {"float_op_us": 0.04, "int_op_us": 0.01, "call_us": 0.04, "builtin_call_us": 0.04,

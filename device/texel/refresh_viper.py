@@ -1,7 +1,8 @@
-# The fused refresh: sensor tracking + scene lookup + duty law in one viper
-# function, so a refresh costs a few microseconds on an RP2040 instead of the
-# hundreds a Python-level refresh (about ten calls and a hundred bytecodes)
-# would cost on an emulated one. It computes exactly what Refresh.step with
+# The fused refresh: ADC reading, sensor tracking, scene lookup, duty law and
+# the PWM compare store in one viper function, refresh(), with no Python call
+# inside - on an RP2040 it is the hard timer IRQ itself - so a refresh costs
+# tens of microseconds on an emulated RP2040 instead of the hundreds a
+# Python-level refresh (about ten calls and a hundred bytecodes) would. It computes exactly what Refresh.step with
 # AdcLinearSensor, Scene.amp and DutyLaw.duty compute (tests/test_refresh_viper.py
 # runs both on the same inputs and compares every refresh).
 #
@@ -76,8 +77,9 @@ S_MAXC = const(29)      # DutyLaw max_counts
 S_WORST = const(30)
 S_OVR = const(31)
 S_PERIOD = const(32)    # refresh period, us
-S_ADC_CS = const(33)    # rp2: CS word that starts one conversion on the sensor's channel
-S_SIZE = const(34)
+S_ADC_CS = const(33)    # the word written to the ADC's CS (rp2: starts one conversion)
+S_ADC12 = const(34)     # 1: RESULT is a 12-bit RP2040 reading, scaled as read_u16 does
+S_SIZE = const(35)
 V_BIAS = const(0x10000000)      # 2^28 > any |v| (v <= qmax < 2^28)
 _SLOTS = const(256)             # = refresh.TELEMETRY_SLOTS (checked below)
 
@@ -85,11 +87,26 @@ _W = None
 
 
 @micropython.viper
-def core(raw: int, t: int) -> int:
-    """One refresh from a raw reading (read_u16 units); t: time stamp (us,
-    < 2^30) for telemetry. Returns the duty (PWM counts)."""
+def refresh(timer) -> int:
+    """The whole refresh, with no Python call: the timer IRQ itself on an
+    RP2040. Reads its input from the "registers" whose addresses are in _W -
+    on an RP2040 the real TIMERAWL, ADC CS/RESULT and the slice's CC; on other
+    boards three small arrays that FastRefresh.step fills and reads - tracks
+    the finger, looks the scene up, applies the duty law, writes the CC word
+    and returns the duty (PWM counts). timer: the Timer object (unused)."""
     w = ptr32(_W)
     s = ptr32((int(w[W_S * 2]) | ((int(w[W_S * 2 + 1]) << 16) << 16)))
+    clock = ptr32(int(w[W_TIMER * 2]) | ((int(w[W_TIMER * 2 + 1]) << 16) << 16))
+    t0 = int(clock[0])
+    adc = ptr32(int(w[W_ADC * 2]) | ((int(w[W_ADC * 2 + 1]) << 16) << 16))
+    adc[0] = s[S_ADC_CS]                    # rp2: EN | START_ONCE | AINSEL
+    while (int(adc[0]) & 0x100) == 0:       # READY after ~2 us
+        pass
+    raw = int(adc[1])
+    if int(s[S_ADC12]):
+        raw = raw & 0xFFF
+        raw = (raw << 4) | (raw >> 8)       # read_u16 scaling of a 12-bit result
+    t = t0 & 0x3FFFFFFF
     # --- sensor: AdcLinearSensor.read + _Tracker._track ---------------------
     p = -1
     if raw < int(s[S_LIFT]):
@@ -212,32 +229,16 @@ def core(raw: int, t: int) -> int:
             ptr16((int(w[W_TEL_A * 2]) | ((int(w[W_TEL_A * 2 + 1]) << 16) << 16)))[k] = amp
             s[S_TEL_HEAD] = (h + 1) & 0x3FFFFFFF
         s[S_TEL_DIV] = n
-    return dc
-
-
-@micropython.viper
-def irq_rp2(timer) -> int:
-    """The whole refresh as an rp2 hard-IRQ callback: ADC, core, CC store,
-    cost bookkeeping - no Python call but core(). Registers are reached
-    through _W (TIMERAWL, ADC CS/RESULT, the slice's CC), so tests can point
-    them at arrays."""
-    w = ptr32(_W)
-    s = ptr32((int(w[W_S * 2]) | ((int(w[W_S * 2 + 1]) << 16) << 16)))
-    clock = ptr32((int(w[W_TIMER * 2]) | ((int(w[W_TIMER * 2 + 1]) << 16) << 16)))
-    t0 = int(clock[0])
-    adc = ptr32((int(w[W_ADC * 2]) | ((int(w[W_ADC * 2 + 1]) << 16) << 16)))
-    adc[0] = s[S_ADC_CS]                    # EN | START_ONCE | AINSEL
-    while (int(adc[0]) & 0x100) == 0:       # READY after ~2 us
-        pass
-    r12 = int(adc[1]) & 0xFFF
-    dc = int(core((r12 << 4) | (r12 >> 8), t0 & 0x3FFFFFFF))   # read_u16 scaling
-    ptr32((int(w[W_CC * 2]) | ((int(w[W_CC * 2 + 1]) << 16) << 16)))[0] = dc * int(w[W_MUL * 2])
+    ptr32(int(w[W_CC * 2]) | ((int(w[W_CC * 2 + 1]) << 16) << 16))[0] = dc * int(w[W_MUL * 2])
     dt = int(clock[0]) - t0
     if dt > int(s[S_WORST]):
         s[S_WORST] = dt
     if dt > int(s[S_PERIOD]):
         s[S_OVR] = (int(s[S_OVR]) + 1) & 0x3FFFFFFF
-    return 0
+    return dc
+
+
+irq_rp2 = refresh       # the name app.py gives the timer on an RP2040
 
 
 def _state(i, bias=0):
@@ -286,14 +287,22 @@ class FastRefresh(Refresh):
         S[S_MAXC] = law.max_counts
         S[S_PERIOD] = period_us
         self._read = read
-        self._regs = (0, 0, 0, 0)
-        self._adc_cs = 0
+        # the generic path's "registers": a clock word, an ADC (CS with READY
+        # always set, RESULT = the raw read_u16 value) and a CC word (MUL 1)
+        self._clk = array("I", [0])
+        self._adc = array("I", [0x100, 0])
+        self._cc = array("I", [0])
+        S[S_ADC_CS] = 0x100
+        S[S_ADC12] = 0
+        self._regs = (uctypes.addressof(self._clk), uctypes.addressof(self._adc),
+                      uctypes.addressof(self._cc), 1)
         self._install(None)
 
     def use_rp2_registers(self, cc_addr, mul, adc_channel, timer_addr=_RP2_TIMERAWL,
                           adc_addr=_RP2_ADC_CS):
         """Let irq_rp2 drive the hardware directly (RP2040)."""
         self._S[S_ADC_CS] = 1 | 4 | (adc_channel << 12)
+        self._S[S_ADC12] = 1
         self._regs = (timer_addr, adc_addr, cc_addr, mul)
         self._install(self.scene)
 
@@ -346,8 +355,10 @@ class FastRefresh(Refresh):
 
     def step(self, _timer=None):
         c0 = self.cost_ticks()
-        d = core(self._read(), self.ticks_us() & 0x3FFFFFFF)
-        self.set_duty(d)
+        self._clk[0] = self.ticks_us() & 0x3FFFFFFF
+        self._adc[1] = self._read()
+        refresh(None)
+        self.set_duty(self._cc[0])
         dt = self.ticks_diff(self.cost_ticks(), c0)
         S = self._S
         if dt > S[S_WORST]:

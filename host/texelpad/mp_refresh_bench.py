@@ -434,12 +434,27 @@ def measure_components(variant, seconds):
                       (_Clock(),), 1 << 30, None))
     else:
         import texel.refresh_viper as rv
-        core = getattr(rv, "core", None)
-        if core is None:
+        f = getattr(rv, "refresh", None)
+        regs = getattr(rt.refresh, "_adc", None)
+        if f is None or regs is None:
             return out
-        comps = [("viper_core", "refresh_viper.core(raw, t): sensor + scene + duty fused in "
-                                "one viper function (split screen)",
-                  loop_call2, loop_call1_empty, core, (raws,), n, None)]
+
+        def loop_regs(f, a, j, n):
+            # the generic path's ADC word holds the raw reading
+            end = j + n
+            while j < end:
+                regs[1] = a[j]
+                f(None)
+                j += 1
+
+        def loop_regs_empty(f, a, j, n):
+            end = j + n
+            while j < end:
+                regs[1] = a[j]
+                j += 1
+        comps = [("viper_core", "refresh_viper.refresh(None): sensor + scene + duty fused in "
+                                "one viper function, input from its ADC word (split screen)",
+                  loop_regs, loop_regs_empty, f, (raws,), n, None)]
     for name, what, loop, empty, f, args, n, before in comps:
         r = time_component(seconds, _wrap_f(loop, f), _wrap_f(empty, f), args, n, before)
         r.update({"event": "component", "variant": variant, "name": name, "what": what})

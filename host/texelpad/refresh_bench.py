@@ -251,10 +251,12 @@ PARTS: dict[str, dict[str, float]] = {
     # hw_rp2.Hw.set_duty, direct CC store: two clamp tests (I3), _mem is not
     # None (I2), self._mem[self._cc] = counts * self._mul (I5)
     "set_duty_rp2": {"C": 1, "I": 10},
-    # FastRefresh.step minus core/adc/set_duty: cost_ticks() x2, ticks_diff
-    # (I3 N3), global core (I1), self._read (I1), self.ticks_us() & mask (I2 N1),
-    # self.set_duty (I1), self._S and S[S_WORST] compare (I3), period test (I2)
-    "fast_step": {"I": 13, "N": 4},
+    # FastRefresh.step minus refresh/adc/set_duty: cost_ticks() x2, ticks_diff
+    # (I3 N3), the clock word (self._clk[0] = self.ticks_us() & mask: I4 N1),
+    # the ADC word (self._adc[1] = self._read(): I4), global refresh (I1),
+    # self.set_duty(self._cc[0]) (I3), self._S and S[S_WORST] compare (I3),
+    # period test (I2)
+    "fast_step": {"I": 20, "N": 4},
     # refresh_viper.core, touching path, split screen: the global _W (I1) and
     # 146 Vop - sensor 67 (each S address is 5: two 32-bit halves, two shifts,
     # an or), scene 48 (1.5 scan tests; reference half: the buffer address
@@ -262,9 +264,13 @@ PARTS: dict[str, dict[str, float]] = {
     # and sine addresses, phase, interpolation, gain, 65), duty 20,
     # bookkeeping 11; the call from Python or viper (C1)
     "viper_core": {"C": 1, "I": 1, "Vop": 146},
-    # refresh_viper.irq_rp2 minus core: _W and core globals (I2), addresses of
-    # S, TIMERAWL, ADC, CC (20 Vop), ADC start/result, clock reads, CC store,
-    # worst/overrun tests (19 Vop), and the ADC conversion it polls for
+    # the same body when it is the IRQ itself (refresh_viper.refresh on an
+    # RP2040): no call of its own, the dispatch is the timer's
+    "viper_body": {"I": 1, "Vop": 146},
+    # refresh_viper.refresh as the RP2040 IRQ, its register work: the _W and
+    # refresh globals (I2), addresses of TIMERAWL, ADC, CC (15 Vop) and S
+    # (5), ADC start/result, clock reads, CC store, worst/overrun tests (19
+    # Vop), and the ADC conversion it polls for
     "irq_rp2": {"I": 2, "Vop": 39, "us": ADC_CONVERSION_US},
 }
 
@@ -286,7 +292,7 @@ PATHS: list[tuple[str, str, tuple[str, ...], bool]] = [
     ("viper", "FastRefresh.step, rp2 timer IRQ (mode viper)",
      ("dispatch", "fast_step", "adc_rp2", "viper_core", "set_duty_rp2"), True),
     ("viper-irq", "irq_rp2, RP2040 registers (mode viper-irq)",
-     ("dispatch", "irq_rp2", "viper_core"), True),
+     ("dispatch", "irq_rp2", "viper_body"), True),
 ]
 
 FORMULA = ("est = nI*I + nN*N + nC*C + nVop*Vop + 2 us of ADC conversion, op counts n* of "
