@@ -34,7 +34,7 @@ def main():
         import texel.app
         st = texel.app.start(board, cfg.get("scene"))
         print("texelpad: playing on %s (%s refreshes/s)" % (st.get("board"), st.get("refresh_hz")))
-        if st.get("port") == "circuitpython":
+        if st.get("refresh_mode") == "loop":      # no timer IRQ: this loop is the display
             texel.app.run_loop()
     except Exception as e:          # never brick the REPL: report and stay off
         print("texelpad: not started:", repr(e))

@@ -381,3 +381,43 @@ def test_circuitpython_paced_loop_reports_its_rate():
     # never more refreshes than the schedule allows (k is due at k*1e6//hz)
     assert loop["refreshes"] <= r["hz"] * loop["seconds"] + 1
     print("CircuitPython-profile loop on the unix port:", loop)
+
+
+MODES = r"""
+import json
+import texel.app as app
+from texel import boards
+b = boards.load("pico")
+res = {}
+for mode in ("core1_viper", "loop"):
+    d = dict(b)
+    d["refresh"] = dict(b["refresh"], mode=mode)
+    d["name"] = "pico_" + mode
+    with open("boards/pico_" + mode + ".json", "w") as f:     # ./boards is searched
+        json.dump(d, f)
+try:
+    app.start("pico_core1_viper")
+    res["core1"] = "started"
+except ValueError as e:
+    res["core1"] = str(e)
+import machine
+n = len(machine.TIMERS)
+st = app.start("pico_loop")
+res["loop_mode"] = st["refresh_mode"]
+res["timers_started"] = len(machine.TIMERS) - n
+loop = app.run_loop(seconds=0.05)
+res["loop_refreshes"] = loop["refreshes"]
+app.stop()
+print(json.dumps(res))
+"""
+
+
+def test_refresh_modes(tmp_path):
+    """core1_viper is refused by name (not built yet); 'loop' starts no timer
+    and run_loop() drives the refresh (rp2 on the recording fakes)."""
+    (tmp_path / "boards").mkdir()
+    r = mpy.run_json("import os\nos.chdir(%r)\n" % str(tmp_path) + MODES,
+                     extra_path=FAKES, timeout=120)
+    assert "core1_viper" in r["core1"] and "not implemented" in r["core1"]
+    assert r["loop_mode"] == "loop" and r["timers_started"] == 0
+    assert r["loop_refreshes"] > 0

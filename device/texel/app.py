@@ -9,8 +9,9 @@
 # On rp2/stm32 start() returns at once with the refresh running in a hard
 # timer IRQ, so the REPL stays free. On the virtual board time is stepped:
 # texel.app.advance(ms) runs the refresh (or start(..., realtime=True)).
-# CircuitPython has no timer IRQ: run_loop() runs a paced loop that measures
-# and reports its own rate.
+# CircuitPython has no timer IRQ (refresh mode "loop", also selectable on
+# other ports): start() returns without a timer and run_loop() runs a paced
+# loop that measures and reports its own rate.
 import gc
 import sys
 from . import __version__, compat
@@ -77,6 +78,10 @@ def start(board_name, scene=None, realtime=False, fast=None, **hw_opts):
     then reads the ADC and writes the PWM compare register itself."""
     global _rt
     board = _boards.load(board_name)
+    mode = board["refresh"]["mode"]
+    if mode == "core1_viper":
+        raise ValueError("board %r: refresh.mode 'core1_viper' is not implemented yet; use "
+                         "'timer_irq' (a hard timer IRQ on core 0) or 'loop'" % board["name"])
     # build the scene before touching the hardware: a bad scene changes nothing
     canonical = _scene.validate(DEFAULT_SCENE if scene is None else scene, board["display"])
     if _rt is not None:
@@ -129,7 +134,8 @@ def start(board_name, scene=None, realtime=False, fast=None, **hw_opts):
         rt.pushes = 0
         _rt = rt
         _install(canonical)
-        if board["port"] != "circuitpython":
+        rt.loop_mode = mode == "loop"
+        if not rt.loop_mode:
             hw.start(callback, rt.hz)
             if realtime and hasattr(hw, "run_realtime"):
                 hw.run_realtime()
@@ -194,6 +200,7 @@ def status():
     sc = r.scene
     st.update({
         "board": rt.board["name"], "port": rt.board["port"], "refresh": rt.mode,
+        "refresh_mode": rt.board["refresh"]["mode"],
         "carrier_hz": rt.hw.freq_hz if hasattr(rt.hw, "freq_hz") else rt.board["carrier"]["freq_hz"],
         "pwm_top": rt.hw.top, "refresh_hz": rt.hz,
         "refreshes": r.count, "rate_hz": (r.count * 1000000 // elapsed) if elapsed > 0 else 0,
