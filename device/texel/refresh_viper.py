@@ -263,6 +263,7 @@ class FastRefresh(Refresh):
                  idle_amp=0, cost_ticks=None):
         self._S = array("i", bytes(4 * S_SIZE))
         self._keep = None
+        self._prev = None
         Refresh.__init__(self, sensor, law, set_duty, ticks_us, ticks_diff, period_us,
                          idle_amp, cost_ticks)
         S = self._S
@@ -342,10 +343,14 @@ class FastRefresh(Refresh):
             put(b + 2, ln)
             put(b + 3, g)
         keep = (words, scene, tab)
-        old = self._keep
+        # The previous generation stays referenced until the next swap: the
+        # viper refresh holds raw addresses the GC cannot see, and on a port
+        # with real threads (the unix port's realtime virtual board) a refresh
+        # may still be reading the old scene just after this store.
+        self._prev = self._keep
         self._keep = keep               # referenced before the IRQ can see them
         _W = words                      # the swap: one store
-        return old
+        return self._prev
 
     def swap(self, scene):
         old = self.scene
