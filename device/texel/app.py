@@ -200,6 +200,8 @@ def status():
     sc = r.scene
     st.update({
         "board": rt.board["name"], "port": rt.board["port"], "refresh": rt.mode,
+        "display": {"positions": rt.board["display"]["positions"],
+                    "dx_um": rt.board["display"]["dx_um"]},
         "refresh_mode": rt.board["refresh"]["mode"],
         "carrier_hz": rt.hw.freq_hz if hasattr(rt.hw, "freq_hz") else rt.board["carrier"]["freq_hz"],
         "pwm_top": rt.hw.top, "refresh_hz": rt.hz,
@@ -212,6 +214,15 @@ def status():
         "pushes": rt.pushes, "last_push": rt.last_push,
         "loop": getattr(rt, "loop", None)})
     return st
+
+
+def scene_source():
+    """The canonical dict of the scene playing (None when stopped): what the
+    host needs to redraw it. Uploaded samples come back in full."""
+    rt = _rt
+    if rt is None or rt.refresh.scene is None:
+        return None
+    return rt.refresh.scene.source
 
 
 def stream(rate_hz=125):
@@ -250,12 +261,15 @@ def advance(ms):
 
 
 def finger(keyframes):
-    """Virtual board only: script the finger, [(t_ms, position_mm or None)]."""
+    """Virtual board only: script the finger, [(t_ms, position_mm or None)],
+    relative to now. Returns now (the board's ticks_us), so the host can line
+    the script up with telemetry."""
     rt = _running()
     if not hasattr(rt.hw, "set_finger"):
         raise ValueError("finger(): only the virtual board has a scripted finger")
     dx = rt.board["display"]["dx_um"] / 1000.0
-    rt.hw.set_finger([(int(t * 1000), None if p is None else int(p / dx + 0.5)) for t, p in keyframes])
+    return rt.hw.set_finger([(int(t * 1000), None if p is None else int(p / dx + 0.5))
+                             for t, p in keyframes])
 
 
 def stop():

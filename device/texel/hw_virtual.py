@@ -171,9 +171,11 @@ class VirtualHw:
 
     # --- virtual-only ----------------------------------------------------
     def set_finger(self, keyframes):
-        """Script the finger from now on: keyframe times are relative to now."""
+        """Script the finger from now on: keyframe times are relative to now.
+        Returns now (virtual us), the time the script starts at."""
         t0 = self.now
         self.finger = Finger([(t0 + t, p) for (t, p) in keyframes])
+        return t0
 
     def advance(self, us):
         """Run the refresh for `us` microseconds of virtual time."""
