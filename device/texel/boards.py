@@ -14,8 +14,13 @@
 #
 # Search path (first directory holding <name>.json wins): "/boards" (a board's
 # flash root: `mpremote cp -r boards :`), "boards" (relative to the working
-# directory), then <texel package>/../../boards (the repository's copy, so
-# CPython and the unix port find the shipped boards from anywhere).
+# directory), <texel package>/../../boards (the repository's copy, so CPython
+# and the unix port find the shipped boards from anywhere), then last
+# <texel package>/boards.d, where the installed image keeps the shipped boards
+# (`texelpad deploy` and `mpremote mip install` both put them in
+# /lib/texel/boards.d/), so a user's /boards/<name>.json still overrides them.
+# Not texel/boards/: MicroPython imports a directory before a module of the
+# same name, so a texel/boards/ folder would hide this module (boards.py).
 import json
 
 try:
@@ -161,18 +166,43 @@ def _norm_up(path, levels):
     return text or "."
 
 
-def _package_boards():
-    """<texel package>/../../boards, or None without __file__ (frozen)."""
+# The shipped boards inside the installed package (<texel>/boards.d).
+PACKAGE_BOARDS_DIR = "boards.d"
+
+
+def _package_dir():
+    """The texel package's directory ("/lib/texel", "texel", "."), or None
+    without __file__ (frozen)."""
     try:
         here = __file__
     except NameError:
         return None
     here = here.replace("\\", "/")
     cut = here.rfind("/")
-    up = _norm_up(here[:cut] if cut >= 0 else ".", 2)
+    if cut < 0:
+        return "."
+    return here[:cut] or "/"
+
+
+def _package_boards():
+    """<texel package>/../../boards, or None without __file__ (frozen)."""
+    pkg = _package_dir()
+    if pkg is None:
+        return None
+    up = _norm_up(pkg, 2)
     if up == ".":
         return "boards"
     return ("" if up == "/" else up) + "/boards"
+
+
+def _installed_boards():
+    """<texel package>/boards.d (the image's copy), or None (frozen)."""
+    pkg = _package_dir()
+    if pkg is None:
+        return None
+    if pkg == ".":
+        return PACKAGE_BOARDS_DIR
+    return ("" if pkg == "/" else pkg) + "/" + PACKAGE_BOARDS_DIR
 
 
 def search_path(search=None):
@@ -182,6 +212,9 @@ def search_path(search=None):
         pkg = _package_boards()
         if pkg:
             dirs.append(pkg)
+        inst = _installed_boards()
+        if inst:
+            dirs.append(inst)
     elif isinstance(search, str):
         dirs = [search]
     else:
