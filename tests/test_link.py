@@ -200,3 +200,23 @@ def test_timeout_is_a_clear_error(tmp_path):
         with pytest.raises(LinkTimeout, match="stopped answering"):
             b.link.exec("import time\ntime.sleep(5)")
         b.link.t = None          # the board is busy: drop the link without Ctrl-B
+
+
+def test_board_renders_what_the_host_renders(b):
+    """The generator run on the board (MicroPython, viper int engine) gives
+    the host's int-engine map bit for bit."""
+    import numpy as np
+    import texel
+    p = {"pitch_db": 12.0, "irregularity_db": -6.0, "seed": 3, "length_samples": 3000}
+    got = b.render_u16(p, engine="int")
+    want = np.asarray(texel.render_u16(p, engine="int"), dtype=np.uint16)
+    assert got.dtype == np.uint16 and got.shape == (3000,)
+    assert np.array_equal(got, want)
+
+
+def test_ulab_engine_on_a_board_without_ulab(b):
+    from texelpad.link import NoUlab
+    with pytest.raises(NoUlab, match="has none"):
+        b.render_u16({"pitch_db": 3.0, "irregularity_db": -10.0}, engine="ulab")
+    with pytest.raises(ValueError, match="pitch_db: nan"):
+        b.render_u16({"pitch_db": float("nan"), "irregularity_db": -10.0})

@@ -119,7 +119,6 @@ class Board:
             raise LinkError("texelpad is not running on %s: start it first "
                             "(texelpad push --board NAME, or Board.start)" % self.port)
         _host_check(scene, st["display"])
-        self._need_engines(scene, st)
         return self._app("push", scene, timeout=max(self.link.timeout, 30))
 
     def push_texel(self, params: dict[str, Any]) -> dict[str, Any]:
@@ -170,13 +169,27 @@ class Board:
         relative to now; returns the board's ticks_us the script starts at."""
         return self._app("finger", [(float(t), None if p is None else float(p)) for t, p in keyframes])
 
-    def _need_engines(self, scene: dict[str, Any], st: dict[str, Any]) -> None:
-        want = {r.get("texture", {}).get("engine") for r in scene.get("regions", ())
-                if isinstance(r, dict) and isinstance(r.get("texture"), dict)}
-        if "ulab" in want and not st.get("ulab"):
-            raise NoUlab("the scene asks for the ulab engine but %s's firmware has no ulab "
-                         "(stock MicroPython has none: use a ulab build, or drop 'engine')"
-                         % self.port)
+    # --- the generator on the board ----------------------------------------------
+    def render_u16(self, params: dict[str, Any], engine: str | None = None) -> Any:
+        """texel.render_u16(params, engine=engine) run ON THE BOARD, the map
+        read back as a uint16 numpy array: checks a board's own arithmetic
+        (float32, ulab, viper) against the host's reference."""
+        import base64
+
+        import numpy as np
+        if engine == "ulab" and not self.status().get("ulab"):
+            raise NoUlab("the ulab engine needs ulab, and %s's firmware has none (stock "
+                         "MicroPython has no ulab: use a ulab build such as Pimoroni's, or "
+                         "CircuitPython; or engine='int')" % self.port)
+        texel.validate(params)                      # the board's own check, here first
+        code = ("import texel, binascii\ntry:\n _m = texel.render_u16(%s, engine=%s)\n"
+                " _r = ('ok', binascii.b2a_base64(bytes(_m)).strip())\nexcept ValueError as _e:\n"
+                " _r = ('err', str(_e))\nprint(repr(_r))\n_m = _r = None"
+                % (literal(params), literal(engine)))
+        kind, value = self.link.eval(code, timeout=max(self.link.timeout, 60))
+        if kind == "err":
+            raise DeviceError(value)
+        return np.frombuffer(base64.b64decode(value), dtype="<u2").copy()
 
 
 def _host_check(scene: Any, display: dict[str, Any] | None) -> None:

@@ -378,6 +378,12 @@ SUBCOMMANDS: list[Callable[[Any], None]] = [add_bench, add_render, add_tank,
                                              add_bench_refresh]
 
 
+def _board_subcommands() -> list[Callable[[Any], None]]:
+    # the board commands live in cli_board.py, which imports the helpers above
+    from .cli_board import BOARD_SUBCOMMANDS
+    return BOARD_SUBCOMMANDS
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="texelpad",
@@ -386,7 +392,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version",
                         version="texelpad %s (texel %s)" % (__version__, texel.__version__))
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    for add in SUBCOMMANDS:
+    for add in _board_subcommands() + SUBCOMMANDS:
         add(sub)
     return parser
 

@@ -1,0 +1,143 @@
+"""`texelpad demo`, the quick start's main job: play the study's split screen
+on a board (the virtual one when no port is given), sweep a finger across
+it, and draw one PNG of the map, its spectrum, the texel pitch histogram and
+the amplitude the carrier actually played."""
+from __future__ import annotations
+
+import time
+from typing import Any, Callable
+
+import numpy as np
+import texel.app
+import texel.scene
+
+from .link import LinkError
+
+DEFAULT_SCENE = texel.app.DEFAULT_SCENE
+
+# The simulated finger on the virtual board (ms, mm): rests lifted, touches
+# down 2 mm in, sweeps to the far end at ~49 mm/s (a slow, deliberate swipe:
+# about 40 telemetry samples per mm at 2 kHz), holds, lifts.
+SWEEP = [(0, None), (100, 2.0), (2100, 99.76), (2200, 99.76), (2210, None), (2400, None)]
+RATE_HZ = 2083          # telemetry every 4th refresh at 8,333 Hz: the 256-slot ring holds 123 ms
+POLL_S = 0.03           # drain the ring well inside that
+
+
+def finger_truth(keyframes: list[tuple[float, float | None]], t0_us: int, dx_um: float,
+                 t_us: np.ndarray) -> np.ndarray:
+    """Where the scripted finger truly is (display index, -1 lifted) at board
+    times t_us, for a script that started at t0_us: the virtual board's own
+    rule (linear between keyframes, lifted from a None keyframe to the next,
+    the last keyframe holds)."""
+    kt = np.array([t * 1000.0 for t, _ in keyframes]) + t0_us
+    kp = [None if p is None else p * 1000.0 / dx_um for _, p in keyframes]
+    out = np.full(t_us.shape, -1.0)
+    for i, t in enumerate(t_us):
+        j = int(np.searchsorted(kt, t, side="right")) - 1
+        if j < 0 or kp[j] is None:
+            continue
+        if j + 1 < len(kt) and kp[j + 1] is not None:
+            a = (t - kt[j]) / (kt[j + 1] - kt[j])
+            out[i] = kp[j] + a * (kp[j + 1] - kp[j])
+        else:
+            out[i] = kp[j]
+    return np.rint(out).astype(np.int64)     # display indices, as the board's ADC sees them
+
+
+def collect(board: Any, seconds: float, rate_hz: int = RATE_HZ) -> tuple[list, int]:
+    """Telemetry for `seconds`: (samples, lost)."""
+    board.stream(rate_hz)
+    samples: list = []
+    lost = 0
+    t_end = time.monotonic() + seconds
+    try:
+        while True:
+            got, l = board.telemetry()
+            samples += got
+            lost += l
+            if time.monotonic() >= t_end:
+                break
+            time.sleep(POLL_S)
+    finally:
+        board.stream(0)
+    return samples, lost
+
+
+def run(port: str | None = None, out: str = "texelpad-demo.png", scene: dict | None = None,
+        board_name: str | None = None, seconds: float = 6.0, flash: str | None = None,
+        timeout: float = 10.0, progress: Callable[[str], None] = lambda m: None) -> dict[str, Any]:
+    """The whole demo; returns its figures (and writes `out`)."""
+    from .board import connect
+    from .plots import demo_figure
+    scene = DEFAULT_SCENE if scene is None else scene
+    vb = None
+    t_all = time.perf_counter()
+    report: dict[str, Any] = {}
+    try:
+        if port is None:
+            from .cli_board import open_virtual
+            progress("no --port: starting the virtual board (MicroPython unix port on a pty)")
+            t0 = time.perf_counter()
+            vb = open_virtual(flash, start=False, progress=progress)
+            report["deploy_s"] = time.perf_counter() - t0
+            port = vb.port
+            board_name = "virtual"
+        with connect(port, timeout=timeout) as b:
+            st = b.status()
+            if not st.get("running") or (vb is not None):
+                if not board_name:
+                    raise LinkError("texelpad is not running on %s: say which board file to "
+                                    "start (--board pico, pyboard, ...)" % port)
+                progress("starting texelpad on %s (board %s)" % (port, board_name))
+                b.start(board_name, None, **({"realtime": True} if vb is not None else {}))
+            progress("pushing the scene")
+            sent0 = b.link.sent
+            t0 = time.perf_counter()
+            st = b.push(scene)
+            report["push_ms"] = (time.perf_counter() - t0) * 1e3
+            report["push_bytes"] = b.link.sent - sent0
+            display = st["display"]
+            truth = None
+            if vb is not None:
+                sweep_s = (SWEEP[-1][0]) / 1000.0
+                progress("sweeping the simulated finger across the display (%.1f s)" % sweep_s)
+                t0_us = b.finger(SWEEP)
+                samples, lost = collect(b, sweep_s + 0.1)
+            else:
+                progress("swipe your finger across the plate now (%g s)" % seconds)
+                samples, lost = collect(b, seconds)
+            tel = np.array(samples, dtype=np.int64).reshape(-1, 3)
+            if vb is not None and len(tel):
+                truth = np.column_stack([tel[:, 0], finger_truth(SWEEP, t0_us, display["dx_um"],
+                                                                 tel[:, 0].astype(float))])
+            st = b.status()
+            canonical = b.scene_source()
+        progress("drawing %s" % out)
+        figs = demo_figure(out, canonical, tel, display=display, truth=truth,
+                           title="texelpad demo on %s (%s, %s refresh): %s"
+                                 % (st["board"], st["firmware"], st["refresh"],
+                                    _scene_title(canonical)))
+        report.update(figs)
+        report.update({"port": port, "board": st["board"], "samples": int(len(tel)),
+                       "lost": int(lost), "refreshes": st["refreshes"],
+                       "overruns": st["overruns"], "faults": st["faults"],
+                       "scene_bytes": st["scene"]["bytes"], "out": str(out),
+                       "total_s": time.perf_counter() - t_all})
+        return report
+    finally:
+        if vb is not None:
+            vb.stop()
+
+
+def _scene_title(canonical: dict[str, Any]) -> str:
+    parts = []
+    for r in canonical["regions"]:
+        t = r["texture"]
+        if t["kind"] == "texel":
+            parts.append("texel %g dB/%g dB seed %d" % (t["pitch_db"], t["irregularity_db"],
+                                                        t["seed"]))
+        elif t["kind"] == "reference":
+            parts.append("reference %s" % t["name"])
+        else:
+            parts.append(t["kind"])
+    return " | ".join(parts)
