@@ -206,3 +206,30 @@ def test_deploy_writes_only_what_changed(capsys, tmp_path):
         with texelpad.connect(vb.port) as b:         # the handshake now passes
             st = b.start("virtual", None)
             assert st["running"]
+
+
+def test_deploy_refuses_an_image_that_does_not_fit(capsys, tmp_path, monkeypatch):
+    from texelpad import deploy as deploy_mod
+    real = deploy_mod.survey
+
+    def small_flash(board, files):
+        hashes, present, _free = real(board, files)
+        return hashes, present, 100_000            # bytes free: less than the image needs
+    monkeypatch.setattr(deploy_mod, "survey", small_flash)
+    flash = tmp_path / "flash"
+    with VirtualBoard(flash, image=None) as vb:
+        code, out, err = run_cli(capsys, "deploy", "--port", vb.port)
+    assert code == 1, (out, err)
+    assert "the image does not fit" in err and "has 100000 free" in err
+    assert not (flash / "lib").exists()             # nothing written
+
+
+def test_progress_bar_lines_without_a_terminal():
+    import io
+    from texelpad.cli_board import ProgressBar
+    s = io.StringIO()
+    bar = ProgressBar(s)
+    for done, name in ((0, "/lib/texel/a.mpy"), (50, "/lib/texel/a.mpy"), (100, "/main.py")):
+        bar(done, 200, name)
+    bar.end()
+    assert s.getvalue().splitlines() == ["deploy:   0% /lib/texel/a.mpy", "deploy:  50% /main.py"]
