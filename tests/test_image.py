@@ -19,13 +19,10 @@ import ast
 import hashlib
 import json
 import os
-import pty
 import re
 import subprocess
 import sys
 import time
-import tty
-from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -34,6 +31,7 @@ import mpy
 import texelpad
 from texelpad import image
 from texelpad.image import TARGETS, ImageError, target_for
+from texelpad.virtual import VirtualBoard
 
 ROOT = mpy.ROOT
 MODULES = sorted((ROOT / "device" / "texel").glob("*.py"))
@@ -380,22 +378,10 @@ def test_image_runs_on_the_unix_port_from_a_flash_folder(images, tmp_path, name)
     assert not [d for d in r["path"] if "device" in d]
 
 
-@contextmanager
 def flash_board(flash: Path):
-    """The unix port's REPL on a pty, its flash folder as cwd and module path
-    (tests/vboard.py's board, without device/ on the path)."""
-    master, slave = pty.openpty()
-    tty.setraw(slave)
-    port = os.ttyname(slave)
-    proc = subprocess.Popen([mpy.micropython_exe(), "-i"], stdin=master, stdout=master,
-                            stderr=master, env=_flash_env(flash), cwd=flash, close_fds=True)
-    os.close(master)
-    try:
-        yield port
-    finally:
-        proc.kill()
-        proc.wait(timeout=10)
-        os.close(slave)
+    """The virtual board with only its flash folder on the module path (no
+    device/): what mip installs into is all it has."""
+    return VirtualBoard(flash, image=None)
 
 
 def _mpremote(port: str, *args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
@@ -408,7 +394,8 @@ def _mpremote(port: str, *args: str, cwd: Path | None = None) -> subprocess.Comp
 def test_mip_install_from_the_checkout_onto_a_virtual_board(tmp_path):
     flash = tmp_path / "flash"
     flash.mkdir()
-    with flash_board(flash) as port:
+    with flash_board(flash) as vb:
+        port = vb.port
         # the README's form: from the checkout, relative URLs against ./
         r = _mpremote(port, "mip", "install", "./package.json", cwd=ROOT)
         assert r.returncode == 0, r.stdout + r.stderr

