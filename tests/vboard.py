@@ -3,9 +3,9 @@ end of a pseudo-terminal, device/ on its path; the slave's /dev/pts path is
 the serial port the host tools (mpremote) open, as they would a board's."""
 import os
 import subprocess
+import sys
 from contextlib import contextmanager
 
-import mpy
 from texelpad.virtual import VirtualBoard
 
 
@@ -20,7 +20,7 @@ def virtual_board():
 def mpremote(port: str, code: str, timeout: float = 60) -> subprocess.CompletedProcess:
     """`mpremote connect PORT resume exec CODE` (resume: never soft-reset a
     running display)."""
-    exe = os.path.join(os.path.dirname(mpy.sys.executable), "mpremote")
+    exe = os.path.join(os.path.dirname(sys.executable), "mpremote")
     if not os.path.exists(exe):
         exe = "mpremote"
     return subprocess.run([exe, "connect", port, "resume", "exec", code],

@@ -65,6 +65,7 @@ class Board:
         self.firmware = {"implementation": impl, "version": tuple(version), "mpy": mpy,
                          "platform": platform}
         self.image = None if ver[0] == "missing" else {"protocol": ver[0], "texel": ver[1]}
+        self.lost = 0           # telemetry samples lost during the last monitor()
 
     # context manager
     def __enter__(self) -> "Board":
@@ -76,20 +77,13 @@ class Board:
     def close(self) -> None:
         self.link.close()
 
-    def _app(self, func: str, *args: Any, timeout: float | None = None) -> Any:
-        return self.link.call(APP, func, *args, timeout=timeout)
+    def _app(self, func: str, *args: Any, timeout: float | None = None, **kwargs: Any) -> Any:
+        return self.link.call(APP, func, *args, timeout=timeout, **kwargs)
 
     # --- the device entry points ---------------------------------------------
     def status(self) -> dict[str, Any]:
         """texel.app.status() on the board."""
         return self._app("status")
-
-    def display(self) -> dict[str, Any]:
-        st = self.status()
-        if not st.get("running"):
-            raise LinkError("texelpad is not running on %s: start it (texelpad push starts "
-                            "the board's default board file, or b.start(board_name))" % self.port)
-        return st["display"]
 
     def start(self, board_name: str, scene: dict[str, Any] | None = None,
               **opts: Any) -> dict[str, Any]:
@@ -102,30 +96,31 @@ class Board:
         for k in opts:
             if not isinstance(k, str) or not k.isidentifier():
                 raise ValueError("start(): option %r is not a name" % (k,))
-        code = ("import texel.app as _m\ntry:\n _r = ('ok', _m.start(%s, %s, **%s))\n"
-                "except ValueError as _e:\n _r = ('err', str(_e))\nprint(repr(_r))\n_m = _r = None"
-                % (literal(board_name), literal(scene), literal(opts)))
-        kind, value = self.link.eval(code, timeout=max(self.link.timeout, 30))
-        if kind == "err":
-            raise DeviceError(value)
-        return value
+        return self._app("start", board_name, scene, timeout=max(self.link.timeout, 30), **opts)
+
+    def _running_status(self) -> dict[str, Any]:
+        st = self.status()
+        if not st.get("running"):
+            raise LinkError("texelpad is not running on %s: start it first "
+                            "(texelpad push --board NAME, or Board.start)" % self.port)
+        return st
+
+    def _push(self, scene: dict[str, Any], st: dict[str, Any]) -> dict[str, Any]:
+        _host_check(scene, st["display"])
+        return self._app("push", scene, timeout=max(self.link.timeout, 30))
 
     def push(self, scene: dict[str, Any]) -> dict[str, Any]:
         """Play `scene` (a dict of regions). Checked on the host, then on the
         board; returns the board's status with the new scene. On any error
         the board keeps playing what it played."""
-        st = self.status()
-        if not st.get("running"):
-            raise LinkError("texelpad is not running on %s: start it first "
-                            "(texelpad push --board NAME, or Board.start)" % self.port)
-        _host_check(scene, st["display"])
-        return self._app("push", scene, timeout=max(self.link.timeout, 30))
+        return self._push(scene, self._running_status())
 
     def push_texel(self, params: dict[str, Any]) -> dict[str, Any]:
         """Play one texel parameter set over the whole display."""
         if not isinstance(params, dict):
             raise ValueError("texel parameters: expected a dict, got %s" % type(params).__name__)
-        return self.push(full_screen_texel(params, self.display()))
+        st = self._running_status()
+        return self._push(full_screen_texel(params, st["display"]), st)
 
     def stop(self) -> None:
         """Carrier to its safe off state."""
@@ -147,16 +142,19 @@ class Board:
                 poll_s: float = 0.05) -> Iterator[tuple[int, int, int]]:
         """Yield (t_us, position, amplitude) samples taken by the board's
         refresh at rate_hz, for `seconds` (None: until the caller stops);
-        the stream is turned off again at the end."""
+        the stream is turned off again at the end. self.lost counts the
+        samples the board's ring lapped before they were read."""
         self.stream(rate_hz)
+        self.lost = 0
         t_end = None if seconds is None else time.monotonic() + seconds
         try:
-            while t_end is None or time.monotonic() < t_end:
-                samples, _lost = self.telemetry()
+            while True:
+                samples, lost = self.telemetry()
+                self.lost += lost
                 yield from samples
+                if t_end is not None and time.monotonic() >= t_end:
+                    break
                 time.sleep(poll_s)
-            samples, _lost = self.telemetry()
-            yield from samples
         finally:
             try:
                 self.stream(0)

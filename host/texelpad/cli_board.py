@@ -9,11 +9,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 import time
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 from .cli import (EXIT_FAIL, EXIT_OK, EXIT_USAGE, CliError, PARAM_FLAGS, _stderr,
                   positive_float, render_params)

@@ -46,21 +46,8 @@ def finger_truth(keyframes: list[tuple[float, float | None]], t0_us: int, dx_um:
 
 def collect(board: Any, seconds: float, rate_hz: int = RATE_HZ) -> tuple[list, int]:
     """Telemetry for `seconds`: (samples, lost)."""
-    board.stream(rate_hz)
-    samples: list = []
-    lost = 0
-    t_end = time.monotonic() + seconds
-    try:
-        while True:
-            got, l = board.telemetry()
-            samples += got
-            lost += l
-            if time.monotonic() >= t_end:
-                break
-            time.sleep(POLL_S)
-    finally:
-        board.stream(0)
-    return samples, lost
+    samples = list(board.monitor(seconds, rate_hz=rate_hz, poll_s=POLL_S))
+    return samples, board.lost
 
 
 def run(port: str | None = None, out: str = "texelpad-demo.png", scene: dict | None = None,
@@ -78,18 +65,17 @@ def run(port: str | None = None, out: str = "texelpad-demo.png", scene: dict | N
             from .cli_board import open_virtual
             progress("no --port: starting the virtual board (MicroPython unix port on a pty)")
             t0 = time.perf_counter()
-            vb = open_virtual(flash, start=False, progress=progress)
+            vb = open_virtual(flash, progress=progress)      # deployed, playing in real time
             report["deploy_s"] = time.perf_counter() - t0
             port = vb.port
-            board_name = "virtual"
         with connect(port, timeout=timeout) as b:
             st = b.status()
-            if not st.get("running") or (vb is not None):
+            if not st.get("running"):
                 if not board_name:
                     raise LinkError("texelpad is not running on %s: say which board file to "
                                     "start (--board pico, pyboard, ...)" % port)
                 progress("starting texelpad on %s (board %s)" % (port, board_name))
-                b.start(board_name, None, **({"realtime": True} if vb is not None else {}))
+                b.start(board_name, None)
             progress("pushing the scene")
             sent0 = b.link.sent
             t0 = time.perf_counter()

@@ -18,7 +18,7 @@ from typing import Any
 
 # mpremote is pinned (pyproject): its SerialTransport is the raw-REPL /
 # raw-paste implementation used here.
-from mpremote.transport import TransportError, TransportExecError
+from mpremote.transport import TransportError
 from mpremote.transport_serial import SerialTransport
 
 import serial
@@ -232,10 +232,11 @@ class Link:
         except (ValueError, SyntaxError):
             raise LinkError("unexpected answer from %s: %r" % (self.port, out[-200:])) from None
 
-    def call(self, module: str, func: str, *args: Any, timeout: float | None = None) -> Any:
-        """`module.func(*args)` on the board, arguments as literals; a device
-        ValueError becomes DeviceError with the device's text."""
-        argtext = ", ".join(literal(a) for a in args)
+    def call(self, module: str, func: str, *args: Any, timeout: float | None = None,
+             **kwargs: Any) -> Any:
+        """`module.func(*args, **kwargs)` on the board, arguments as literals; a
+        device ValueError becomes DeviceError with the device's text."""
+        argtext = ", ".join([literal(a) for a in args] + (["**" + literal(kwargs)] if kwargs else []))
         code = ("import %s as _m\ntry:\n _r = ('ok', _m.%s(%s))\nexcept ValueError as _e:\n"
                 " _r = ('err', str(_e))\nprint(repr(_r))\n_m = _r = None" % (module, func, argtext))
         kind, value = self.eval(code, timeout)

