@@ -116,7 +116,7 @@ def run(board="pico", pickup_pin=27, f_lo=20000, f_hi=60000, step=100, amplitude
     envelope on ADC pin `pickup_pin`. The carrier is off when this returns,
     also after an error or Ctrl-C."""
     from machine import ADC, PWM, Pin
-    from texel import boards
+    from texel.runtime import boards
     b = boards.load(board)
     car = b["carrier"]
     if amplitude > AMPLITUDE_MAX:

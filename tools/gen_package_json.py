@@ -6,17 +6,17 @@ device package, so a board can install it without texelpad:
     mpremote mip install ./package.json             # from this checkout
 
 Both install the `texel` package as source .py files under the board's /lib
-(the same layout `texelpad deploy` writes, see host/texelpad/image.py).
-tests/test_image.py checks the committed file against what this writes, so
+(the same layout `texelpad deploy` writes, see host/texelpad/deploy/image.py).
+tests/host/test_image.py checks the committed file against what this writes, so
 run it after adding, removing or renaming a device file or a board.
 """
 import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "host"))          # works without the venv's install too
+sys.path[:0] = [str(ROOT / "host"), str(ROOT / "device")]   # works without an install too
 
-from texelpad.image import write_package_json  # noqa: E402
+from texelpad.deploy.image import write_package_json  # noqa: E402
 
 
 def main():

@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
-"""Regenerate the sine table literal in device/texel/sine_table.py.
+"""Regenerate the sine table literal in device/texel/gen/sine_table.py.
 
 (sin(2*pi*i/1024) + 1) * 32767.5, rounded half up, i = 0..1024, as uint16
 little-endian. Shipped as a literal so a board does not spend 1,025 float sines
-(~150 ms on an emulated RP2040) at its first render. tests/test_precision.py
+(~150 ms on an emulated RP2040) at its first render. tests/gen/test_precision.py
 checks the literal against this formula.
 """
 import math
@@ -11,7 +11,7 @@ import re
 import struct
 from pathlib import Path
 
-PATH = Path(__file__).resolve().parents[1] / "device" / "texel" / "sine_table.py"
+PATH = Path(__file__).resolve().parents[1] / "device" / "texel" / "gen" / "sine_table.py"
 SIZE = 1024
 
 

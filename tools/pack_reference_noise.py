@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Pack the study's three noise rows (white, pink, blue) into
-device/texel/reference_noise.bin, the package data texel.reference() reads.
+device/texel/gen/reference_noise.bin, the package data texel.reference() reads.
 
 The rows have no closed form (their seeds are unknown), so the golden data
 itself is the reference: golden/reference_textures.csv rows 4-6 (1-based;
@@ -23,7 +23,7 @@ from array import array
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "device" / "texel" / "reference_noise.bin"
+OUT = ROOT / "device" / "texel" / "gen" / "reference_noise.bin"
 ROWS = {"white": 3, "pink": 4, "blue": 5}      # 0-based rows of the CSV
 LENGTH = 9600
 

@@ -1,9 +1,17 @@
 #!/usr/bin/env bash
 # Set up (.venv with the package and its test tools) and run the test suite.
-# This is the README's test command, and what .ci/run calls.
+# This is the README's test command, and what .ci/run calls (everything).
+#
+#   bash tools/test.sh            every test (CI)
+#   bash tools/test.sh --fast     the development slice: -m "not slow" (about 2 minutes)
+#   bash tools/test.sh ARGS...    any pytest arguments (a file, -k, -x ...)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+args=()
+for a in "$@"; do
+    if [ "$a" = "--fast" ]; then args+=(-m "not slow"); else args+=("$a"); fi
+done
 [ -x .venv/bin/python ] || python3 -m venv .venv
 .venv/bin/python -m pip install -q --upgrade pip >/dev/null
 .venv/bin/python -m pip install -q -e '.[test]'
-exec .venv/bin/python -m pytest -q "$@"
+exec .venv/bin/python -m pytest -q ${args[@]+"${args[@]}"}

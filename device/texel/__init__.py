@@ -3,11 +3,11 @@
 #
 #   texel.render(params, draws=None, engine=None)  -> friction map in [0, 1]
 #   texel.render_u16(params, ...)                   -> uint16 map (0..65535)
-#   texel.plan(params, draws=None)                  -> per-texel pitches/phases
+#   texel.make_plan(params, draws=None)             -> per-texel pitches/phases
 #   texel.engines()                                 -> engines usable here
 #   texel.reference(name, length_samples)           -> reference textures
-from .params import validate, FORMAT_VERSION, DX_MM, NYQUIST_CPMM
-from .plan import Plan
+from .gen.params import validate, FORMAT_VERSION, DX_MM, NYQUIST_CPMM
+from .gen.plan import Plan
 from . import compat
 
 __version__ = "0.1.0"
@@ -17,16 +17,16 @@ _ENGINE_ORDER = ("numpy", "int", "ulab", "pure")
 
 def _engine_module(name):
     if name == "numpy":
-        from . import engine_numpy as m
+        from .gen import engine_numpy as m
         return m if m.AVAILABLE else None
     if name == "ulab":
-        from . import engine_ulab as m
+        from .gen import engine_ulab as m
         return m if m.available() else None
     if name == "int":
-        from . import engine_int as m
+        from .gen import engine_int as m
         return m
     if name == "pure":
-        from . import engine_pure as m
+        from .gen import engine_pure as m
         return m
     raise ValueError("engine: unknown engine %r (known: %s)" % (name, ", ".join(_ENGINE_ORDER)))
 
@@ -52,7 +52,7 @@ def _engine(engine):
     return m
 
 
-def plan(params, draws=None):
+def make_plan(params, draws=None):
     """Validate params and compute the per-texel plan (pitches f in cycles/mm,
     start phases phi in rad, fraction above Nyquist)."""
     return Plan(validate(params), draws)
@@ -65,29 +65,29 @@ def render(params, draws=None, engine=None):
     generator. The container is the engine's: numpy float64 array (numpy),
     ulab float array (ulab), array of floats (int, pure)."""
     m = _engine(engine)
-    return m.render(plan(params, draws))
+    return m.render(make_plan(params, draws))
 
 
 def render_u16(params, draws=None, engine=None, out=None):
     """The map as uint16, 0..65535 = friction 0..1 (2 bytes/sample)."""
     m = _engine(engine)
-    return m.render_u16(plan(params, draws), out)
+    return m.render_u16(make_plan(params, draws), out)
 
 
 def reference(name, length_samples=9600):
     """A reference texture as a float map in [0, 1]: the matching study's nine
     (2sin 3sin 4sin white pink blue square triangle sawtooth) and the earlier
-    paper's band-pass family (bp-<fc>-<zeta>); see reference_textures.py."""
-    from .reference_textures import reference as _ref
+    paper's band-pass family (bp-<fc>-<zeta>); see gen/reference.py."""
+    from .gen.reference import reference as _ref
     return _ref(name, length_samples)
 
 
 def reference_u16(name, length_samples=9600, out=None):
     """The same as uint16 (0..65535), 2 bytes/sample."""
-    from .reference_textures import reference_u16 as _ref
+    from .gen.reference import reference_u16 as _ref
     return _ref(name, length_samples, out)
 
 
 def reference_names():
-    from .reference_textures import names
+    from .gen.reference import names
     return names()

@@ -15,11 +15,11 @@
 import gc
 import sys
 from . import __version__, compat
-from . import boards as _boards
-from . import scene as _scene
-from .carrier import DutyLaw
-from .refresh import Refresh
-from .sensor import make_sensor
+from .runtime import boards as _boards
+from .runtime import scene as _scene
+from .runtime.duty import DutyLaw
+from .runtime.refresh import Refresh
+from .runtime.sensor import make_sensor
 
 PROTOCOL = 1          # host <-> device contract version (the host checks it)
 
@@ -40,13 +40,13 @@ class _Runtime:
 def _make_hw(board, opts):
     port = board["port"]
     if port == "rp2":
-        from .hw_rp2 import Hw
+        from .hw.rp2 import Hw
     elif port == "stm32":
-        from .hw_stm32 import Hw
+        from .hw.stm32 import Hw
     elif port == "circuitpython":
-        from .hw_cpy import Hw
+        from .hw.cpy import Hw
     elif port == "virtual":
-        from .hw_virtual import VirtualHw
+        from .hw.virtual import VirtualHw
         return VirtualHw(board, **opts)
     else:
         raise ValueError("board %r: unknown port %r" % (board["name"], port))
@@ -57,15 +57,6 @@ def _reader(hw, i):
     if hasattr(hw, "adc_reader"):
         return hw.adc_reader(i)
     return lambda: hw.adc_read(i)
-
-
-def _ticks():
-    try:
-        import time
-        return time.ticks_us, time.ticks_diff
-    except AttributeError:
-        from .hw_virtual import _real_ticks, _ticks_diff
-        return _real_ticks(), _ticks_diff
 
 
 def start(board_name, scene=None, realtime=False, fast=None, **hw_opts):
@@ -102,7 +93,7 @@ def start(board_name, scene=None, realtime=False, fast=None, **hw_opts):
         if hasattr(hw, "ticks_us"):
             ticks, diff = hw.ticks_us, hw.ticks_diff
         else:
-            ticks, diff = _ticks()
+            ticks, diff = compat.ticks_us, compat.ticks_diff
         idle = board["carrier"].get("idle_amplitude", 0)
         if fast is None:
             fast = compat.HAS_VIPER and s["kind"] == "adc_linear"
@@ -110,14 +101,15 @@ def start(board_name, scene=None, realtime=False, fast=None, **hw_opts):
         if fast:
             try:
                 # viper code: a port without a native emitter cannot compile it
-                from .refresh_viper import FastRefresh, irq_rp2
+                from .runtime.refresh_viper import FastRefresh, irq_rp2
             except (ImportError, SyntaxError):
                 fast = False
         if fast:
             rt.refresh = FastRefresh(rt.sensor, rt.law, hw.set_duty, reads[0], ticks, diff,
                                      rt.period_us, idle, getattr(hw, "cost_ticks", None))
-            if board["port"] == "rp2" and getattr(hw, "direct", False):
-                rt.refresh.use_rp2_registers(hw._cc, hw._mul, int(s["pins"][0]) - 26)
+            regs = hw.direct_registers() if hasattr(hw, "direct_registers") else None
+            if regs is not None:
+                rt.refresh.use_rp2_registers(regs[0], regs[1], int(s["pins"][0]) - 26)
                 callback = irq_rp2
             rt.mode = "viper" if callback is None else "viper-irq"
         else:

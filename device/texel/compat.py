@@ -67,6 +67,24 @@ def _detect_viper():
         return False
 HAS_VIPER = _detect_viper()
 
+# Microsecond ticks: time.ticks_us/ticks_diff where the port has them
+# (MicroPython); elsewhere the same arithmetic over MicroPython's 2^30 tick
+# period, from perf_counter_ns (CPython) or monotonic_ns (CircuitPython, which
+# has no ticks_us; it allocates bigints, so keep it out of IRQ code), so code
+# that measures intervals runs unchanged everywhere.
+TICKS_MASK = 0x3FFFFFFF
+try:
+    from time import ticks_us, ticks_diff
+except ImportError:
+    import time as _time
+    _ns = getattr(_time, "perf_counter_ns", None) or _time.monotonic_ns
+
+    def ticks_us():
+        return (_ns() // 1000) & TICKS_MASK
+
+    def ticks_diff(a, b):
+        return ((a - b + 0x20000000) & TICKS_MASK) - 0x20000000
+
 try:
     from array import array
 except ImportError:                     # pragma: no cover - every target has array
@@ -74,8 +92,29 @@ except ImportError:                     # pragma: no cover - every target has ar
 
 
 def u16_buffer(n):
-    """A zeroed uint16 buffer of n samples (2 bytes each)."""
+    """A zeroed uint16 buffer of n samples (2 bytes each), in one heap block.
+    array('H', bytes(2n)) needs two 2n-byte blocks at once (the zeroed bytes,
+    then the array): on a board-sized heap that second 38.4 KB block is what
+    fails. array('H', range(n)) is allocated once at its final size (range
+    knows its length), then zeroed by slices; CircuitPython refuses range
+    values above 65,535, and a port without array slice assignment raises,
+    so those take the two-block way."""
+    if ON_DEVICE_RUNTIME and 0 < n <= 65536:
+        try:
+            a = array("H", range(n))
+            z = array("H", bytes(2 * _ZERO_CHUNK))
+            for i in range(0, n - _ZERO_CHUNK + 1, _ZERO_CHUNK):
+                a[i:i + _ZERO_CHUNK] = z
+            tail = n % _ZERO_CHUNK
+            if tail:
+                a[n - tail:n] = z[:tail]
+            return a
+        except (TypeError, ValueError, NotImplementedError, OverflowError):
+            pass
     return array("H", bytes(2 * n))
+
+
+_ZERO_CHUNK = 256
 
 
 def check_u16_out(out, n):

@@ -9,5 +9,5 @@ __version__ = "0.1.0"
 
 def connect(port=None, timeout=10.0, check=True):
     """A Board over the serial link (see texelpad.board.connect)."""
-    from .board import connect as _connect
+    from .link.board import connect as _connect
     return _connect(port, timeout=timeout, check=check)

@@ -1,0 +1,1 @@
+# texel.gen: the generator: parameters, RNG, plan, engines, reference textures.

@@ -1,0 +1,118 @@
+# The texture parameter set: a plain dict that crosses the serial link as a
+# literal. validate() is the one gate every path goes through (render, scenes,
+# the REPL entry points); it never mutates its input and returns a new dict
+# with every default filled in, or raises ValueError naming key, value, range.
+
+FORMAT_VERSION = 1
+
+# Geometry of the TPaD display (SPEC §1): 5.3 um per map sample.
+DX_MM = 0.0053
+NYQUIST_CPMM = 1.0 / (2.0 * DX_MM)          # 94.34 cycles/mm
+# 10*log10(94.3396) = 19.7470 dB: the highest pitch the display can show.
+PITCH_DB_MAX = 19.747
+PITCH_DB_MIN = -20.0                         # 0.01 cycles/mm (paper's limit)
+IRREG_DB_MIN = -30.0                         # sigma = 0.001 decade
+IRREG_DB_MAX = 5.0                           # sigma = 3.16 decades
+QUANT_DB_MAX = 20.0                          # 2 decades: coarser than any spread
+# Finest quantization grid: 0.001 dB = 1e-4 decades of log10 f. Finer grids
+# are no quantization a finger could feel, and a grid near zero makes the plan's
+# log10(f)/q overflow (1e-308 did: an OverflowError after validation passed).
+# 1e-4 decades is still ~400 float32 ulps of log10 f at the Nyquist pitch, so
+# the grid means the same on a float32 board. 0 stays "off".
+QUANT_DB_MIN = 0.001
+TEXEL_MAX = 1048576                          # samples; > map length is allowed
+LENGTH_MAX = 1048576                         # 5.5 m of display; boards refuse what won't fit
+SEED_MAX = 4294967295                        # seeds are 32-bit unsigned
+
+# key: (kind, default, lo, hi); kind "f" float (int accepted), "i" int.
+# Required keys have default None.
+SPEC = {
+    "pitch_db": ("f", None, PITCH_DB_MIN, PITCH_DB_MAX),
+    "irregularity_db": ("f", None, IRREG_DB_MIN, IRREG_DB_MAX),
+    "texel_samples": ("i", 50, 1, TEXEL_MAX),
+    "length_samples": ("i", 9600, 1, LENGTH_MAX),
+    "quant_db": ("f", 0.0, 0.0, QUANT_DB_MAX),
+    "seed": ("i", 0, 0, SEED_MAX),
+    "gain": ("f", 1.0, 0.0, 1.0),
+    # Format version of the parameter set; only 1 exists.
+    "v": ("i", FORMAT_VERSION, FORMAT_VERSION, FORMAT_VERSION),
+    # Explicit band limit (our addition): None = faithful (no clamping, drawn
+    # pitches above Nyquist alias as in the original); a number in cycles/mm
+    # clamps every drawn pitch to at most that value.
+    "band_limit_cpmm": ("f", None, 0.01, NYQUIST_CPMM),
+}
+
+# Spelled out, not tuple(SPEC): MicroPython dicts do not keep insertion order,
+# and this order is both the order validate() checks keys in (which bad key is
+# named first) and the list in the unknown-key message.
+KEYS = ("pitch_db", "irregularity_db", "texel_samples", "length_samples", "quant_db",
+        "seed", "gain", "v", "band_limit_cpmm")
+
+
+def _fmt_range(lo, hi):
+    return "[%r, %r]" % (lo, hi)
+
+
+def _is_finite(x):
+    return x == x and x not in (float("inf"), float("-inf"))
+
+
+def check_value(key, value):
+    """Return value converted to its canonical type, or raise ValueError."""
+    kind, default, lo, hi = SPEC[key]
+    if value is None:
+        if key == "band_limit_cpmm":
+            return None
+        raise ValueError("%s: None is not allowed (expected a number in %s)"
+                         % (key, _fmt_range(lo, hi)))
+    # bool is an int subclass in Python: reject it explicitly.
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError("%s: expected %s in %s, got %s %r"
+                         % (key, "an int" if kind == "i" else "a number",
+                            _fmt_range(lo, hi), type(value).__name__, value))
+    if kind == "i":
+        if not isinstance(value, int):
+            raise ValueError("%s: expected an int in %s, got float %r"
+                             % (key, _fmt_range(lo, hi), value))
+    else:
+        if not _is_finite(value):
+            raise ValueError("%s: %r is not finite (allowed %s)"
+                             % (key, value, _fmt_range(lo, hi)))
+        value = float(value)
+    if value < lo or value > hi:
+        raise ValueError("%s: %r is out of range %s" % (key, value, _fmt_range(lo, hi)))
+    if key == "quant_db" and 0.0 < value < QUANT_DB_MIN:
+        raise ValueError("quant_db: %r is too fine a grid (0 = off, else %r .. %r dB)"
+                         % (value, QUANT_DB_MIN, hi))
+    return value
+
+
+def validate(params):
+    """Check a parameter dict completely; return a new dict with defaults.
+
+    Raises ValueError naming the first bad key, its value and the allowed
+    range. Never changes `params`."""
+    if not isinstance(params, dict):
+        raise ValueError("texel parameters must be a dict, got %s" % type(params).__name__)
+    # Several unknown keys: name the smallest repr, not the first in the dict's
+    # iteration order (which differs between CPython and MicroPython).
+    unknown = [repr(key) for key in params if key not in SPEC]
+    if unknown:
+        raise ValueError("unknown key %s (allowed: %s)" % (min(unknown), ", ".join(KEYS)))
+    out = {}
+    for key in KEYS:
+        kind, default, lo, hi = SPEC[key]
+        if key in params:
+            out[key] = check_value(key, params[key])
+        elif default is None and key != "band_limit_cpmm":
+            raise ValueError("missing required key %r (a number in %s)" % (key, _fmt_range(lo, hi)))
+        else:
+            out[key] = default
+    return out
+
+
+def texel_count(p):
+    """Texels needed for the map; the last one is cut short when the map
+    length is not a multiple of the texel length."""
+    L = p["texel_samples"]
+    return (p["length_samples"] + L - 1) // L

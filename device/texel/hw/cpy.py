@@ -1,0 +1,103 @@
+# hw/cpy.py -- hardware backend for CircuitPython boards (pwmio, analogio).
+#
+# Hw(board): see docs/runtime.md ("hw/*.py"). Platform modules are imported
+# here, never by the texel package: importing this module on CPython raises
+# ImportError.
+#
+# CircuitPython has no interrupts, threads or viper: start() is not
+# available (it raises NotImplementedError) and texel.app runs a paced loop
+# instead (refresh.mode "loop": Refresh.step() every 1/hz s as far as the
+# interpreter keeps up -- a reduced-rate profile).
+#
+# Carrier: pwmio.PWMOut(pin, frequency=freq, duty_cycle=0). duty_cycle is a
+# 16-bit fraction; the raspberrypi port (ports/raspberrypi/common-hal/pwmio/
+# PWMOut.c) programs TOP = cpu_hz // freq (125 MHz / 34 kHz -> 3676: TOP+1 =
+# 3,677 clocks per period, 33,995 Hz) and compare = (duty*TOP + 32767) //
+# 65534, so this backend reports top = cpu_hz // freq and sends
+# duty = (counts*65534 + TOP//2) // TOP, which that rounding maps back to
+# exactly `counts`. (On other CircuitPython ports the count is approximate.)
+# Only single drive: pwmio has no inverted or phase-locked outputs, so the
+# complementary legs of a bridge cannot be made (ValueError); a bridge can be
+# built with an external inverter on a single-drive pin.
+# Sensor: analogio.AnalogIn(pin).value (already 0..65535, read_u16 units).
+
+import pwmio
+import analogio
+import board as _pins
+
+from ..compat import const, ticks_us, ticks_diff
+
+
+def _pin(p):
+    # board pin from a GPIO number (16 -> board.GP16) or a name ("GP16", "A0")
+    name = ("GP%d" % p) if isinstance(p, int) else p
+    try:
+        return getattr(_pins, name)
+    except AttributeError:
+        raise ValueError("pin %r: no board.%s on this board" % (p, name))
+
+
+class Hw:
+    def __init__(self, board):
+        if board.get("port") != "circuitpython":
+            raise ValueError("board %r: port is %r, hw/cpy drives 'circuitpython' boards"
+                             % (board.get("name"), board.get("port")))
+        c = board["carrier"]
+        freq = int(c["freq_hz"])
+        cpu = int(board["cpu_hz"])
+        drive = c.get("drive", "single")
+        pins = list(c["pins"])
+        if drive != "single":
+            raise ValueError("carrier.drive: CircuitPython supports 'single' only (pwmio has no "
+                             "complementary outputs for %r); use an external inverter" % (drive,))
+        if len(pins) != 1:
+            raise ValueError("carrier.pins: single drive needs 1 pin, got %r" % (pins,))
+        try:
+            import microcontroller
+            real = microcontroller.cpu.frequency
+        except (ImportError, AttributeError):
+            real = cpu
+        if real != cpu:
+            raise ValueError("cpu_hz: board says %d Hz but microcontroller.cpu.frequency is %d Hz "
+                             "(PWM TOP depends on it)" % (cpu, real))
+        top = cpu // freq
+        if not 1 <= top < 16383:
+            raise ValueError("carrier.freq_hz: %d Hz gives TOP %d at %d Hz; supported 1..16382"
+                             % (freq, top, cpu))
+        cap = float(c.get("duty_cap", 0.5))
+        self.top = top
+        self.max_counts = int(cap * (top + 1))
+        self.freq_hz = freq
+        self.drive = drive
+        self.pins = tuple(pins)
+        self._half = top // 2
+        self._pwm = pwmio.PWMOut(_pin(pins[0]), frequency=freq, duty_cycle=0)
+        s = board.get("sensor", {})
+        self._adc = tuple(analogio.AnalogIn(_pin(p)) for p in s.get("pins", ()))
+        # CircuitPython has no time.ticks_us: compat's wraps monotonic_ns
+        # (allocates bigints; fine in the paced loop, which runs no IRQ code)
+        self.ticks_us = ticks_us
+        self.ticks_diff = ticks_diff
+
+    def set_duty(self, counts):
+        # counts: compare value 0..max_counts (clamped); small ints only
+        if counts > self.max_counts:
+            counts = self.max_counts
+        elif counts < 0:
+            counts = 0
+        self._pwm.duty_cycle = (counts * 65534 + self._half) // self.top
+
+    def off(self):
+        """Safe state: duty 0 (the output low)."""
+        self._pwm.duty_cycle = 0
+
+    def adc_read(self, i):
+        # AnalogIn.value is 16-bit already
+        return self._adc[i].value
+
+    def start(self, callback, hz):
+        raise NotImplementedError("CircuitPython has no timer interrupts: run the refresh "
+                                  "as a paced loop (refresh.mode 'loop', texel.app does)")
+
+    def stop(self):
+        self.off()

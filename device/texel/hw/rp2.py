@@ -1,0 +1,214 @@
+# hw/rp2.py -- hardware backend for RP2040 boards running MicroPython.
+#
+# Hw(board): see docs/runtime.md ("hw/*.py"). The carrier is machine.PWM at
+# the board's carrier frequency; the compare value is written allocation-free
+# (hard-IRQ safe). Platform modules are imported here, never by the texel
+# package: importing this module on CPython raises ImportError.
+#
+# PWM (RP2040 datasheet, section 4.5): a slice counts 0..TOP and wraps
+# (TOP+1 clocks per period); an output is high while count < CC, so CC is
+# 0 (always low) .. TOP+1 (always high); CC is double-buffered and latched at
+# the wrap, so a new duty never glitches a period. MicroPython picks TOP =
+# (clk_sys + freq/2) // freq - 1 with divider 1: 125 MHz / 34 kHz -> 3675.
+#
+# Writes: on an RP2040 (auto-detected) set_duty stores the slice's CC
+# register directly, both channel halves in one 32-bit store
+# (machine.mem32[0x4005000C + 0x14*slice]): one bytecode store, no method
+# call. Elsewhere (RP2350, whose PWM block is at another address, or
+# direct=False) it falls back to PWM.duty_u16 with a count -> u16 value that
+# MicroPython's rounding maps back to exactly the same CC.
+#
+# Drive:
+#   single: pins [A]. The slice's other channel is written 0 by the 32-bit
+#           store: do not use the other pin of the slice for PWM.
+#   bridge: pins [A, B] = the two channels of one slice (GPIO 2k and 2k+1);
+#           leg B is inverted (machine.PWM(invert=True)) and gets the same
+#           CC, so B = not A at every count (complementary). The RP2040 PWM
+#           has no dead-time generator: use a gate driver that inserts it.
+#           Note: complementary legs carry a DC part V*(2D-1): at duty 0
+#           (amplitude 0 while running) leg B is high all period, so the
+#           load sits at -V DC with no fundamental; only at D = 0.5 is
+#           there no DC. Safe state (off()): CC_A = 0 and CC_B = TOP+1,
+#           i.e. both legs low (B inverted and always "high" internally):
+#           no voltage across the load.
+# The duty is clamped to max_counts = floor(duty_cap * (TOP+1)).
+import sys
+import time
+
+import machine
+
+from ..compat import const
+
+# RP2040 PWM registers (datasheet 4.5.3). 0x40050000 exceeds the small-int
+# range of a 32-bit port (+-2^30): the address is a heap int, built once in
+# __init__ and kept; loading it later allocates nothing.
+_PWM_BASE = const(0x40050000)
+_SLICE_STRIDE = const(0x14)
+_CH_CC = const(0x0C)                # bits 15:0 channel A, 31:16 channel B
+_CH_TOP = const(0x10)
+_TOP_LIMIT = const(16383)          # TOP+1 < 2^14: (TOP+1) << 16 < 2^30
+
+
+def _is_rp2040():
+    # sys.implementation._machine is e.g. "Raspberry Pi Pico with RP2040"
+    return sys.platform == "rp2" and "RP2040" in getattr(sys.implementation, "_machine", "")
+
+
+def pwm_top(cpu_hz, freq_hz):
+    """TOP that ports/rp2/machine_pwm.c programs for freq_hz (divider 1)."""
+    return (cpu_hz + freq_hz // 2) // freq_hz - 1
+
+
+class Hw:
+    """Hw(board, direct=None): the rp2 backend. direct=None writes CC
+    registers directly on an RP2040 and uses PWM.duty_u16 elsewhere;
+    True/False force it (tests)."""
+
+    def __init__(self, board, direct=None):
+        if board.get("port") != "rp2":
+            raise ValueError("board %r: port is %r, hw/rp2 drives 'rp2' boards"
+                             % (board.get("name"), board.get("port")))
+        c = board["carrier"]
+        freq = int(c["freq_hz"])
+        cpu = int(board["cpu_hz"])
+        drive = c.get("drive", "single")
+        pins = [int(p) for p in c["pins"]]
+        if drive not in ("single", "bridge"):
+            raise ValueError("carrier.drive: expected 'single' or 'bridge', got %r" % (drive,))
+        if len(pins) != (2 if drive == "bridge" else 1):
+            raise ValueError("carrier.pins: %s drive needs %d pin(s), got %r"
+                             % (drive, 2 if drive == "bridge" else 1, pins))
+        for p in pins:
+            if not 0 <= p <= 29:
+                raise ValueError("carrier.pins: GPIO %d does not exist on an RP2040" % p)
+        sl = (pins[0] >> 1) & 7         # pwm_gpio_to_slice_num on the RP2040
+        want = c.get("pwm", {}).get("slice")
+        if want is not None and want != sl:
+            raise ValueError("carrier.pwm.slice: GPIO %d is on slice %d, board says %d"
+                             % (pins[0], sl, want))
+        if drive == "bridge" and (((pins[1] >> 1) & 7) != sl or (pins[1] & 1) == (pins[0] & 1)):
+            raise ValueError("carrier.pins: bridge legs %r must be the two channels of one "
+                             "PWM slice (GPIO 2k and 2k+1)" % (pins,))
+        mf = machine.freq()
+        if mf != cpu:
+            raise ValueError("cpu_hz: board says %d Hz but machine.freq() is %d Hz "
+                             "(PWM TOP depends on it)" % (cpu, mf))
+        top = pwm_top(cpu, freq)
+        if not 1 <= top < _TOP_LIMIT:
+            # compare words (counts << 16, TOP+1 << 16) must stay small ints
+            # on a 32-bit port (< 2^30), or set_duty would allocate
+            raise ValueError("carrier.freq_hz: %d Hz needs TOP %d at %d Hz; supported "
+                             "1..%d (carrier above ~7.7 kHz)" % (freq, top, cpu, _TOP_LIMIT - 1))
+        cap = float(c.get("duty_cap", 0.5))
+        self.top = top
+        self.max_counts = int(cap * (top + 1))
+        self.freq_hz = freq
+        self.drive = drive
+        self.pins = tuple(pins)
+        self.slice = sl
+        if direct is None:
+            direct = _is_rp2040()
+        self.direct = bool(direct)
+        self._timer = None
+        self._period = top + 1
+        self._half = (top + 1) // 2     # rounding of the duty_u16 fallback
+
+        # CC word for `counts`: counts * _mul puts it in leg A's half (and,
+        # bridge, leg B's half too). Off word: A = 0, B (inverted) = TOP+1.
+        sa = 16 * (pins[0] & 1)
+        if drive == "bridge":
+            sb = 16 * (pins[1] & 1)
+            self._mul = (1 << sa) | (1 << sb)
+            self._off_word = (top + 1) << sb
+        else:
+            self._mul = 1 << sa
+            self._off_word = 0
+        base = _PWM_BASE + _SLICE_STRIDE * sl
+        self._cc = base + _CH_CC        # a heap int on the board: made here, once
+        self._top_reg = base + _CH_TOP
+        self._mem = machine.mem32 if self.direct else None
+
+        # Leg A low from the start (duty 0). Leg B is made with CC_B = TOP+1
+        # and inverted: low. Current MicroPython configures the slice before
+        # muxing the pin, and the direct path latches B's off value before B
+        # is made, so B stays low throughout; with older versions (mux first)
+        # or the duty_u16 path B may be high for less than one carrier period.
+        self._a = machine.PWM(machine.Pin(pins[0]), freq=freq, duty_u16=0)
+        self._b = None
+        if self.direct:
+            if self._mem[self._top_reg] & 0xFFFF != top:
+                raise RuntimeError("PWM slice %d TOP reads %d, expected %d: not an RP2040 "
+                                   "PWM block (use direct=False)"
+                                   % (sl, self._mem[self._top_reg] & 0xFFFF, top))
+            self._mem[self._cc] = self._off_word
+            time.sleep_us(2 * (1000000 // freq + 1))   # let the wrap latch it
+        if drive == "bridge":
+            self._b = machine.PWM(machine.Pin(pins[1]), freq=freq, duty_u16=65535,
+                                  invert=True)
+        self.off()
+
+        s = board.get("sensor", {})
+        self._adc = tuple(machine.ADC(machine.Pin(int(p))) for p in s.get("pins", ()))
+        # time functions as plain attributes: calling them allocates nothing
+        self.ticks_us = time.ticks_us
+        self.ticks_diff = time.ticks_diff
+
+    def direct_registers(self):
+        """(CC register address, multiplier) for the fused viper IRQ to write
+        `counts * multiplier` into the CC register itself, or None when this
+        backend writes through PWM.duty_u16 (not an RP2040, or direct=False)."""
+        if not self.direct:
+            return None
+        return self._cc, self._mul
+
+    def set_duty(self, counts):
+        # counts: compare value 0..max_counts (clamped). Hot path: small ints
+        # only, no allocation (hard-IRQ safe). Takes effect at the next wrap.
+        if counts > self.max_counts:
+            counts = self.max_counts
+        elif counts < 0:
+            counts = 0
+        if self._mem is not None:
+            self._mem[self._cc] = counts * self._mul
+        else:
+            # u16 whose MicroPython rounding (u*(TOP+1) + 32767) // 65535 is counts
+            u = (counts * 65535 + self._half) // self._period
+            self._a.duty_u16(u)
+            if self._b is not None:
+                self._b.duty_u16(u)
+
+    def off(self):
+        """Safe state: duty 0, bridge legs both low (from the next wrap,
+        <= 1 carrier period). A later set_duty drives again."""
+        if self._mem is not None:
+            self._mem[self._cc] = self._off_word
+        else:
+            self._a.duty_u16(0)
+            if self._b is not None:
+                self._b.duty_u16(65535)
+
+    def adc_read(self, i):
+        # raw read_u16 (0..65535) of sensor pin i; allocation-free
+        return self._adc[i].read_u16()
+
+    def start(self, callback, hz):
+        """Call callback(timer) hz times a second from a hard IRQ
+        (machine.Timer(hard=True), MicroPython >= 1.26). The period is whole
+        microseconds: 8,333 Hz -> 120 us. The timer object is kept here:
+        rp2 Timers stop when garbage-collected."""
+        self.stop_timer()
+        try:
+            self._timer = machine.Timer(freq=hz, mode=machine.Timer.PERIODIC,
+                                        callback=callback, hard=True)
+        except TypeError:
+            raise RuntimeError("machine.Timer(hard=True) needs MicroPython >= 1.26 on rp2")
+
+    def stop_timer(self):
+        if self._timer is not None:
+            self._timer.deinit()
+            self._timer = None
+
+    def stop(self):
+        """Stop the refresh, then the safe state."""
+        self.stop_timer()
+        self.off()

@@ -1,0 +1,47 @@
+# Power-up: start texelpad's default scene on this board, so a plate plays
+# something the moment it is plugged in; the REPL stays free for the host.
+# This is the board's /main.py: `texelpad deploy` writes it there (not under
+# /lib/texel). It lives in the package so that an installed texelpad (a
+# wheel) carries it; it is never imported (importing it would start the
+# display).
+# Board and scene come from /texelpad.json if present, e.g.
+#   {"board": "pico_bridge", "scene": {"regions": [...]}}
+# otherwise the board is picked from sys.platform and the scene is the
+# study's split screen (texel.app.DEFAULT_SCENE).
+import sys
+
+
+def _config():
+    try:
+        import json
+        with open("/texelpad.json") as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return {}
+
+
+def _board_for_platform():
+    p = sys.platform
+    if sys.implementation.name == "circuitpython":
+        return "pico_cpy"
+    if p == "rp2":
+        return "pico"
+    if p == "pyboard":
+        return "pyboard"
+    return "virtual"
+
+
+def main():
+    cfg = _config()
+    board = cfg.get("board") or _board_for_platform()
+    try:
+        import texel.app
+        st = texel.app.start(board, cfg.get("scene"))
+        print("texelpad: playing on %s (%s refreshes/s)" % (st.get("board"), st.get("refresh_hz")))
+        if st.get("refresh_mode") == "loop":      # no timer IRQ: this loop is the display
+            texel.app.run_loop()
+    except Exception as e:          # never brick the REPL: report and stay off
+        print("texelpad: not started:", repr(e))
+
+
+main()

@@ -1,0 +1,1 @@
+# texel.runtime: the display runtime: boards, scenes, sensor, duty law, refresh.

@@ -1,0 +1,437 @@
+"""Figures for the command line (matplotlib, drawn off-screen with the Agg
+canvas; pyplot and its global backend state are never touched)."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import texel
+
+from .spectrum import pitch_normal_pdf, spectrum
+
+
+def render_figure(fmap: np.ndarray, plan: Any, path: str | Path, engine: str = "") -> None:
+    """Map, spectrum and texel pitch histogram of one rendering, as a PNG."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    p = plan.params
+    fig = Figure(figsize=(10, 11.5), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax_map, ax_zoom, ax_spec, ax_hist = fig.subplots(4, 1)
+    sigma = 10.0 ** (p["irregularity_db"] / 10.0)
+    fig.suptitle("pitch %.2f dB (%.3g c/mm), irregularity %.2f dB (%.3g decade), seed %d, "
+                 "%d texel%s of %d samples%s" % (
+                     p["pitch_db"], 10 ** (p["pitch_db"] / 10), p["irregularity_db"], sigma,
+                     p["seed"], plan.count, "" if plan.count == 1 else "s", plan.L,
+                     (", " + engine) if engine else ""))
+
+    x = np.arange(fmap.size) * texel.DX_MM
+    ax_map.plot(x, fmap, lw=0.4, color="C0")
+    ax_map.set_xlim(0, max(x[-1], texel.DX_MM))
+    ax_map.set_ylim(-0.02, 1.02)
+    ax_map.set_xlabel("position (mm)")
+    ax_map.set_ylabel("friction reduction")
+    ax_map.set_title("friction map (%d samples, %.2f mm)" % (fmap.size, fmap.size * texel.DX_MM))
+
+    # zoom: the first 8 texels (at least 100 samples), texel borders marked
+    nz = int(min(fmap.size, max(100, 8 * plan.L)))
+    ax_zoom.plot(x[:nz], fmap[:nz], lw=0.8, color="C0", marker="." if nz <= 400 else None,
+                 ms=2)
+    for k in range(plan.L, nz, plan.L):
+        if nz // plan.L <= 40:
+            ax_zoom.axvline(k * texel.DX_MM, color="0.8", lw=0.6, zorder=0)
+    ax_zoom.set_xlim(0, max(x[nz - 1], texel.DX_MM))
+    ax_zoom.set_ylim(-0.02, 1.02)
+    ax_zoom.set_xlabel("position (mm)")
+    ax_zoom.set_ylabel("friction reduction")
+    ax_zoom.set_title("first %d samples (%.3g mm)%s" % (
+        nz, nz * texel.DX_MM, ", texel borders in grey" if plan.L < nz else ""))
+
+    f, a = spectrum(fmap)
+    keep = f > 0
+    if keep.any():
+        ax_spec.loglog(f[keep], np.maximum(a[keep], 1e-12), lw=0.5, color="C0")
+    ax_spec.axvline(texel.NYQUIST_CPMM, color="C3", ls="--", lw=1,
+                    label="Nyquist %.1f c/mm" % texel.NYQUIST_CPMM)
+    ax_spec.axvline(10 ** (p["pitch_db"] / 10), color="C2", ls=":", lw=1.2,
+                    label="central pitch %.3g c/mm" % 10 ** (p["pitch_db"] / 10))
+    ax_spec.set_xlabel("spatial frequency (cycles/mm)")
+    ax_spec.set_ylabel("amplitude")
+    ax_spec.set_title("spectrum (Hann window, mean removed)")
+    ax_spec.legend(loc="lower left", fontsize="small")
+
+    db = 10.0 * np.log10(np.asarray(plan.f, dtype=np.float64))
+    sd = 10.0 * sigma
+    lo = min(db.min(), p["pitch_db"] - 4 * sd)
+    hi = max(db.max(), p["pitch_db"] + 4 * sd)
+    if hi - lo < 1e-6:
+        lo, hi = lo - 0.5, hi + 0.5
+    bins = int(min(80, max(10, math.sqrt(db.size) * 2)))
+    ax_hist.hist(db, bins=np.linspace(lo, hi, bins + 1), density=True, color="C0", alpha=0.6,
+                 label="texel pitches (%d)" % db.size)
+    grid = np.linspace(lo, hi, 400)
+    ax_hist.plot(grid, pitch_normal_pdf(grid, p["pitch_db"], p["irregularity_db"]), color="C1",
+                 lw=1.5, label="Normal(%.2f dB, %.3g dB)" % (p["pitch_db"], sd))
+    nyq_db = 10 * math.log10(texel.NYQUIST_CPMM)
+    if lo <= nyq_db <= hi:
+        ax_hist.axvline(nyq_db, color="C3", ls="--", lw=1, label="Nyquist (%.0f%% of texels above)"
+                        % (100 * plan.fraction_above_nyquist()))
+    ax_hist.set_xlim(lo, hi)
+    ax_hist.set_xlabel("texel pitch (dB re 1 cycle/mm)")
+    ax_hist.set_ylabel("density (1/dB)")
+    ax_hist.set_title("texel pitch histogram against the drawing distribution"
+                      + (" (quantized %g dB)" % p["quant_db"] if p["quant_db"] > 0 else ""))
+    ax_hist.legend(loc="upper right", fontsize="small")
+    fig.savefig(str(path), dpi=110)
+
+
+# --- the `texelpad demo` figure ---------------------------------------------------
+
+DEFAULT_DISPLAY = {"positions": 19200, "dx_um": 5.3}   # the TPaD screen: 19,200 x 5.3 um = 101.76 mm
+_T_WRAP = 1 << 30           # board clocks in telemetry (t_us) wrap here (refresh._WRAP + 1)
+_U16 = 65535.0              # uint16 amplitude of friction reduction 1.0
+
+
+def _built(scene: Any, display: dict | None) -> tuple[dict, Any]:
+    """(canonical scene, texel.runtime.scene.Scene) exactly as a board builds it (idle
+    default 0, every board's carrier.idle_amplitude). ValueError from validate."""
+    from texel.runtime import scene as tscene
+    disp = dict(DEFAULT_DISPLAY if display is None else display)
+    canonical = tscene.validate(scene, disp)
+    return canonical, tscene.build(canonical, disp)
+
+
+def _u16_map(sc: Any) -> np.ndarray:
+    """uint16 amplitude at every display position: Scene.amp itself, so
+    plan-backed texel regions, gaps and the idle level are what a board plays."""
+    amp = sc.amp
+    return np.fromiter((amp(i) for i in range(sc.positions)), dtype=np.uint16,
+                       count=sc.positions)
+
+
+def scene_map(scene: Any, display: dict | None = None) -> np.ndarray:
+    """The friction map a board plays for `scene`: float64 in [0, 1] (uint16 / 65535),
+    one value per display position (display default 19,200 x 5.3 um)."""
+    return _u16_map(_built(scene, display)[1]) / _U16
+
+
+def _rows(name: str, data: Any, cols: int, what: str) -> np.ndarray:
+    """data as an int64 (n, cols) array of finite integers, or ValueError."""
+    try:
+        a = np.asarray(data, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError("%s: expected a sequence of %s rows of %d numbers each, got %s"
+                         % (name, what, cols, type(data).__name__)) from None
+    if a.size == 0 and a.shape in ((0,), (0, cols)):
+        return np.zeros((0, cols), dtype=np.int64)
+    if a.ndim != 2 or a.shape[1] != cols:
+        raise ValueError("%s: expected shape (n, %d) of %s rows, got shape %s"
+                         % (name, cols, what, a.shape))
+    bad = ~np.isfinite(a) | (a != np.round(a))
+    if bad.any():
+        r, c = np.argwhere(bad)[0]
+        raise ValueError("%s[%d][%d]: %r is not a finite integer" % (name, r, c, float(a[r, c])))
+    return a.astype(np.int64)
+
+
+def _unwrap_us(t: np.ndarray) -> np.ndarray:
+    """Board microsecond stamps (wrapping at 2^30) -> monotonic us from t[0]."""
+    if t.size == 0:
+        return t.astype(np.float64)
+    return t[0] + np.concatenate(([0], np.cumsum(np.diff(t) % _T_WRAP))).astype(np.float64)
+
+
+def _label(k: int, tex: dict, short: bool) -> str:
+    """'R2 texel 6.3 dB / −12.9 dB / seed 7' (short: 'R2 T 6.3/−12.9/7')."""
+    kind = tex["kind"]
+    if kind == "reference":
+        s = tex["name"] if short else "reference " + tex["name"]
+    elif kind == "texel":
+        s = (("T %.3g/%.3g/%d" if short else "texel %.3g dB / %.3g dB / seed %d")
+             % (tex["pitch_db"], tex["irregularity_db"], tex["seed"]))
+    elif kind == "constant":
+        s = "const %.3g" % tex["level"]
+    else:
+        s = "samples %d %s" % (len(tex["u16"]), tex["fit"])
+    return ("R%d " % (k + 1) + s).replace("-", "\u2212")
+
+
+def _note(ax: Any, text: str) -> None:
+    ax.text(0.5, 0.5, text, transform=ax.transAxes, ha="center", va="center",
+            fontsize="large", color="0.35",
+            bbox=dict(boxstyle="round", fc="white", ec="0.7", alpha=0.9))
+
+
+def demo_figure(path: str | Path, scene: Any, telemetry: Any, *, display: dict | None = None,
+                title: str = "", truth: Any = None) -> dict:
+    """One PNG for `texelpad demo`: what the scene should play against what the
+    board's refresh played (telemetry rows (t_us, position, amplitude u16);
+    position -1 = lifted), spectra, texel pitch histograms, and amplitude and
+    finger over time. truth: optional rows (t_us, true position or negative =
+    lifted) of the simulated finger, in time order, in the same clock as t_us.
+
+    Returns {"path", "samples", "down" (finger-down samples), "amp_err_max"
+    (max |played - map[position]| over finger-down samples, uint16 counts; None
+    without any), "amp_mismatches" (samples with a nonzero error)} and with
+    truth also "pos_err_max" (max |sensed - true| in positions, nearest t_us,
+    both down; None without any pair) and "lift_mismatches" (sensed and true
+    finger disagree on lifted). Raises ValueError on malformed inputs."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    canonical, sc = _built(scene, display)
+    u16 = _u16_map(sc)
+    fmap = u16 / _U16                             # friction reduction 0..1 per position
+    npos = sc.positions
+    dx = sc.dx_um / 1000.0                        # mm per position
+    x = np.arange(npos) * dx                      # mm
+    regions = canonical["regions"]
+    spans = [(s, e) for (s, e, _, _) in sc.spans()]
+    texs = [r["texture"] for r in regions]
+
+    tel = _rows("telemetry", telemetry, 3, "(t_us, position, amplitude)")
+    t_us, pos, amp = tel[:, 0], tel[:, 1], tel[:, 2]
+    if ((pos < -1) | (pos >= npos)).any():
+        i = int(np.argmax((pos < -1) | (pos >= npos)))
+        raise ValueError("telemetry[%d]: position %d outside -1 (lifted) .. %d"
+                         % (i, pos[i], npos - 1))
+    if ((amp < 0) | (amp > 65535)).any():
+        i = int(np.argmax((amp < 0) | (amp > 65535)))
+        raise ValueError("telemetry[%d]: amplitude %d outside 0 .. 65535" % (i, amp[i]))
+    down = pos >= 0
+    err = np.zeros(len(tel), dtype=np.int64)      # |played - map[position]|, uint16 counts
+    err[down] = np.abs(amp[down] - u16[pos[down]].astype(np.int64))
+    out: dict = {"path": str(path), "samples": int(len(tel)), "down": int(down.sum()),
+                 "amp_err_max": int(err[down].max()) if down.any() else None,
+                 "amp_mismatches": int((err != 0).sum())}
+    t0 = float(t_us[0]) if len(tel) else None
+    ts = (_unwrap_us(t_us) - (t0 or 0.0)) / 1e6   # s from the first telemetry sample
+
+    tr = None
+    if truth is not None:
+        tr = _rows("truth", truth, 2, "(t_us, true position)")
+        tr_t = _unwrap_us(tr[:, 0])               # rows in time order, stamps may wrap like t_us
+        if t0 is None and len(tr):
+            t0 = float(tr[0, 0])
+        tr_s = (tr_t - (t0 or 0.0)) / 1e6         # s, same origin as ts
+        out["pos_err_max"] = None
+        out["lift_mismatches"] = 0
+        if len(tel) and len(tr):
+            # the truth row nearest in time to each telemetry sample
+            near = np.zeros(len(ts), dtype=np.int64)
+            if len(tr) > 1:
+                j = np.clip(np.searchsorted(tr_s, ts), 1, len(tr) - 1)
+                near = np.where(ts - tr_s[j - 1] <= tr_s[j] - ts, j - 1, j)
+            tpos = tr[near, 1]
+            both = down & (tpos >= 0)
+            if both.any():
+                out["pos_err_max"] = int(np.abs(pos[both] - tpos[both]).max())
+            out["lift_mismatches"] = int((down != (tpos >= 0)).sum())
+
+    fig = Figure(figsize=(12, 14.5), layout="constrained")
+    FigureCanvasAgg(fig)
+    gs = fig.add_gridspec(4, 2, height_ratios=[1.15, 1, 1, 1])
+    ax_map = fig.add_subplot(gs[0, :])
+    ax_zoom = fig.add_subplot(gs[1, :])
+    ax_spec = fig.add_subplot(gs[2, 0])
+    ax_hist = fig.add_subplot(gs[2, 1])
+    ax_time = fig.add_subplot(gs[3, :])
+
+    summary = ["%d telemetry samples, %d with the finger down" % (out["samples"], out["down"])]
+    if out["amp_err_max"] is not None:
+        summary.append("max |played \u2212 map| = %d counts (%d sample%s differ%s)" % (
+            out["amp_err_max"], out["amp_mismatches"], "" if out["amp_mismatches"] == 1 else "s",
+            "s" if out["amp_mismatches"] == 1 else ""))
+    if out.get("pos_err_max") is not None:
+        summary.append("max |sensed \u2212 true| = %d positions (%.4g \u00b5m)" % (
+            out["pos_err_max"], out["pos_err_max"] * sc.dx_um))
+    import textwrap
+    fig.suptitle(textwrap.fill(title or "texelpad demo", 130) + "\n" + "; ".join(summary[:2])
+                 + ("\n" + summary[2] if len(summary) > 2 else ""))
+    # one colour per region: tab10, then the light tab20 shades (16 regions at most)
+    from matplotlib import colormaps
+    t20 = colormaps["tab20"].colors
+    colors = [t20[2 * k] if k < 10 else t20[2 * (k - 10) + 1] for k in range(len(regions))]
+    short = len(regions) > 3
+    played_kw = dict(s=14, color="C3", zorder=3, edgecolors="none")
+
+    # 1. the whole display: the map, regions, played samples at their positions
+    ax_map.plot(x, fmap, lw=0.4, color="C0", label="map (what should play)")
+    edges = sorted({s for s, _ in spans} | {e for _, e in spans})
+    for b in edges:
+        ax_map.axvline(b * dx, color="0.5", lw=0.8, ls="--", zorder=1)
+    gaps = [(0, spans[0][0])] + [(spans[k][1], spans[k + 1][0]) for k in range(len(spans) - 1)] \
+        + [(spans[-1][1], npos)]
+    for a, b in gaps:
+        if b > a:
+            ax_map.axvspan(a * dx, b * dx, color="0.85", zorder=0)
+    if down.any():
+        ax_map.scatter(pos[down] * dx, amp[down] / _U16, label="played (telemetry, finger down)",
+                       **played_kw)
+        bad = down & (err != 0)
+        if bad.any():
+            ax_map.scatter(pos[bad] * dx, amp[bad] / _U16, marker="x", s=40, color="k", zorder=4,
+                           label="played \u2260 map (%d)" % bad.sum())
+    else:
+        ax_map.text(0.99, 0.97, "no telemetry" if not len(tel) else "finger never down",
+                    transform=ax_map.transAxes, ha="right", va="top", color="C3")
+    ax_map.set_xlim(0, npos * dx)
+    ax_map.set_ylim(-0.03, 1.3)
+    ax_map.set_yticks([0, 0.25, 0.5, 0.75, 1])
+    ax_map.set_xlabel("position (mm)")
+    ax_map.set_ylabel("friction reduction")
+    ax_map.set_title("friction map over the display (%d positions \u00d7 %.3g \u00b5m = %.2f mm)%s"
+                     % (npos, sc.dx_um, npos * dx,
+                        ", grey = no region (idle)" if any(b > a for a, b in gaps) else ""),
+                     fontsize="medium")
+    ax_map.legend(loc="upper left", ncol=3, fontsize="small", framealpha=0.9)
+    top = ax_map.secondary_xaxis("top")
+    top.set_xticks([(s + e) / 2 * dx for s, e in spans],
+                   labels=[_label(k, t, short) for k, t in enumerate(texs)])
+    top.tick_params(axis="x", length=0, labelsize="small" if not short else 7,
+                    rotation=0 if not short else 90)
+
+    # 2. zoom: a few mm around the first border touching a textured region
+    textured = [bool(np.ptp(fmap[s:e]) > 0) for s, e in spans]
+    half = int(round(1.5 / dx))                   # positions in 1.5 mm
+    centre, what = None, ""
+    for k in range(len(spans) - 1):
+        if textured[k] or textured[k + 1]:
+            centre = (spans[k][1] + spans[k + 1][0]) // 2
+            what = "around the border of R%d and R%d" % (k + 1, k + 2)
+            break
+    if centre is None:
+        k = textured.index(True) if any(textured) else 0
+        centre = spans[k][0] + half
+        what = "start of R%d" % (k + 1)
+    a = max(0, min(centre - half, npos - 2 * half))
+    b = min(npos, a + 2 * half)
+    ax_zoom.plot(x[a:b], fmap[a:b], lw=0.9, color="C0", label="map")
+    for e in edges:
+        if a <= e <= b:
+            ax_zoom.axvline(e * dx, color="0.5", lw=0.8, ls="--")
+    inz = down & (pos >= a) & (pos < b)
+    if inz.any():
+        ax_zoom.scatter(pos[inz] * dx, amp[inz] / _U16, label="played", **played_kw)
+    ax_zoom.set_xlim(x[a], x[b - 1] if b - a > 1 else x[a] + dx)
+    ax_zoom.set_ylim(-0.03, 1.03)
+    ax_zoom.set_xlabel("position (mm)")
+    ax_zoom.set_ylabel("friction reduction")
+    ax_zoom.set_title("zoom %.2f \u2013 %.2f mm, %s (%d played samples here)"
+                      % (x[a], x[b - 1], what, inz.sum()), fontsize="medium")
+    ax_zoom.legend(loc="upper right", fontsize="small", framealpha=0.9)
+
+    # 3. spectrum of every non-constant region (c/mm on this display's spacing)
+    nyq = 1.0 / (2.0 * dx)                        # c/mm
+    scale = texel.DX_MM / dx                      # spectrum() assumes 5.3 um samples
+    peak, shown = 0.0, 0
+    for k, (s, e) in enumerate(spans):
+        if not textured[k] or e - s < 2:
+            continue
+        f, am = spectrum(fmap[s:e])
+        f = f * scale
+        keep = f > 0
+        peak = max(peak, float(am[keep].max()))
+        ax_spec.loglog(f[keep], np.maximum(am[keep], 1e-12), lw=0.5, color=colors[k],
+                       label=_label(k, texs[k], True) if shown < 6 else None)
+        if texs[k]["kind"] == "texel":
+            ax_spec.axvline(10 ** (texs[k]["pitch_db"] / 10) * scale, color=colors[k], ls=":",
+                            lw=1.4, label=("R%d central pitch %.3g c/mm" % (
+                                k + 1, 10 ** (texs[k]["pitch_db"] / 10) * scale))
+                            if shown < 6 else None)
+        shown += 1
+    if shown > 6:
+        ax_spec.plot([], [], " ", label="(+%d more regions)" % (shown - 6))
+    if shown:
+        ax_spec.axvline(nyq, color="C3", ls="--", lw=1, label="Nyquist %.1f c/mm" % nyq)
+        ax_spec.set_ylim(max(peak, 1e-9) * 1e-5, max(peak, 1e-9) * 3)
+        ax_spec.legend(loc="lower left", fontsize="x-small", framealpha=0.9)
+    else:
+        _note(ax_spec, "no textured region\n(constant levels only)")
+    ax_spec.set_xlabel("spatial frequency (cycles/mm)")
+    ax_spec.set_ylabel("amplitude")
+    ax_spec.set_title("spectrum per region (Hann, mean removed)", fontsize="medium")
+
+    # 4. texel pitch histograms against the drawing distribution (first 4 texel regions)
+    tk = [k for k, t in enumerate(texs) if t["kind"] == "texel"]
+    if tk:
+        plans = []
+        for k in tk[:4]:
+            p = {key: v for key, v in texs[k].items() if key != "kind"}
+            p["length_samples"] = spans[k][1] - spans[k][0]   # the region sets the length
+            plans.append((k, texel.make_plan(p)))
+        lo = min(min(10 * np.log10(np.asarray(pl.f, dtype=np.float64)).min(),
+                     pl.params["pitch_db"] - 4 * 10 * 10 ** (pl.params["irregularity_db"] / 10))
+                 for _, pl in plans)
+        hi = max(max(10 * np.log10(np.asarray(pl.f, dtype=np.float64)).max(),
+                     pl.params["pitch_db"] + 4 * 10 * 10 ** (pl.params["irregularity_db"] / 10))
+                 for _, pl in plans)
+        if hi - lo < 1e-6:
+            lo, hi = lo - 0.5, hi + 0.5
+        grid = np.linspace(lo, hi, 400)                       # dB re 1 c/mm
+        fracs = []
+        for k, pl in plans:
+            db = 10 * np.log10(np.asarray(pl.f, dtype=np.float64))
+            bins = int(min(60, max(10, math.sqrt(db.size) * 2)))
+            ax_hist.hist(db, bins=np.linspace(lo, hi, bins + 1), density=True, color=colors[k],
+                         **(dict(alpha=0.45) if len(plans) == 1 else dict(histtype="step", lw=1.5)),
+                         label="R%d: %d texels" % (k + 1, db.size))
+            ax_hist.plot(grid, pitch_normal_pdf(grid, pl.params["pitch_db"],
+                                                pl.params["irregularity_db"]),
+                         color=colors[k], lw=1.5)
+            fracs.append("R%d %.0f%%" % (k + 1, 100 * pl.fraction_above_nyquist()))
+        nyq_db = 10 * math.log10(texel.NYQUIST_CPMM)          # the plan's own sample spacing
+        if lo <= nyq_db <= hi:
+            ax_hist.axvline(nyq_db, color="C3", ls="--", lw=1,
+                            label="Nyquist (above: %s)" % ", ".join(fracs))
+        else:
+            ax_hist.plot([], [], " ", label="above Nyquist: %s" % ", ".join(fracs))
+        ax_hist.plot([], [], color="0.3", lw=1.5, label="drawing distribution (lines)")
+        ax_hist.set_xlim(lo, hi)
+        ax_hist.set_ylim(0, ax_hist.get_ylim()[1] * 1.3)         # headroom for the legend
+        ax_hist.legend(loc="upper right", fontsize="x-small", framealpha=0.9)
+        ax_hist.set_title("texel pitch histogram%s" % (
+            " (first 4 of %d texel regions)" % len(tk) if len(tk) > 4 else ""), fontsize="medium")
+    else:
+        _note(ax_hist, "no texel region in this scene")
+        ax_hist.set_title("texel pitch histogram", fontsize="medium")
+    ax_hist.set_xlabel("texel pitch (dB re 1 cycle/mm)")
+    ax_hist.set_ylabel("density (1/dB)")
+
+    # 5. played amplitude and finger position over time (lifted = gaps)
+    ax_pos = ax_time.twinx()
+    handles = []
+    if down.any():
+        handles.append(ax_time.plot(ts, np.where(down, amp / _U16, np.nan), lw=0.5, marker=".",
+                                    ms=3, color="C0", label="played amplitude")[0])
+    if (~down).any():
+        handles.append(ax_time.plot(ts[~down], amp[~down] / _U16, ls="none", marker="o",
+                                    ms=3, mfc="none", color="0.5",
+                                    label="played while lifted (idle)")[0])
+    if down.any():
+        handles.append(ax_pos.plot(ts, np.where(down, pos * dx, np.nan), lw=1.2, color="C1",
+                                   label="sensed finger (mm)")[0])
+    if tr is not None and len(tr):
+        handles.append(ax_pos.plot(tr_s, np.where(tr[:, 1] >= 0, tr[:, 1] * dx, np.nan), lw=1,
+                                   ls="--", color="k", label="true finger (mm)")[0])
+    if not len(tel):
+        _note(ax_time, "no telemetry")
+    elif not down.any():
+        ax_time.text(0.5, 0.6, "finger lifted throughout", transform=ax_time.transAxes,
+                     ha="center", color="C3")
+    ax_time.set_ylim(-0.03, 1.3)
+    ax_time.set_yticks([0, 0.25, 0.5, 0.75, 1])
+    ax_pos.set_ylim(-0.03 * npos * dx, 1.3 * npos * dx)
+    ax_time.set_xlabel("time since the first sample (s)")
+    ax_time.set_ylabel("played friction reduction", color="C0")
+    ax_pos.set_ylabel("finger position (mm)", color="C1")
+    ax_time.set_title("played amplitude and finger over time", fontsize="medium")
+    if handles:
+        ax_pos.legend(handles=handles, loc="upper left", ncol=len(handles), fontsize="small",
+                       framealpha=0.9)
+    fig.savefig(str(path), dpi=100)
+    return out

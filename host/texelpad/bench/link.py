@@ -1,0 +1,129 @@
+"""`texelpad bench-link`: what the link costs, measured on the virtual board
+(the device image under the MicroPython unix port, on a pty, playing in real
+time while the host talks to it).
+
+- deploy: the whole image into an empty flash (cold), then again with
+  nothing changed (warm: the hash check alone);
+- push latency: host call -> the board's status confirming the new scene
+  plays (Board.push: host-side check, status, push, swap, status back);
+- bytes on the wire per texture change, against the original lab's 76,800
+  (two 19,200 x int16 maps over serial per change, SPEC 4);
+- the soak: every push acknowledged with the scene that was sent, and the
+  board's free memory (after its gc.collect) across the pushes: its trend
+  must not go down.
+"""
+from __future__ import annotations
+
+import statistics
+import time
+from typing import Any, Callable
+
+LAB_BYTES_PER_CHANGE = 2 * 19200 * 2       # two int16 maps of 19,200 samples
+
+
+def _pct(xs: list[float], q: float) -> float:
+    s = sorted(xs)
+    return s[min(len(s) - 1, int(q * (len(s) - 1) + 0.5))]
+
+
+def slope_per_push(ys: list[float]) -> float:
+    """Least-squares slope of ys against their index (bytes per push)."""
+    n = len(ys)
+    if n < 2:
+        return 0.0
+    mx = (n - 1) / 2
+    my = sum(ys) / n
+    sxx = sum((i - mx) ** 2 for i in range(n))
+    return sum((i - mx) * (y - my) for i, y in enumerate(ys)) / sxx
+
+
+def run(pushes: int = 200, deploy: bool = True,
+        progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+    from ..link.board import connect
+    from ..link.virtual import VirtualBoard
+    say = progress or (lambda m: None)
+    res: dict[str, Any] = {"pushes": pushes}
+    with VirtualBoard(image=None if deploy else "source") as vb:
+        if deploy:
+            from ..deploy.install import deploy as do_deploy
+            for label in ("cold", "warm"):
+                with connect(vb.port, check=False) as b:
+                    t0 = time.perf_counter()
+                    rep = do_deploy(b)
+                    res["deploy_%s_s" % label] = time.perf_counter() - t0
+                    res["deploy_%s" % label] = rep
+                say("deploy %s: %.2f s, %d files written, %d bytes"
+                    % (label, res["deploy_%s_s" % label], rep["written"], rep["bytes_written"]))
+        with connect(vb.port) as b:
+            b.start("virtual", None, realtime=True)
+            display = b.status()["display"]
+            lat, sent, recv, mem, acked = [], [], [], [], 0
+            t_all = time.perf_counter()
+            for i in range(pushes):
+                params = {"pitch_db": round(-5.0 + 20.0 * (i % 97) / 97, 3),
+                          "irregularity_db": -12.9, "seed": i}
+                s0, r0 = b.link.sent, b.link.received
+                t0 = time.perf_counter()
+                st = b.push_texel(params)
+                lat.append(time.perf_counter() - t0)
+                sent.append(b.link.sent - s0)
+                recv.append(b.link.received - r0)
+                reg = st["scene"]["regions"]
+                if (st["pushes"] == i + 2 and len(reg) == 1 and reg[0]["seed"] == i
+                        and reg[0]["pitch_db"] == params["pitch_db"] and st["faults"] == 0):
+                    acked += 1
+                mem.append(st["mem_free"])
+                if progress and (i + 1) % max(1, pushes // 10) == 0:
+                    say("push %d/%d: median %.1f ms" % (i + 1, pushes,
+                                                        1e3 * statistics.median(lat)))
+            res["soak_s"] = time.perf_counter() - t_all
+            st = b.status()
+            # one texture as the bytes of its literal alone (what the scene
+            # costs on the wire, without the code around it)
+            from ..link.board import full_screen_texel
+            from ..link.protocol import literal
+            one = literal(full_screen_texel({"pitch_db": 6.3, "irregularity_db": -12.9,
+                                             "seed": 7}, display))
+    n = max(1, len(mem) // 10)
+    res.update({
+        "acked": acked, "faults": st["faults"], "overruns": st["overruns"],
+        "refreshes": st["refreshes"],
+        "push_ms_median": 1e3 * statistics.median(lat), "push_ms_p95": 1e3 * _pct(lat, 0.95),
+        "push_ms_max": 1e3 * max(lat),
+        "bytes_sent_per_push": statistics.median(sent),
+        "bytes_received_per_push": statistics.median(recv),
+        "scene_literal_bytes": len(one),
+        "lab_bytes_per_change": LAB_BYTES_PER_CHANGE,
+        "mem_free_first": statistics.median(mem[:n]), "mem_free_last": statistics.median(mem[-n:]),
+        "mem_free_min": min(mem), "mem_free_slope_per_push": slope_per_push(mem),
+    })
+    return res
+
+
+def table(res: dict[str, Any]) -> str:
+    lines = ["texelpad bench-link: the virtual board on a pty (MicroPython unix port, real time)"]
+    if "deploy_cold_s" in res:
+        for label in ("cold", "warm"):
+            rep = res["deploy_%s" % label]
+            lines.append("deploy %-4s  %6.2f s  %2d of %d files written, %s bytes" % (
+                label, res["deploy_%s_s" % label], rep["written"], rep["files"],
+                format(rep["bytes_written"], ",")))
+    lines += [
+        "push        median %.1f ms, p95 %.1f ms, max %.1f ms over %d pushes (host call -> board "
+        "confirms the new scene)" % (res["push_ms_median"], res["push_ms_p95"],
+                                     res["push_ms_max"], res["pushes"]),
+        "wire        %d bytes sent, %d received per push (code + literal + status); the scene "
+        "literal alone %d bytes; the original lab: %s bytes per change (%.0fx more than we send)"
+        % (res["bytes_sent_per_push"], res["bytes_received_per_push"],
+           res["scene_literal_bytes"], format(res["lab_bytes_per_change"], ","),
+           res["lab_bytes_per_change"] / max(1, res["bytes_sent_per_push"])),
+        "soak        %d/%d pushes acknowledged with the scene sent; %d faults, %d overruns over "
+        "%s refreshes" % (res["acked"], res["pushes"], res["faults"], res["overruns"],
+                          format(res["refreshes"], ",")),
+        "memory      free after each push: first tenth %s, last tenth %s, min %s bytes; trend "
+        "%+.2f bytes/push" % (format(int(res["mem_free_first"]), ","),
+                              format(int(res["mem_free_last"]), ","),
+                              format(int(res["mem_free_min"]), ","),
+                              res["mem_free_slope_per_push"]),
+    ]
+    return "\n".join(lines)

@@ -1,0 +1,125 @@
+"""`texelpad bench`, `bench-refresh`, `bench-link`: the benchmarks (texelpad.bench)."""
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from ..link.transport import LinkError
+from .common import EXIT_FAIL, EXIT_OK, CliError, _fail, _stderr, csv_list, positive_float, \
+    positive_int
+
+
+def add_bench(p: argparse.ArgumentParser) -> None:
+    from ..bench.engines import RUNTIMES, TIMING_CASE
+    from ..analysis.hard_cases import HARD_CASES
+    p.description = ("Time a full 19,200-sample map (the %r case; plan and synthesis apart, "
+                    "median of --repeat runs) with every engine on CPython and on the "
+                    "MicroPython unix port, and measure each engine's error against the "
+                    "float64 reference over the hard-case suite, in PWM steps (1/3676 of "
+                    "full scale). Also prints an op-count ESTIMATE for an emulated RP2040. "
+                    "Progress goes to stderr, the table to stdout." % TIMING_CASE)
+    p.add_argument("--json", metavar="PATH",
+                   help="also write every figure, per-case detail, machine and versions here")
+    p.add_argument("--cases", type=csv_list, metavar="A,B,...",
+                   help="hard cases to measure errors on (default: all %d: %s)"
+                        % (len(HARD_CASES), ", ".join(HARD_CASES)))
+    p.add_argument("--runtimes", type=csv_list, default=list(RUNTIMES), metavar="R,...",
+                   help="runtimes to bench (default: %s)" % ",".join(RUNTIMES))
+    p.add_argument("--repeat", type=positive_int, default=11, metavar="N",
+                   help="timing repeats, the median is reported (default: 11; a full map "
+                        "takes milliseconds, and more runs steady the median on a busy host)")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    p.set_defaults(func=cmd_bench)
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    from ..bench import engines as bench
+    from ..analysis.hard_cases import HARD_CASES
+    bad = [r for r in args.runtimes if r not in bench.RUNTIMES]
+    if bad:
+        raise CliError("--runtimes", "unknown runtime %s (known: %s)"
+                       % (", ".join(map(repr, bad)), ", ".join(bench.RUNTIMES)))
+    if args.cases is not None:
+        bad = [c for c in args.cases if c not in HARD_CASES]
+        if bad:
+            raise CliError("--cases", "unknown case %s (known: %s)"
+                           % (", ".join(map(repr, bad)), ", ".join(HARD_CASES)))
+    progress = None if args.quiet else (lambda m: _stderr("bench: " + m))
+    res = bench.run(args.cases, args.runtimes, args.repeat, progress)
+    print(bench.table(res), flush=True)
+    if args.json:
+        try:
+            bench.write_json(res, args.json)
+        except OSError as e:
+            raise CliError("--json", "cannot write %s: %s" % (args.json, e.strerror or e),
+                           EXIT_FAIL) from None
+        if progress:
+            progress("wrote %s" % args.json)
+    return EXIT_FAIL if res.failed else EXIT_OK
+
+
+def add_bench_refresh(p: argparse.ArgumentParser) -> None:
+    from ..bench.refresh import BUDGET_US, DEFAULT_SECONDS, GOAL_US
+    p.description = ("Run the device runtime on the virtual board under the MicroPython unix "
+                    "port while a scripted finger swipes across the study's split screen, and "
+                    "time one refresh (Python and, where present, the fused viper refresh; "
+                    "batches timed with ticks_us), its parts (sensor.read, scene.amp, "
+                    "law.duty, hw.set_duty), the memory of five scenes and app.push() split "
+                    "into validate/build/swap. Also prints an op-count ESTIMATE for an "
+                    "emulated RP2040 against the %d us refresh period (goal <= %g us). "
+                    "Progress goes to stderr, the table to stdout." % (BUDGET_US, GOAL_US))
+    p.add_argument("--json", metavar="PATH", help="also write every figure here")
+    p.add_argument("--seconds", type=positive_float, default=DEFAULT_SECONDS, metavar="S",
+                   help="wall time spent timing each refresh variant, at most (it also stops "
+                        "at 16,384 batches of 100); each component gets S/4 (at most 4,096 "
+                        "batches). Default %g" % DEFAULT_SECONDS)
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    p.set_defaults(func=cmd_bench_refresh)
+
+
+def cmd_bench_refresh(args: argparse.Namespace) -> int:
+    from ..bench import refresh as refresh_bench
+    progress = None if args.quiet else (lambda m: _stderr("bench-refresh: " + m))
+    res = refresh_bench.run(args.seconds, progress)
+    print(refresh_bench.table(res), flush=True)
+    if args.json:
+        try:
+            refresh_bench.write_json(res, args.json)
+        except OSError as e:
+            raise CliError("--json", "cannot write %s: %s" % (args.json, e.strerror or e),
+                           EXIT_FAIL) from None
+        if progress:
+            progress("wrote %s" % args.json)
+    return EXIT_FAIL if res.failed else EXIT_OK
+
+
+
+def add_bench_link(p: argparse.ArgumentParser) -> None:
+    p.description = ("On a virtual board on a pty (real time): deploy the image into an empty "
+                    "flash and again with nothing changed, then push --pushes texel textures, "
+                    "timing each from the host call to the board's confirmation, counting the "
+                    "bytes both ways, checking every acknowledgement and the board's free "
+                    "memory after each push.")
+    p.add_argument("--pushes", type=int, default=200, metavar="N", help="pushes (default 200)")
+    p.add_argument("--json", metavar="PATH", help="also write every figure here")
+    p.set_defaults(func=cmd_bench_link)
+
+
+def cmd_bench_link(args: argparse.Namespace) -> int:
+    from ..bench import link as link_bench
+    if args.pushes < 1:
+        raise CliError("--pushes", "must be >= 1, got %d" % args.pushes)
+    try:
+        res = link_bench.run(args.pushes, progress=lambda m: _stderr("bench-link: " + m))
+    except LinkError as e:
+        raise _fail(e) from None
+    print(link_bench.table(res))
+    if args.json:
+        try:
+            Path(args.json).write_text(json.dumps(res, indent=1, default=str))
+        except OSError as e:
+            raise CliError("--json", "cannot write %s: %s" % (args.json, e.strerror or e),
+                           EXIT_FAIL) from None
+    return EXIT_OK if res["acked"] == res["pushes"] else EXIT_FAIL
+

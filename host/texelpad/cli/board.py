@@ -1,0 +1,206 @@
+"""The commands that talk to a running board (or the virtual one): push, status,
+monitor, ports. A bad flag or a request the board refuses is one line and
+exit 2; a failure of the world (no board, port busy, link lost) is one line
+and exit 1. A failed push never changes what the board plays."""
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from typing import Any
+
+from ..link.protocol import LiteralError
+from ..link.transport import DeviceError, LinkError
+from .common import EXIT_FAIL, EXIT_OK, CliError, _connect, _fail, _port_arg, _stderr, \
+    _value_error, TEXEL_KEYS, add_texel_flags, positive_float, read_scene_file, render_params
+
+
+def describe_scene(desc: dict[str, Any] | None) -> str:
+    """status()['scene'] as lines a person reads."""
+    if not desc:
+        return "nothing (the board plays its idle level)"
+    lines = []
+    for r in desc["regions"]:
+        what = r["kind"]
+        if what == "texel":
+            what = "texel pitch %s dB, irregularity %s dB, seed %s" % (
+                r["pitch_db"], r["irregularity_db"], r["seed"])
+        elif what == "reference":
+            what = "reference %s" % r["name"]
+        elif what == "constant":
+            what = "constant %.4f" % (r["amplitude"] / 65535)
+        else:
+            what = "samples (%d values, %s)" % (r["values"], r["fit"])
+        lines.append("  %7.2f .. %7.2f mm  %-52s %s, %d B" % (
+            r["start_mm"], r["end_mm"], what, r["mode"], r["bytes"]))
+    lines.append("  %d region%s, %d bytes on the board" % (
+        desc["count"], "" if desc["count"] == 1 else "s", desc["bytes"]))
+    return "\n".join(lines)
+
+
+def add_push(p: argparse.ArgumentParser) -> None:
+    p.description = ("Send a texel parameter set (as one full-display region) or a scene file "
+                    "to the board and print what now plays. The scene is checked on the host "
+                    "with the board's own validation, then on the board; if anything fails "
+                    "the board keeps playing what it played.")
+    g = p.add_argument_group("a texel texture over the whole display")
+    add_texel_flags(g, tuple(k for k in TEXEL_KEYS if k != "length_samples"))
+    p.add_argument("--scene", metavar="FILE.json",
+                   help="a scene file: {\"regions\": [{\"start_mm\": .., \"end_mm\": .., "
+                        "\"texture\": {...}}, ...]} (docs/runtime.md)")
+    p.add_argument("--board", metavar="NAME",
+                   help="start texelpad with this board file first if it is not running "
+                        "(e.g. pico, pyboard, virtual)")
+    p.add_argument("--json", action="store_true", help="print the board's status as JSON")
+    _port_arg(p, "the one board plugged in")
+    p.set_defaults(func=cmd_push)
+
+
+def cmd_push(args: argparse.Namespace) -> int:
+    params = render_params(args)
+    if args.scene and params:
+        raise CliError("--scene", "give either a scene file or texel flags, not both")
+    if not args.scene and not params:
+        raise CliError("", "nothing to push: give --pitch-db and --irregularity-db, or --scene")
+    scene = read_scene_file(args.scene) if args.scene else None
+    with _connect(args) as b:
+        try:
+            st = b.status()
+            if not st.get("running"):
+                if not args.board:
+                    raise CliError("--board", "texelpad is not running on %s: say which board "
+                                   "file to start it with (--board pico, --board virtual, ...)"
+                                   % b.port)
+                b.start(args.board)
+            sent0 = b.link.sent
+            t0 = time.perf_counter()
+            st = b.push(scene) if scene is not None else b.push_texel(params)
+            dt = time.perf_counter() - t0
+        except (LiteralError, DeviceError) as e:
+            raise _value_error(e, scene is None) from None
+        except ValueError as e:                # the host-side check (the board's own code)
+            raise _value_error(e, scene is None) from None
+        except LinkError as e:
+            raise _fail(e) from None
+        if args.json:
+            print(json.dumps(st, indent=1, sort_keys=True))
+        else:
+            print("now playing on %s (%s):" % (b.port, st.get("board")))
+            print(describe_scene(st.get("scene")))
+            print("push: %.1f ms from the host call to the board's confirmation, %d bytes sent"
+                  % (dt * 1e3, b.link.sent - sent0))
+    return EXIT_OK
+
+
+def add_status(p: argparse.ArgumentParser) -> None:
+    p.description = ("Print texel.app.status() of the board: the scene, refresh "
+                                   "rate, worst refresh time, overruns, free memory, firmware.")
+    p.add_argument("--json", action="store_true", help="print it as JSON")
+    _port_arg(p, "the one board plugged in")
+    p.set_defaults(func=cmd_status)
+
+
+def format_status(st: dict[str, Any]) -> str:
+    fw = "%s, texel %s, protocol %s, ulab %s, viper %s" % (
+        st.get("firmware"), st.get("texel"), st.get("protocol"), st.get("ulab") or "none",
+        "yes" if st.get("viper") else "no")
+    if not st.get("running"):
+        return "texelpad is not running (%s); free memory %s bytes" % (fw, st.get("mem_free"))
+    lines = ["board %s (%s), refresh %s at %s Hz: %s refreshes, measured %s Hz, worst %s us, "
+             "%s overruns, %s faults" % (st["board"], st["port"], st["refresh"],
+                                         st["refresh_hz"], st["refreshes"], st["rate_hz"],
+                                         st["worst_us"], st["overruns"], st["faults"]),
+             "carrier %s Hz (PWM top %s); finger at %s, amplitude %s, duty %s"
+             % (st["carrier_hz"], st["pwm_top"],
+                "lifted" if st["position"] < 0 else "%.2f mm" % (
+                    st["position"] * st["display"]["dx_um"] / 1000),
+                st["amplitude"], st["duty"]),
+             "free memory %s bytes; %s" % (st.get("mem_free"), fw),
+             "scene (%s pushes):" % st.get("pushes"), describe_scene(st.get("scene"))]
+    return "\n".join(lines)
+
+
+def cmd_status(args: argparse.Namespace) -> int:
+    with _connect(args) as b:
+        try:
+            st = b.status()
+        except LinkError as e:
+            raise _fail(e) from None
+    print(json.dumps(st, indent=1, sort_keys=True) if args.json else format_status(st))
+    return EXIT_OK
+
+
+def add_monitor(p: argparse.ArgumentParser) -> None:
+    p.description = ("Stream (time, position, amplitude) samples that the board's "
+                                   "refresh loop takes itself (it is not disturbed) until "
+                                   "Ctrl-C or --seconds.")
+    p.add_argument("--rate", type=int, default=125, metavar="HZ",
+                   help="samples per second, 1 .. the refresh rate (default 125)")
+    p.add_argument("--seconds", type=positive_float, metavar="S", help="stop after S seconds")
+    p.add_argument("--csv", metavar="FILE", help="write t_us,position,position_mm,amplitude rows")
+    _port_arg(p, "the one board plugged in")
+    p.set_defaults(func=cmd_monitor)
+
+
+def _bar(amp: int, width: int = 40) -> str:
+    n = round(amp / 65535 * width)
+    return "#" * n + "." * (width - n)
+
+
+def cmd_monitor(args: argparse.Namespace) -> int:
+    if not 1 <= args.rate <= 50000:
+        raise CliError("--rate", "must be 1 .. 50,000 samples/s, got %d" % args.rate)
+    out = None
+    if args.csv:
+        try:
+            out = open(args.csv, "w", encoding="utf-8")
+        except OSError as e:
+            raise CliError("--csv", "cannot write %s: %s" % (args.csv, e.strerror or e),
+                           EXIT_FAIL) from None
+        out.write("t_us,position,position_mm,amplitude\n")
+    n = 0
+    try:
+        with _connect(args) as b:
+            try:
+                st = b.status()
+                if not st.get("running"):
+                    raise CliError("", "texelpad is not running on %s (texelpad push --board "
+                                   "NAME starts it)" % b.port, EXIT_FAIL)
+                dx = st["display"]["dx_um"] / 1000.0
+                if not out:
+                    print("%10s  %9s  %6s  amplitude" % ("t_ms", "mm", "amp"))
+                for t, pos, amp in b.monitor(args.seconds, rate_hz=args.rate):
+                    n += 1
+                    mm = pos * dx if pos >= 0 else float("nan")
+                    if out:
+                        out.write("%d,%d,%.4f,%d\n" % (t, pos, mm, amp))
+                    else:
+                        print("%10.1f  %9s  %6d  %s" % (t / 1000, "lifted" if pos < 0 else
+                                                        "%.3f" % mm, amp, _bar(amp)), flush=True)
+            except LinkError as e:
+                raise _fail(e) from None
+    except KeyboardInterrupt:
+        pass
+    finally:
+        if out:
+            out.close()
+            _stderr("monitor: %d samples written to %s" % (n, args.csv))
+    return EXIT_OK
+
+
+def add_ports(p: argparse.ArgumentParser) -> None:
+    p.description = ("List serial ports whose USB vendor is a MicroPython or "
+                                   "CircuitPython board maker (Raspberry Pi, MicroPython, "
+                                   "Adafruit, ST).")
+    p.set_defaults(func=cmd_ports)
+
+
+def cmd_ports(args: argparse.Namespace) -> int:
+    from ..link.transport import ports
+    found = ports()
+    if not found:
+        print("no boards found (texelpad virtual starts a virtual one)")
+    for p in found:
+        print("%-20s %-24s %s" % (p["port"], p["vendor"], p["description"]))
+    return EXIT_OK
+

@@ -1,0 +1,230 @@
+"""What every texelpad command shares: exit codes, the one-line error, the
+texel parameter flags (derived from the device's own parameter spec,
+texel.gen.params.SPEC), argument types, the board connection and the
+progress bar.
+
+Errors in what the user typed print one line naming the flag and exit 2 (no
+traceback); failures of the world (a file that cannot be written, no board,
+a lost link) exit 1.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Any, NoReturn
+
+from texel.gen.params import QUANT_DB_MIN, SPEC as TEXEL_SPEC
+
+from ..link.transport import DeviceError, LinkError
+
+EXIT_OK = 0
+
+
+EXIT_FAIL = 1
+
+
+EXIT_USAGE = 2
+
+
+class CliError(Exception):
+    """A bad command-line value: printed as one line, exit 2."""
+
+    def __init__(self, flag: str, message: str, code: int = EXIT_USAGE):
+        super().__init__("%s: %s" % (flag, message) if flag else message)
+        self.code = code
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line (plus a hint), exit 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_USAGE, "%s: error: %s (see: %s --help)\n" % (self.prog, message, self.prog))
+
+
+
+
+# --- the texel parameter flags --------------------------------------------------------
+# One flag per key of texel.gen.params.SPEC (but "v", the format version, which
+# is always 1): --pitch-db for pitch_db, typed and ranged by the spec; the
+# meaning of each key is the only thing written here.
+TEXEL_MEANING = {
+    "pitch_db": ("DB", "central pitch, 10*log10(P / 1 cycle/mm)"),
+    "irregularity_db": ("DB", "irregularity, 10*log10(sigma / 1 decade)"),
+    "texel_samples": ("N", "samples per texel (5.3 um each)"),
+    "length_samples": ("N", "map length in samples of 5.3 um"),
+    "quant_db": ("DB", "quantize log pitch to this grid, dB (0 = off)"),
+    "seed": ("N", "random seed"),
+    "gain": ("G", "map scale"),
+    "band_limit_cpmm": ("F", "clamp drawn pitches to at most F cycles/mm (default: faithful, "
+                             "pitches above Nyquist alias as in the original)"),
+}
+TEXEL_KEYS = tuple(k for k in TEXEL_MEANING if k in TEXEL_SPEC)
+# texel parameter key -> its flag (error messages name the flag, not the key)
+PARAM_FLAGS = {k: "--" + k.replace("_", "-") for k in TEXEL_KEYS}
+PARAM_FLAGS["engine"] = "--engine"
+
+
+def _range_text(key: str) -> str:
+    """"-20 .. 19.747", "0 or 0.001 .. 20, default 0": the spec's range."""
+    kind, default, lo, hi = TEXEL_SPEC[key]
+
+    def num(v: float) -> str:
+        return format(v, ",") if kind == "i" else "%g" % v
+    low = "0 or %s" % num(QUANT_DB_MIN) if key == "quant_db" else num(lo)
+    text = "%s .. %s" % (low, num(hi))
+    return text if default is None else text + ", default %s" % num(default)
+
+
+def add_texel_flags(group: Any, keys: tuple[str, ...] = TEXEL_KEYS,
+                    required: tuple[str, ...] = ()) -> None:
+    """Add --<key> flags for these texel keys to a parser or argument group."""
+    for key in keys:
+        kind, _, _, _ = TEXEL_SPEC[key]
+        metavar, meaning = TEXEL_MEANING[key]
+        group.add_argument(PARAM_FLAGS[key], dest=key, type=int if kind == "i" else float,
+                           metavar=metavar, required=key in required,
+                           help="%s; %s" % (meaning, _range_text(key)))
+
+
+def render_params(args: argparse.Namespace) -> dict[str, Any]:
+    """The texel parameter dict from the flags that were given."""
+    params: dict[str, Any] = {}
+    for key in TEXEL_KEYS:
+        v = getattr(args, key, None)
+        if v is not None:
+            params[key] = v
+    return params
+
+
+
+def device_error(e: ValueError) -> CliError:
+    """A device ValueError ("pitch_db: nan is not finite ...") as a CliError
+    naming the flag instead of the parameter key."""
+    text = str(e)
+    key, sep, rest = text.partition(": ")
+    if sep and key in PARAM_FLAGS:
+        return CliError(PARAM_FLAGS[key], rest)
+    return CliError("", text)
+
+
+def csv_list(text: str) -> list[str]:
+    items = [s.strip() for s in text.split(",")]
+    if not all(items):
+        raise argparse.ArgumentTypeError("expected a comma-separated list, got %r" % text)
+    return items
+
+
+def positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError("invalid int value: %r" % text) from None
+    if v < 1:
+        raise argparse.ArgumentTypeError("must be >= 1, got %d" % v)
+    return v
+
+
+def _stderr(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def positive_float(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError("invalid number: %r" % text) from None
+    if not (v > 0 and math.isfinite(v)):
+        raise argparse.ArgumentTypeError("must be a finite number > 0, got %s" % text)
+    return v
+
+
+
+
+def _port_arg(p: argparse.ArgumentParser, help_none: str) -> None:
+    p.add_argument("--port", metavar="PORT",
+                   help="the board's serial port (/dev/ttyACM0, COM3, or a virtual board's "
+                        "/dev/pts/N); default: %s" % help_none)
+    p.add_argument("--timeout", type=positive_float, default=10.0, metavar="S",
+                   help="seconds to wait for the board to answer (default 10)")
+
+
+def _fail(e: LinkError) -> CliError:
+    """A link/board error as a CliError: the board's refusal of what the user
+    asked is a usage error (2), the rest a failure (1)."""
+    if isinstance(e, DeviceError):
+        return CliError("", "the board refused it: %s" % e, EXIT_USAGE)
+    return CliError("", str(e), EXIT_FAIL)
+
+
+def _connect(args: argparse.Namespace, check: bool = True) -> Any:
+    from ..link.board import connect
+    try:
+        return connect(args.port, timeout=args.timeout, check=check)
+    except LinkError as e:
+        raise _fail(e) from None
+
+
+def read_scene_file(path: str) -> dict[str, Any]:
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as e:
+        raise CliError("--scene", "cannot read %s: %s" % (path, e.strerror or e)) from None
+    except UnicodeDecodeError:
+        raise CliError("--scene", "%s is not UTF-8 text" % path) from None
+    try:
+        scene = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise CliError("--scene", "%s is not valid JSON: %s (line %d, column %d)"
+                       % (path, e.msg, e.lineno, e.colno)) from None
+    if not isinstance(scene, dict):
+        raise CliError("--scene", "%s: a scene is a JSON object {\"regions\": [...]}, not a %s"
+                       % (path, type(scene).__name__))
+    return scene
+
+
+def _value_error(e: Exception, from_flags: bool) -> CliError:
+    """A refused parameter: name the flag when it came from one."""
+    text = str(e)
+    if from_flags:
+        path, sep, rest = text.partition(": ")
+        key = path.rsplit(".", 1)[-1]
+        if sep and path.startswith("regions[0].texture.") and key in PARAM_FLAGS:
+            return CliError(PARAM_FLAGS[key], rest)
+        missing = "missing required key '"
+        if path == "regions[0].texture" and rest.startswith(missing):
+            key, _, more = rest[len(missing):].partition("'")
+            if key in PARAM_FLAGS:
+                return CliError(PARAM_FLAGS[key], "required%s" % more)
+    prefix = "the board refused it: " if isinstance(e, DeviceError) else ""
+    return CliError("--scene" if not from_flags else "", prefix + text)
+
+
+class ProgressBar:
+    """Upload progress on stderr: a redrawn bar on a terminal, a line per
+    file otherwise (logs, CI)."""
+
+    def __init__(self, stream: Any = None, width: int = 30):
+        self.stream = stream or sys.stderr
+        self.tty = self.stream.isatty()
+        self.width = width
+        self.last = None
+
+    def __call__(self, done: int, total: int, name: str) -> None:
+        frac = done / total if total else 1.0
+        if self.tty:
+            n = int(frac * self.width)
+            self.stream.write("\r[%s%s] %3d%% %7s / %s bytes  %-32s" % (
+                "#" * n, "." * (self.width - n), frac * 100, format(done, ","),
+                format(total, ","), name[-32:]))
+            self.stream.flush()
+        elif name != self.last:
+            self.stream.write("deploy: %3d%% %s\n" % (frac * 100, name))
+        self.last = name
+
+    def end(self) -> None:
+        if self.tty and self.last is not None:
+            self.stream.write("\n")
+

@@ -1,0 +1,2 @@
+"""The physical plate: the resonant tank calculator (the board-side resonance
+sweep is hardware/sweep.py)."""
