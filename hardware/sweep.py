@@ -3,7 +3,7 @@
 # plate, through an envelope detector, into a spare ADC pin: see
 # hardware/README.md). Runs on MicroPython (the board) and CPython (tests).
 #
-# On a Pico (MicroPython >= 1.26), with texel and boards/ on the board:
+# On a Pico (MicroPython >= 1.26), with texelpad's image on the board (texelpad deploy):
 #   mpremote cp hardware/sweep.py :sweep.py
 #   mpremote exec "import sweep; sweep.run('pico', pickup_pin=27)"
 # prints "freq_hz level" lines, then the peak, the -3 dB bandwidth and Q.
@@ -13,6 +13,8 @@
 # pyb.Timer, a signal generator on the bench) plugs in its own.
 import math
 import time
+
+from texel.runtime.duty import duty_fraction
 
 F_MIN_HZ = 1000
 F_MAX_HZ = 200000
@@ -29,11 +31,11 @@ def _sleep_ms(ms):
 
 def duty_for(amplitude, duty_cap=0.5):
     """PWM duty fraction (0..duty_cap) whose fundamental is `amplitude`
-    (0..1) of the fundamental at duty_cap: D = asin(a sin(pi cap)) / pi,
-    the same law as texel's DutyLaw."""
+    (0..1) of the fundamental at duty_cap: the runtime's own law
+    (texel.runtime.duty.duty_fraction), range-checked for a sweep."""
     if not 0.0 <= amplitude <= 1.0:
         raise ValueError("amplitude: %r is out of range [0, 1]" % (amplitude,))
-    return math.asin(amplitude * math.sin(math.pi * duty_cap)) / math.pi
+    return duty_fraction(amplitude, duty_cap)
 
 
 def sweep(set_carrier, read_level, f_lo, f_hi, step, settle_ms=30, samples=32, sleep_ms=None):

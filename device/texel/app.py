@@ -4,7 +4,8 @@
 #   texel.app.push(scene)                    -> status dict (raises ValueError,
 #                                               and the old scene keeps playing)
 #   texel.app.status()                       -> dict
-#   texel.app.stream(n=125, rate_hz=125)     -> [(t_us, position, amplitude), ...]
+#   texel.app.stream(rate_hz=125)            -> divider (refreshes per sample; 0 stops)
+#   texel.app.telemetry()                    -> ([(t_us, position, amplitude), ...], lost)
 #   texel.app.stop()
 # On rp2/stm32 start() returns at once with the refresh running in a hard
 # timer IRQ, so the REPL stays free. On the virtual board time is stepped:
@@ -23,7 +24,7 @@ from .runtime.sensor import make_sensor
 
 PROTOCOL = 1          # host <-> device contract version (the host checks it)
 
-# The study's split screen (SPEC §5): a reference texture left, a texel
+# The study's split screen (docs/background.md §5): a reference texture left, a texel
 # rendering right. Played when start() gets no scene.
 DEFAULT_SCENE = {"regions": [
     {"start_mm": 0, "end_mm": 50.88, "texture": {"kind": "reference", "name": "4sin"}},

@@ -1,4 +1,4 @@
-# Reference textures: the nine of the matching study (SPEC section 2,
+# Reference textures: the nine of the matching study (docs/background.md §2,
 # golden/reference_textures.csv) and the earlier paper's band-pass noise family.
 #
 #   reference(name, length_samples=9600)      -> map in [0, 1] (compat.float_buffer)
@@ -188,7 +188,7 @@ def _fill_sines(name, n, out, q16):
                 p -= _SINE_TURN
             phases[j] = p
         if two:
-            v = 0.5 + 0.3 * s               # SPEC: clip(0.5 + 0.3*s, 0, 1)
+            v = 0.5 + 0.3 * s               # docs/background.md §2: clip(0.5 + 0.3*s, 0, 1)
         else:
             v = (s - lo) * inv
         if v < 0.0:

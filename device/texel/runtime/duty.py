@@ -15,6 +15,17 @@ import math
 from ..compat import const, array
 
 _SEGMENTS = const(1024)     # table rows = amp16 >> 6 (0..1023) + 1 end point
+
+
+def duty_fraction(amplitude, duty_cap=0.5):
+    """The law itself: the duty D (0..duty_cap of a period) whose
+    fundamental is `amplitude` (0..1) of the fundamental at duty_cap,
+    D = asin(a * sin(pi * cap)) / pi. Floats: for building tables and for
+    tools (hardware/sweep.py), never the refresh; DutyLaw tabulates it."""
+    x = amplitude * math.sin(math.pi * duty_cap)
+    if x > 1.0:
+        x = 1.0
+    return math.asin(x) / math.pi
 _SHIFT = const(6)           # low bits of amp16 interpolated between rows
 _MASK = const(63)
 

@@ -7,7 +7,7 @@ time while the host talks to it).
 - push latency: host call -> the board's status confirming the new scene
   plays (Board.push: host-side check, status, push, swap, status back);
 - bytes on the wire per texture change, against the original lab's 76,800
-  (two 19,200 x int16 maps over serial per change, SPEC 4);
+  (two 19,200 x int16 maps over serial per change, docs/background.md §4);
 - the soak: every push acknowledged with the scene that was sent, and the
   board's free memory (after its gc.collect) across the pushes: its trend
   must not go down.

@@ -22,8 +22,8 @@ the device source (device/texel/gen/plan.py, rng.py, engine_*.py) in four classe
   Us, Uo  ulab element operations: sin, and any other vector op (per element).
 
 Estimate = sum(count x cost). Per-op costs on the emulated RP2040 (125 MHz,
-MicroPython 1.28 + ulab 6.12) are SPEC section 3's measurements where it has
-them: F = 16 us, V = 0.27 us, Us = 25 us, Uo = 2 us. SPEC has no figure for
+MicroPython 1.28 + ulab 6.12) are docs/background.md §3's measurements where it has
+them: F = 16 us, V = 0.27 us, Us = 25 us, Uo = 2 us. §3 has no figure for
 I, B and C; they are scaled from F by the ratio measured on the unix port in
 the same run (I_rp = 16 us x I_unix/F_unix, likewise B and C), i.e. it
 assumes integer ops, built-in calls and calls relate to a float op on the
@@ -41,9 +41,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-# SPEC section 3, measured on an emulated RP2040 @ 125 MHz (microseconds).
+# docs/background.md §3, measured on an emulated RP2040 @ 125 MHz (microseconds).
 RP2040_US = {"F": 16.0, "V": 0.27, "Us": 25.0, "Uo": 2.0}
-RP2040_SOURCE = "SPEC section 3 (emulated RP2040 @ 125 MHz, MicroPython 1.28 + ulab 6.12)"
+RP2040_SOURCE = "docs/background.md §3 (emulated RP2040 @ 125 MHz, MicroPython 1.28 + ulab 6.12)"
 # Fallback unix-port ratios to a float op, used only when no calibration ran
 # (MicroPython absent): measured once on the development host.
 DEFAULT_RATIO = {"I": 0.23, "B": 1.1, "C": 1.2}
@@ -199,5 +199,5 @@ def sine_table_ms(costs: dict[str, float]) -> float:
 
 FORMULA = ("est = nF*F + nB*B + nI*I + nC*C + nV*V + nUs*Us + nUo*Uo, with op counts n* of the "
            "plan and the synthesis counted from the device source (texelpad/bench/opcount.py) and "
-           "per-op costs from SPEC 3: F = 16 us (Python float op), V = 0.27 us (viper loop "
+           "per-op costs from docs/background.md §3: F = 16 us (Python float op), V = 0.27 us (viper loop "
            "iteration), Us = 25 us (ulab sin per element), Uo = 2 us (other ulab op per element)")

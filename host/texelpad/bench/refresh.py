@@ -19,7 +19,7 @@ device package copied into a temporary directory, as `texelpad bench` does):
   since the virtual board's clock is stepped).
 
 Estimated (not measured): the refresh on an emulated RP2040 from op counts of
-the device source times per-op costs - SPEC section 3's F = 16 us and V =
+the device source times per-op costs - docs/background.md §3's F = 16 us and V =
 0.27 us, and I, B, C scaled from F by the unix port's ratios measured in the
 same run (bench_model.costs_rp2040). The same counts times the unix port's
 costs are checked against the components measured on the unix port.
@@ -206,7 +206,7 @@ class RefreshBenchResult:
 #        ticks_us call like a float op. N = F * N_unix / F_unix, N_unix timed
 #        by mp_refresh_bench.calibrate_extra like mpbench.calibrate times B.
 #   Vop  one operation of viper code (a machine-word load, store, arithmetic
-#        or compare: a few instructions). SPEC's V = 0.27 us is one iteration
+#        or compare: a few instructions). §3's V = 0.27 us is one iteration
 #        of the int engine's viper fill, which bench_model counts as 19 such
 #        operations (its Python twin is 19 I), so Vop = V / 19 on the board
 #        and viper_iteration_us / 19 on the unix port.
@@ -297,10 +297,10 @@ PATHS: list[tuple[str, str, tuple[str, ...], bool]] = [
 
 FORMULA = ("est = nI*I + nN*N + nC*C + nVop*Vop + 2 us of ADC conversion, op counts n* of "
            "one refresh counted from the device source (texelpad/bench/refresh.py PARTS); "
-           "per-op costs on the emulated RP2040 @ 125 MHz: SPEC 3's F = 16 us (Python float "
+           "per-op costs on the emulated RP2040 @ 125 MHz: docs/background.md §3's F = 16 us (Python float "
            "op) scales I = F*I_unix/F_unix and C = F*C_unix/F_unix (bench_model.costs_rp2040) "
            "and N = F*N_unix/F_unix (a built-in call with small ints: ticks_us, read_u16), "
-           "the unix port's ratios measured in this run; Vop = V/19 with SPEC 3's V = 0.27 us "
+           "the unix port's ratios measured in this run; Vop = V/19 with docs/background.md §3's V = 0.27 us "
            "per viper fill iteration (19 ops)")
 
 

@@ -5,15 +5,20 @@ Layout on the board's filesystem (root "/"), the same for `texelpad deploy`,
 ``sys.path``) and the unix-port virtual board (its "flash" directory as the
 working directory, ``MICROPYPATH=<flash>:<flash>/lib:.frozen``)::
 
-    /lib/texel/<module>.mpy          (.py for source images and mip)
-    /lib/texel/reference_noise.bin   package data (pyproject's package-data)
-    /lib/texel/boards.d/<name>.json  the shipped boards (repo: boards/*.json)
-    /main.py                         power-up (optional; deploy decides)
+    /lib/texel/<module>.mpy              (.py for source images and mip)
+    /lib/texel/{gen,runtime,hw}/<module>.mpy
+    /lib/texel/gen/reference_noise.bin   package data (pyproject's package-data)
+    /lib/texel/boards.d/<name>.json      the shipped boards
+    /main.py                             power-up (texel/main.py; deploy decides)
 
-``texel.runtime.boards.load`` looks in ``<texel package>/boards.d`` last, so a user's
-``/boards/<name>.json`` still overrides a shipped board. (Not ``texel/boards/``:
-MicroPython's import prefers a directory to a module of the same name, so that
-folder would hide ``texel/boards.py``.)
+The layout under /lib/texel is the texel package's own (device/texel in the
+repository, site-packages/texel in a wheel): the image is read from the
+installed package, so a pip-installed texelpad deploys as a checkout does.
+A board's image carries only its own hardware backend (texel/hw/<port>.py)
+and the shipped boards of its port; the mip package and --source images for
+an unknown platform carry them all. ``texel.runtime.boards.load`` looks in
+``<texel package>/boards.d`` last, so a user's ``/boards/<name>.json`` still
+overrides a shipped board.
 
 API:
     target_for(impl_name, mpy, version, platform=None, source=False) -> Target

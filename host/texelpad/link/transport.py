@@ -119,7 +119,7 @@ class Link:
         except TransportError as e:
             raise NoBoard("cannot open %s: %s" % (port, e)) from None
         try:
-            # soft_reset=False: never restart a playing display (SPEC 4)
+            # soft_reset=False: never restart a playing display (docs/background.md §4)
             self.t.enter_raw_repl(soft_reset=False, timeout_overall=timeout)
         except (TransportError, serial.SerialException, OSError) as e:
             self._close_port()
