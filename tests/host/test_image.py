@@ -18,7 +18,6 @@ from __future__ import annotations
 import ast
 import hashlib
 import json
-import os
 import re
 import subprocess
 import sys
@@ -29,6 +28,7 @@ import pytest
 
 from support import mpy
 import texelpad
+from texelpad import toolchain
 from texelpad.deploy import image as image
 from texelpad.deploy.image import TARGETS, ImageError, target_for
 from texelpad.link.virtual import VirtualBoard
@@ -388,11 +388,6 @@ print(repr({'refreshes': app.status()['refreshes'], 'refresh': st.get('refresh')
 """
 
 
-def _flash_env(flash: Path) -> dict:
-    # as on a board: "/" and "/lib"; never this checkout's device/
-    return dict(os.environ, MICROPYPATH="%s:%s/lib:.frozen" % (flash, flash))
-
-
 @pytest.mark.parametrize("name", ["unix", "source"])
 def test_image_runs_on_the_unix_port_from_a_flash_folder(images, tmp_path, name):
     flash = tmp_path / "flash"
@@ -403,8 +398,8 @@ def test_image_runs_on_the_unix_port_from_a_flash_folder(images, tmp_path, name)
     mine = json.loads((ROOT / "device/texel/boards.d/virtual.json").read_text())
     mine["title"] = "my bench"
     (flash / "boards/virtual.json").write_text(json.dumps(mine))
-    p = subprocess.run([mpy.micropython_exe(), "-c", RUN], capture_output=True, text=True,
-                       timeout=120, cwd=flash, env=_flash_env(flash))
+    # as on a board: "/" and "/lib" on the module path; never this checkout's device/
+    p = toolchain.run(RUN, path=[flash, flash / "lib"], cwd=flash, timeout=120)
     assert p.returncode == 0, p.stdout + p.stderr
     r = ast.literal_eval(p.stdout.strip().splitlines()[-1])
     assert 0 < r["refreshes"] <= 84                     # 10 ms at 8,333 Hz
