@@ -626,31 +626,6 @@ for name in ('texel.hw.stm32', 'texel.hw.cpy'):
     assert out.split() == ["[]", "texel.hw.stm32", "ImportError", "texel.hw.cpy", "ImportError"]
 
 
-def test_fakes_import_and_model_on_cpython():
-    code = r"""
-import sys
-sys.path.insert(0, %r)
-import machine, pyb, pwmio, analogio, board
-p = machine.PWM(machine.Pin(16), freq=34000, duty_u16=32768)
-assert machine.pwm_top(0) == 3675 and machine.pwm_cc(16) == 1838
-assert machine.wave(16).count(1) == 1838
-machine.mem32[machine.pwm_reg(0, machine.PWM_CC)] = 5
-assert machine.mem32.writes() == [(0x4005000C, 5)] and machine.pwm_cc(16) == 5
-try:
-    machine.mem32[0x12345678] = 1
-    raise SystemExit("unmapped store accepted")
-except ValueError:
-    pass
-t = pyb.Timer(8, prescaler=0, period=4940)
-assert pyb.Timer(8) is t and t.freq() == 34001
-o = pwmio.PWMOut(board.GP16, frequency=34000, duty_cycle=65535)
-assert o.top == 3676 and o.compare == 3677
-print("ok")
-""" % str(FAKES)
-    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
-    assert p.returncode == 0 and p.stdout.strip() == "ok", p.stdout + p.stderr
-
-
 def _real_boards():
     if not BOARDS_DIR.is_dir():
         return []
