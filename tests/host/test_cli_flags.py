@@ -1,0 +1,76 @@
+"""The texel flags are derived from the device's own parameter spec
+(texel.gen.params.SPEC), declared once (texelpad.cli.common.add_texel_flags),
+and the command table imports a command's module only when it runs."""
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from texel.gen.params import SPEC
+from texelpad import cli
+from texelpad.cli import common
+
+
+def _parser_for(command: str):
+    parser = cli.build_parser([command])
+    sub = next(a for a in parser._actions if a.dest == "command")
+    return sub.choices[command]
+
+
+def _texel_flags(p) -> dict:
+    return {a.dest: a for a in p._actions if a.dest in SPEC}
+
+
+def test_every_spec_key_but_the_version_has_a_flag():
+    assert set(common.TEXEL_KEYS) == set(SPEC) - {"v"}
+    assert common.PARAM_FLAGS["band_limit_cpmm"] == "--band-limit-cpmm"
+
+
+@pytest.mark.parametrize("command, keys", [
+    ("render", set(SPEC) - {"v"}),
+    ("push", set(SPEC) - {"v", "length_samples"}),     # a scene region sets the length
+])
+def test_flags_follow_the_spec(command, keys):
+    flags = _texel_flags(_parser_for(command))
+    assert set(flags) == keys
+    for key, action in flags.items():
+        kind, default, lo, hi = SPEC[key]
+        assert action.option_strings == [common.PARAM_FLAGS[key]]
+        assert action.type is (int if kind == "i" else float)
+        assert action.default is None              # unset: the device's default applies
+        assert ("%g" % hi if kind == "f" else format(hi, ",")) in action.help, action.help
+    if command == "render":
+        assert flags["pitch_db"].required and flags["irregularity_db"].required
+
+
+def test_quant_db_help_names_the_finest_grid():
+    h = _texel_flags(_parser_for("render"))["quant_db"].help
+    assert "0 or 0.001 .. 20" in h
+
+
+def test_tiny_quant_grid_is_a_clear_error_not_a_traceback(capsys):
+    # the review's case: passed validation, then the plan overflowed dividing by it
+    rc = cli.main(["render", "--pitch-db", "6", "--irregularity-db", "-10",
+                   "--quant-db", "1e-308"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "Traceback" not in err
+    assert err.startswith("texelpad render: error: --quant-db: 1e-308")
+
+
+def test_commands_are_imported_only_when_they_run():
+    code = ("import sys\nfrom texelpad.cli import build_parser\nbuild_parser(['tank'])\n"
+            "print(sorted(m for m in sys.modules if m.startswith('texelpad.cli.')))")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.strip() == "['texelpad.cli.common', 'texelpad.cli.tank']"
+
+
+def test_the_table_lists_every_command_module_once():
+    mods = {m for m, _, _ in cli.COMMANDS.values()}
+    assert mods == {"demo", "board", "deploy", "virtual", "bench", "render", "tank"}
+    for name, (mod, func, summary) in cli.COMMANDS.items():
+        p = _parser_for(name)
+        assert callable(p.get_default("func")), name
+        assert summary and p.description, name
