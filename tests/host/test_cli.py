@@ -1,4 +1,5 @@
-"""The `texelpad` command line: bench (both runtimes, JSON), render (PNG, CSV,
+"""The `texelpad` command line: bench (every runtime: CPython, the MicroPython
+unix port and, where present, the instrument interpreters; JSON), render (PNG, CSV,
 NPY, summary) and its error handling. No assertion here depends on a timing."""
 import json
 import math
@@ -19,6 +20,8 @@ from texelpad.analysis.hard_cases import HARD_CASES
 ROOT = Path(__file__).resolve().parents[2]
 CASES = ["study", "ragged"]
 HAVE_MP = toolchain.micropython() is not None
+INSTRUMENTS = toolchain.INSTRUMENTS
+HAVE_INSTRUMENTS = {n: toolchain.interpreter(n) is not None for n in INSTRUMENTS}
 
 
 def _strict_json(path):
@@ -79,13 +82,17 @@ def test_bench_rows_cover_engines_and_runtimes(bench_run):
     if HAVE_MP:
         expected |= {("micropython", "int"), ("micropython", "int-py"), ("micropython", "pure")}
         assert rows[("micropython", "int")]["label"] == "int (viper)"
-        assert doc["machine"]["micropython"]["version"]
+        m = doc["machine"]["micropython"]
+        assert m["version"] and m["float_bits"] == 53 and m["viper"] is True
         cal = doc["unix_calibration_us"]
         assert cal["float_op_us"] > 0 and cal["viper_iteration_us"] > 0
     else:
         assert any(s["runtime"] == "micropython" for s in doc["skipped"])
     assert expected <= set(rows)
     assert doc["failed"] == []
+    for r in doc["rows"]:
+        assert r["runtime_name"] == bench.RUNTIME_NAMES[r["runtime"]]
+    assert doc["runtime_names"] == bench.RUNTIME_NAMES
 
 
 def test_bench_row_fields(bench_run):
@@ -149,7 +156,8 @@ def test_bench_table(bench_run):
         assert col in lines[head]
     body = lines[head + 2: head + 2 + len(doc["rows"])]
     assert len(body) == len(doc["rows"])
-    assert all(l.startswith(("CPython", "MicroPython")) for l in body)
+    assert all(l.startswith(tuple(bench.RUNTIME_NAMES.values())) for l in body)
+    assert [l.split("  ")[0].strip() for l in body] == [r["runtime_name"] for r in doc["rows"]]
     # aligned: every body line is as long as the rule under the header or shorter
     assert all(len(l) <= len(lines[head + 1]) for l in body)
     text = "\n".join(lines)
@@ -176,7 +184,8 @@ def test_bench_micropython_failure_is_reported(monkeypatch, tmp_path, capsys):
     fake.write_text("#!/bin/sh\necho 'MemoryError: memory allocation failed' >&2\nexit 3\n")
     fake.chmod(0o755)
     monkeypatch.setattr(toolchain, "micropython", lambda: str(fake))
-    rc = cli.main(["bench", "--cases", "study", "--repeat", "1", "--quiet"])
+    rc = cli.main(["bench", "--cases", "study", "--runtimes", "cpython,micropython",
+                   "--repeat", "1", "--quiet"])
     out = capsys.readouterr().out
     assert rc == 1
     assert "FAILED: MicroPython unix: micropython exited with 3" in out
@@ -190,6 +199,197 @@ def test_bench_cpython_has_no_ulab_row(capsys):
     assert res.skipped == [{"runtime": "cpython", "variant": "ulab",
                             "reason": res.skipped[0]["reason"]}]
     assert "ulab interpreters" in res.skipped[0]["reason"]
+
+
+# --- the instruments: real interpreters built like the boards ---------------
+
+INSTRUMENT_RUNTIMES = ",".join(INSTRUMENTS)
+# what each instrument has (../shared/instruments/README.md)
+INSTRUMENT_BUILD = {
+    "micropython-ulab-f32": {"float_bits": 24, "viper": True,
+                             "variants": {"int", "int-py", "pure", "ulab"}},
+    "micropython-ulab-f64": {"float_bits": 53, "viper": True,
+                             "variants": {"int", "int-py", "pure", "ulab"}},
+    "circuitpython": {"float_bits": 22, "viper": False, "variants": {"int", "pure", "ulab"}},
+}
+
+
+def _need(name):
+    if not HAVE_INSTRUMENTS[name]:
+        pytest.skip("instrument %s not found (../shared/instruments)" % name)
+
+
+@pytest.fixture(scope="module")
+def bench_instruments(tmp_path_factory):
+    """The same reduced bench on the instrument interpreters (those absent are
+    skipped entries): a couple of seconds each."""
+    if not any(HAVE_INSTRUMENTS.values()):
+        pytest.skip("no instrument interpreters (../shared/instruments)")
+    out = tmp_path_factory.mktemp("bench-instruments") / "bench.json"
+    import io
+    from contextlib import redirect_stderr, redirect_stdout
+    so, se = io.StringIO(), io.StringIO()
+    with redirect_stdout(so), redirect_stderr(se):
+        rc = cli.main(["bench", "--cases", ",".join(CASES), "--runtimes", INSTRUMENT_RUNTIMES,
+                       "--repeat", "2", "--json", str(out)])
+    return rc, so.getvalue(), se.getvalue(), _strict_json(out)
+
+
+def test_bench_default_runtimes_include_the_instruments():
+    assert bench.RUNTIMES == ("cpython", "micropython") + INSTRUMENTS
+    assert set(bench.RUNTIME_NAMES) == set(bench.RUNTIMES)
+    args = cli.build_parser(["bench"]).parse_args(["bench"])
+    assert args.runtimes == list(bench.RUNTIMES)
+
+
+@pytest.mark.instruments
+@pytest.mark.parametrize("name", INSTRUMENTS)
+def test_bench_instrument_rows(bench_instruments, name):
+    """Each instrument present runs every engine its build has (ulab
+    included, timed and its maps measured there); CircuitPython's int row is
+    the Python fill, as it has no viper."""
+    _need(name)
+    rc, stdout, stderr, doc = bench_instruments
+    assert rc == 0, stdout + stderr
+    assert doc["failed"] == [] and "Traceback" not in stderr
+    build = INSTRUMENT_BUILD[name]
+    rows = {r["variant"]: r for r in doc["rows"] if r["runtime"] == name}
+    assert set(rows) == build["variants"]
+    m = doc["machine"][name]
+    assert m["version"] and m["ulab"] and m["exe"] == toolchain.interpreter(name)
+    assert m["float_bits"] == build["float_bits"] and m["viper"] is build["viper"]
+    assert m["calibration_us"]["float_op_us"] > 0
+    assert rows["int"]["label"] == ("int (viper)" if build["viper"] else "int (py fill, no viper)")
+    if not build["viper"]:
+        assert any(s["runtime"] == name and s["variant"] == "int (viper)"
+                   for s in doc["skipped"])
+        # no viper: the estimate is the Python fill's
+        assert rows["int"]["est_rp2040"] == pytest.approx(bench_model.estimate(
+            "int-py", HARD_CASES["study"][0], 19200, 384, doc["rp2040_estimate"]["costs_us"]))
+    for v, r in rows.items():
+        assert r["runtime_name"] == bench.RUNTIME_NAMES[name]
+        assert r["float_bits"] == build["float_bits"]
+        assert r["samples"] == 19200 and r["texels"] == 384, v
+        assert len(r["plan_ms_runs"]) == 2 and r["plan_ms"] > 0 and r["synth_ms"] > 0, v
+        assert r["map_bytes"] == 2 * 19200 and r["transient_bytes"] >= 0, v
+        assert set(r["cases"]) == set(CASES), v
+        # both cases are well conditioned: within one PWM step even with a
+        # plan in float32 or 30-bit floats, and within the bound for them
+        assert r["max_err_steps"] < 1.0, v
+        assert r["over_bound"] == 0, v
+        assert r["est_rp2040"]["total_ms"] > 0, v
+        # the op-count check is the unix port's alone
+        assert r["model_unix"] is None
+    # the table: one line per row, under the readable name; the interpreter
+    # in the header
+    body = [l for l in stdout.splitlines() if l.startswith(bench.RUNTIME_NAMES[name] + "  ")]
+    assert len(body) == len(rows)
+    assert any(l.startswith(bench.RUNTIME_NAMES[name] + ": ") and m["version"] in l
+               for l in stdout.splitlines())
+
+
+@pytest.mark.instruments
+def test_bench_instrument_maps_against_cpython(bench_run, bench_instruments):
+    """With float64 floats the maps are CPython's: the integer engine bit
+    for bit (so the same error figures), pure and ulab as binary64 sines.
+    With narrower floats the plan itself differs (float32 pitches), so the
+    int engine's viper and Python fills agree with each other, not with
+    CPython; CircuitPython's 30-bit floats are immediate objects, so pure
+    allocates no float per sample there."""
+    rows = _rows(bench_run[3])
+    rows.update(_rows(bench_instruments[3]))
+    ref_int = rows[("cpython", "int")]["cases"]
+    ref_pure = rows[("cpython", "pure")]["cases"]
+    if HAVE_INSTRUMENTS["micropython-ulab-f64"]:
+        for v in ("int", "int-py"):
+            got = rows[("micropython-ulab-f64", v)]["cases"]
+            for c in CASES:
+                assert got[c]["max_err_steps"] == ref_int[c]["max_err_steps"]
+                assert got[c]["rms_err_steps"] == ref_int[c]["rms_err_steps"]
+        for v in ("pure", "ulab"):
+            got = rows[("micropython-ulab-f64", v)]["cases"]
+            for c in CASES:
+                assert got[c]["max_err_steps"] == pytest.approx(
+                    ref_pure[c]["max_err_steps"], abs=0.01)
+    if HAVE_INSTRUMENTS["micropython-ulab-f32"]:
+        a = rows[("micropython-ulab-f32", "int")]["cases"]
+        b = rows[("micropython-ulab-f32", "int-py")]["cases"]
+        for c in CASES:
+            assert a[c] == b[c]
+        assert a["study"]["max_err_steps"] != ref_int["study"]["max_err_steps"]
+    if HAVE_INSTRUMENTS["circuitpython"]:
+        assert rows[("circuitpython", "pure")]["transient_bytes"] < 3 * 38400
+
+
+def test_bench_instruments_absent_are_skipped(monkeypatch, tmp_path, capsys):
+    """No instruments on this machine (a user's): each is a skipped entry
+    saying what was looked for, not a failure."""
+    empty = tmp_path / "instruments"
+    (empty / "bin").mkdir(parents=True)
+    monkeypatch.setenv("TEXELPAD_INSTRUMENTS", str(empty))
+    out = tmp_path / "b.json"
+    rc = cli.main(["bench", "--cases", "study", "--runtimes", INSTRUMENT_RUNTIMES,
+                   "--repeat", "1", "--json", str(out), "--quiet"])
+    text = capsys.readouterr().out
+    assert rc == 0
+    doc = _strict_json(out)
+    assert doc["rows"] == [] and doc["failed"] == []
+    assert [s["runtime"] for s in doc["skipped"]] == list(INSTRUMENTS)
+    for s in doc["skipped"]:
+        assert s["variant"] == "all engines"
+        assert s["runtime"] in s["reason"] and str(empty / "bin") in s["reason"]
+    for name in INSTRUMENTS:
+        assert "skipped: %s all engines" % bench.RUNTIME_NAMES[name] in text
+
+
+def test_bench_device_error_is_reported_per_variant(monkeypatch, tmp_path, capsys):
+    """An engine that raises under an interpreter (here a stand-in that
+    reports it as mpbench.py does): that variant is FAILED with the device's
+    message, the runtime's other rows and the other runtimes still come."""
+    d = tmp_path / "instruments" / "bin"
+    d.mkdir(parents=True)
+    fake = d / "circuitpython"
+    info = {"event": "info", "impl": "circuitpython", "version": [10, 2, 1, ""],
+            "float_bits": 22, "viper": False, "ulab": "6.5.3", "variants": ["ulab"],
+            "calibration": {"float_op_us": 0.03, "int_op_us": 0.01, "builtin_call_us": 0.03,
+                            "call_us": 0.07, "loop_iteration_us": 0.02}}
+    err = {"event": "error", "variant": "ulab",
+           "error": "MemoryError: memory allocation failed, allocating 38400 bytes"}
+    fake.write_text("#!/bin/sh\necho '%s'\necho '%s'\necho '{\"event\": \"done\"}'\n"
+                    % (json.dumps(info), json.dumps(err)))
+    fake.chmod(0o755)
+    monkeypatch.setenv("TEXELPAD_INSTRUMENTS", str(tmp_path / "instruments"))
+    rc = cli.main(["bench", "--cases", "study", "--runtimes", "cpython,circuitpython",
+                   "--repeat", "1", "--quiet"])
+    out = capsys.readouterr().out
+    assert rc == 1
+    assert "FAILED: CircuitPython: ulab raised under circuitpython: MemoryError" in out
+    assert out.count("CPython ") >= 3
+
+
+@pytest.mark.parametrize("name", [toolchain.UNIX_PORT] + [
+    pytest.param(n, marks=pytest.mark.instruments) for n in INSTRUMENTS])
+def test_mpbench_goes_on_after_a_device_error(tmp_path, name):
+    """mpbench.py itself, on the real interpreter: a case the device rejects
+    is an error event for each variant (with the device's message; a
+    traceback where the port can print one, CircuitPython cannot), and the
+    run goes on to the end."""
+    exe = toolchain.interpreter(name)
+    if exe is None:
+        pytest.skip("%s not found" % name)
+    work = toolchain.stage_device(tmp_path, [bench.DEVICE_SCRIPTS / "mpbench.py"])
+    bad = dict(HARD_CASES["ragged"][0], gain=7.0)
+    job = {"timing": HARD_CASES["ragged"][0], "cases": [["bad", bad]], "repeat": 1,
+           "outdir": str(work), "variants": ["int", "pure"]}
+    events = []
+    toolchain.json_events(work / "mpbench.py", job, events.append, workdir=work, exe=exe,
+                          heapsize=bench.MP_HEAP, timeout_s=300)
+    kinds = [(e["event"], e.get("variant")) for e in events]
+    assert kinds == [("info", None), ("timing", "int"), ("error", "int"), ("timing", "pure"),
+                     ("error", "pure"), ("done", None)]
+    for e in events:
+        if e["event"] == "error":
+            assert e["case"] == "bad" and "gain" in e["error"].splitlines()[-1]
 
 
 @pytest.mark.parametrize("argv, flag", [

