@@ -7,7 +7,7 @@ from pathlib import Path
 
 from ..link.transport import LinkError
 from .common import EXIT_FAIL, EXIT_OK, CliError, _fail, _stderr, csv_list, positive_float, \
-    positive_int
+    positive_int, write_output
 
 
 def add_bench(p: argparse.ArgumentParser) -> None:
@@ -54,11 +54,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     res = bench.run(args.cases, args.runtimes, args.repeat, progress)
     print(bench.table(res), flush=True)
     if args.json:
-        try:
-            bench.write_json(res, args.json)
-        except OSError as e:
-            raise CliError("--json", "cannot write %s: %s" % (args.json, e.strerror or e),
-                           EXIT_FAIL) from None
+        write_output("--json", args.json, lambda: bench.write_json(res, args.json))
         if progress:
             progress("wrote %s" % args.json)
     return EXIT_FAIL if res.failed else EXIT_OK
@@ -89,15 +85,10 @@ def cmd_bench_refresh(args: argparse.Namespace) -> int:
     res = refresh_bench.run(args.seconds, progress)
     print(refresh_bench.table(res), flush=True)
     if args.json:
-        try:
-            refresh_bench.write_json(res, args.json)
-        except OSError as e:
-            raise CliError("--json", "cannot write %s: %s" % (args.json, e.strerror or e),
-                           EXIT_FAIL) from None
+        write_output("--json", args.json, lambda: refresh_bench.write_json(res, args.json))
         if progress:
             progress("wrote %s" % args.json)
     return EXIT_FAIL if res.failed else EXIT_OK
-
 
 
 def add_bench_link(p: argparse.ArgumentParser) -> None:
@@ -121,10 +112,7 @@ def cmd_bench_link(args: argparse.Namespace) -> int:
         raise _fail(e) from None
     print(link_bench.table(res))
     if args.json:
-        try:
-            Path(args.json).write_text(json.dumps(res, indent=1, default=str))
-        except OSError as e:
-            raise CliError("--json", "cannot write %s: %s" % (args.json, e.strerror or e),
-                           EXIT_FAIL) from None
+        write_output("--json", args.json,
+                     lambda: Path(args.json).write_text(json.dumps(res, indent=1, default=str)))
     return EXIT_OK if res["acked"] == res["pushes"] else EXIT_FAIL
 

@@ -127,6 +127,15 @@ def positive_int(text: str) -> int:
     return v
 
 
+def write_output(flag: str, path: str, write: Any) -> None:
+    """Run write() (which writes `path`); a failure of the filesystem is one
+    line naming the flag and the path, exit 1."""
+    try:
+        write()
+    except OSError as e:
+        raise CliError(flag, "cannot write %s: %s" % (path, e.strerror or e), EXIT_FAIL) from None
+
+
 def _stderr(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
 
