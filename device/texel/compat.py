@@ -30,15 +30,14 @@ FLOAT_BITS = _mantissa_bits()
 # numpy (CPython) and ulab (MicroPython/CircuitPython builds that include it).
 try:
     import numpy as numpy_mod
-    if not hasattr(numpy_mod, "float64"):   # a ulab stand-in installed as numpy
-        numpy_mod = None
+    if not hasattr(numpy_mod, "float64"):   # a numpy-named module that is not numpy
+        numpy_mod = None                    # (e.g. ulab's, on a build registering it so)
 except ImportError:
     numpy_mod = None
 
 
 def ulab_numpy():
-    """ulab's numpy module, or None. Looked up on each call so a test can install
-    a stand-in after import."""
+    """ulab's numpy module, or None (a cached import after the first call)."""
     try:
         from ulab import numpy as unp
         return unp

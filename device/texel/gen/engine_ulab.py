@@ -31,7 +31,7 @@ import math
 from ..compat import ulab_numpy, const
 
 NAME = "ulab"
-PRECISION = "float32"
+PRECISION = "ulab float (float32 on boards; float64 on a double-precision build)"
 CHUNK = 64
 _CENTRE = const(32)               # phase reference: the chunk's 32nd sample
 _MASK = const(0x0FFFFFFF)         # one turn in 2^-28 units
