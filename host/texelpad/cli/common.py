@@ -16,16 +16,12 @@ import sys
 from pathlib import Path
 from typing import Any, NoReturn
 
-from texel.gen.params import QUANT_DB_MIN, SPEC as TEXEL_SPEC
+from texel.gen.params import KEYS as TEXEL_SPEC_KEYS, QUANT_DB_MIN, SPEC as TEXEL_SPEC
 
 from ..link.transport import DeviceError, LinkError
 
 EXIT_OK = 0
-
-
 EXIT_FAIL = 1
-
-
 EXIT_USAGE = 2
 
 
@@ -44,8 +40,6 @@ class _Parser(argparse.ArgumentParser):
         self.exit(EXIT_USAGE, "%s: error: %s (see: %s --help)\n" % (self.prog, message, self.prog))
 
 
-
-
 # --- the texel parameter flags --------------------------------------------------------
 # One flag per key of texel.gen.params.SPEC (but "v", the format version, which
 # is always 1): --pitch-db for pitch_db, typed and ranged by the spec; the
@@ -61,7 +55,8 @@ TEXEL_MEANING = {
     "band_limit_cpmm": ("F", "clamp drawn pitches to at most F cycles/mm (default: faithful, "
                              "pitches above Nyquist alias as in the original)"),
 }
-TEXEL_KEYS = tuple(k for k in TEXEL_MEANING if k in TEXEL_SPEC)
+# in the spec's own order (texel.gen.params.KEYS); a new spec key needs a meaning here
+TEXEL_KEYS = tuple(k for k in TEXEL_SPEC_KEYS if k != "v")
 # texel parameter key -> its flag (error messages name the flag, not the key)
 PARAM_FLAGS = {k: "--" + k.replace("_", "-") for k in TEXEL_KEYS}
 PARAM_FLAGS["engine"] = "--engine"
@@ -97,7 +92,6 @@ def render_params(args: argparse.Namespace) -> dict[str, Any]:
         if v is not None:
             params[key] = v
     return params
-
 
 
 def device_error(e: ValueError) -> CliError:
@@ -148,8 +142,6 @@ def positive_float(text: str) -> float:
     if not (v > 0 and math.isfinite(v)):
         raise argparse.ArgumentTypeError("must be a finite number > 0, got %s" % text)
     return v
-
-
 
 
 def _port_arg(p: argparse.ArgumentParser, help_none: str) -> None:
