@@ -122,3 +122,46 @@ def test_dx_and_nyquist_constants():
     assert math.isclose(texel.NYQUIST_CPMM, 94.3396, rel_tol=1e-5)
     # the pitch ceiling is the display's Nyquist pitch in dB (10*log10)
     assert abs(10 * math.log10(texel.NYQUIST_CPMM) - P.PITCH_DB_MAX) < 1e-3
+
+
+# --- holes found by the build properties (tests/gen/test_build_property.py) ---
+@pytest.mark.parametrize("key", ["pitch_db", "irregularity_db", "quant_db", "gain", "band_limit_cpmm"])
+@pytest.mark.parametrize("value", [10 ** 400, -(10 ** 400), 2 ** 1024, 2 ** 62, -(2 ** 62)])
+def test_huge_int_in_a_float_field_is_out_of_range(key, value):
+    """Hole: validate({"pitch_db": 10**400, ...}) raised OverflowError (int
+    too large to convert to float) on CPython, and MicroPython called the
+    same value "not finite". Now: out of range, the value named, on both."""
+    p = {"pitch_db": 6.0, "irregularity_db": -10.0, key: value}
+    lo, hi = P.SPEC[key][2:]
+    with pytest.raises(ValueError) as e:
+        texel.validate(p)
+    assert str(e.value) == "%s: a huge int (beyond 2^62) is out of range [%r, %r]" % (key, lo, hi)
+
+
+WIDE = {"pitch_db": 6.3, "irregularity_db": 5.0, "texel_samples": 50, "length_samples": 500}
+
+
+@pytest.mark.parametrize("zs,fragment", [
+    ([1e300] * 10, "z[0] must be a finite number in [-10.0, 10.0], got 1e+300"),     # OverflowError
+    ([100.0] * 10, "got 100.0"),                  # 10**317: OverflowError / inf -> int
+    ([0.0] * 9 + [-1e300], "z[9] must be a finite number in [-10.0, 10.0], got -1e+300"),   # pitch 0
+    ([12.0] * 10, "got 12.0"),                    # 10^40 c/mm: beyond float32 on a board
+    ([-13] * 10, "got -13"),                      # a subnormal float32 pitch
+    ([10.000000000000002] * 10, "got 10.000000000000002"),
+    ([1j] * 10, "got complex"),                   # TypeError in float()
+    ([None] * 10, "got NoneType"),                # TypeError in float()
+    (["1.5"] * 10, "got str"),
+    ([True] * 10, "got True"),
+    ([10 ** 400] * 10, "got a huge int (beyond 2^62)"),
+    ([float("nan")] * 10, "got nan"),
+    (set(range(10)), "z_sequence must be an indexable sequence"),                 # TypeError
+    ({i: 0.0 for i in range(1, 11)}, "z_sequence must be an indexable sequence"),  # KeyError
+])
+def test_replayed_draws_out_of_range_refused(zs, fragment):
+    """Hole: _check_draws accepted any finite z (and any object at all): the
+    plan then raised OverflowError (z = 100 at sigma 3.16: 10**317), made a
+    pitch of 0 and pitches_db() a "math domain error" (z = -1e300), and
+    TypeError for complex/None elements or a set of draws."""
+    with pytest.raises(ValueError) as e:
+        texel.make_plan(WIDE, (0.5, zs))
+    assert str(e.value).startswith("draws: ") and fragment in str(e.value), str(e.value)

@@ -22,12 +22,13 @@ from __future__ import annotations
 import copy
 import json
 import math
+import os
 import random
 import re
 from array import array
 
 import pytest
-from hypothesis import given, settings, strategies as st, HealthCheck
+from hypothesis import given, settings, strategies as st
 
 from support import mpy
 import texel
@@ -820,8 +821,12 @@ def check_one(scene, display=SMALL):
 def test_property_validate_then_build():
     seen = {"ok": 0, "err": 0}
 
-    @settings(max_examples=800, deadline=None, database=None,
-              suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+    # the profile tests/conftest.py registers: derandomized unless
+    # TEXELPAD_HYPOTHESIS=nightly (then fresh random cases, 25 x as many)
+    nightly = os.environ.get("TEXELPAD_HYPOTHESIS") == "nightly"
+
+    @settings(settings.get_profile("texelpad-nightly" if nightly else "texelpad-default"),
+              max_examples=800 * (25 if nightly else 1))
     @given(_scene_st())
     def prop(scene):
         seen[check_one(scene)] += 1

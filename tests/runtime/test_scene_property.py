@@ -37,8 +37,29 @@ very unevenly: some would hardly ever run).
    object, same status()["scene"], push count, amplitude, no refresh ran
    meanwhile) and keeps refreshing with no fault.
 
-The hypothesis runs are derandomized (the same cases on every run: CI is
-deterministic) and keep no example database. Figures: `pytest -s`.
+4. Every valid scene BUILDS and plays (check_build): the 120 valid scenes of
+   property 1, 40 more on random displays (1 .. 80,000 positions of
+   0.001 um .. 1 m; over 32,768: the long-stretch arithmetic), the full house, and a stretch and a texel region over
+   80,000 positions (and, marked slow, over a 2^20-position display) are
+   built - texel regions from their plans as a
+   board does, and again rendered by the int, numpy and pure engines - and
+   Scene.amp() at every position is exactly what the region's texture says
+   (gaps idle, constants, reference maps, tiled and stretched uploads,
+   texel maps equal to the int engine's and within
+   texelpad.analysis.precision.error_bound of the float64 reference).
+   A batch of them (the explicit ones, 10 on the virtual board's display,
+   5 on random displays) is built under the MicroPython unix port: the same
+   amplitude at every position, the same bytes and region table. A
+   stretch over more than 32,768 positions allocates nothing on a 32-bit
+   port (the CircuitPython build): it made a bigint per position.
+
+Hypothesis profiles (registered in tests/conftest.py): by default the runs
+are derandomized (the same cases on every run: CI is deterministic) and keep
+no example database; TEXELPAD_HYPOTHESIS=nightly draws fresh random cases,
+NIGHTLY_SCALE (25) times as many per CPython property (3,000 valid scenes
+built, 500 per corruption, 1,000 on random displays); the MicroPython
+batches keep their size. Figures: `pytest -s`.
+    TEXELPAD_HYPOTHESIS=nightly pytest -s -m "not slow" tests/runtime/test_scene_property.py
 """
 from __future__ import annotations
 
@@ -46,6 +67,7 @@ import copy
 import functools
 import json
 import math
+import os
 import re
 import struct
 from array import array
@@ -250,9 +272,11 @@ def valid_texture(draw, kind=None):
     return t
 
 
-def _mm_of(draw, pos):
+def _mm_of(draw, pos, display=D):
     """A mm value that rounds to display position pos: on the 0.1 um grid,
     or up to 0.45 of a position off it, or an int."""
+    positions, dx_um = display["positions"], display["dx_um"]
+    dx_mm = dx_um / 1000.0
     style = _idx(draw, 4)
     if style == 0 and pos == 0:
         mm = 0
@@ -260,21 +284,25 @@ def _mm_of(draw, pos):
         j = draw(st.floats(-0.45, 0.45))
         if pos == 0:
             j = abs(j)
-        elif pos == POSITIONS:
+        elif pos == positions:
             j = -abs(j)
-        mm = (pos + j) * DX_MM
+        mm = (pos + j) * dx_mm
     else:
-        mm = round(pos * DX_MM, 4)
-    assert S.to_position(mm, D["dx_um"]) == pos, (pos, mm)
+        mm = round(pos * dx_mm, 4)
+        if S.to_position(mm, dx_um) != pos:         # a display finer than the 0.1 um grid
+            mm = pos * dx_mm
+    assert S.to_position(mm, dx_um) == pos, (pos, mm)
     return mm
 
 
 @st.composite
-def valid_scene(draw):
+def valid_scene(draw, display=D):
     """(scene, spans): spans[i] = (start, end) positions of regions[i] in
-    input order."""
+    input order, on `display` (the virtual board's unless given)."""
+    positions = display["positions"]
     n = _choice(draw, [1, 2, S.MAX_REGIONS] + list(range(1, S.MAX_REGIONS + 1)))
-    cuts = sorted(draw(st.lists(st.integers(0, POSITIONS), min_size=2 * n, max_size=2 * n,
+    n = min(n, (positions + 1) // 2)                # 2n distinct cuts in 0..positions
+    cuts = sorted(draw(st.lists(st.integers(0, positions), min_size=2 * n, max_size=2 * n,
                                 unique=True)))
     spans = [[cuts[2 * i], cuts[2 * i + 1]] for i in range(n)]
     for i in range(1, n):
@@ -282,8 +310,8 @@ def valid_scene(draw):
             spans[i][0] = spans[i - 1][1]           # touching neighbours
     order = draw(st.permutations(range(n)))
     spans = [tuple(spans[i]) for i in order]
-    regions = [{"start_mm": _mm_of(draw, s), "end_mm": _mm_of(draw, e), "texture": draw(valid_texture())}
-               for s, e in spans]
+    regions = [{"start_mm": _mm_of(draw, s, display), "end_mm": _mm_of(draw, e, display),
+                "texture": draw(valid_texture())} for s, e in spans]
     scene = {"regions": tuple(regions) if _idx(draw, 10) == 0 else regions}
     if _idx(draw, 2):
         scene["idle_amplitude"] = draw(st.one_of(st.integers(0, S.U16_MAX), st.sampled_from([0, 65535])))
@@ -688,6 +716,20 @@ SETTINGS = dict(deadline=None, database=None, derandomize=True, print_blob=True,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
                                        HealthCheck.filter_too_much, HealthCheck.large_base_example])
 
+# Hypothesis profiles (registered in tests/conftest.py): "texelpad-default"
+# is SETTINGS (derandomized); TEXELPAD_HYPOTHESIS=nightly selects
+# "texelpad-nightly" (fresh random cases) and NIGHTLY_SCALE times as many
+# examples per CPython property. The MicroPython batches keep their size
+# (every case runs on the unix port), drawn at random too.
+NIGHTLY = os.environ.get("TEXELPAD_HYPOTHESIS") == "nightly"
+NIGHTLY_SCALE = 25                  # tests/conftest.py
+
+
+def hyp_settings(n, scale=True, **kw):
+    """Settings for a property of n examples (n * NIGHTLY_SCALE at night)."""
+    prof = settings.get_profile("texelpad-nightly" if NIGHTLY else "texelpad-default")
+    return settings(prof, max_examples=n * (NIGHTLY_SCALE if NIGHTLY and scale else 1), **kw)
+
 
 def test_virtual_board_display_is_the_one_tested():
     assert BOARD["display"] == D
@@ -708,7 +750,7 @@ def test_validate_property_cpython(label):
     kinds = {}          # texture kinds in accepted scenes
     uploads = [0]       # accepted uploads of >= 1000 values
 
-    @settings(max_examples=n, **SETTINGS)
+    @hyp_settings(n)
     @given(cases(label))
     def prop(case):
         label, scene, path = case
@@ -716,6 +758,7 @@ def test_validate_property_cpython(label):
         verdict, res = check_case(label, scene, path)
         seen[verdict] += 1
         if verdict == "ok":
+            check_build(res, D)                     # and it builds and plays
             counts[len(res["regions"])] = counts.get(len(res["regions"]), 0) + 1
             for r in res["regions"]:
                 k = r["texture"]["kind"]
@@ -724,7 +767,7 @@ def test_validate_property_cpython(label):
 
     prop()
     print("\n%s: %d accepted, %d refused" % (label, seen["ok"], seen["err"]))
-    assert seen["ok"] + seen["err"] >= 0.9 * n
+    assert seen["ok"] + seen["err"] >= 0.9 * n * (NIGHTLY_SCALE if NIGHTLY else 1)
     if label == "valid":
         print("accepted scenes by region count:", dict(sorted(counts.items())))
         print("accepted regions by kind:", kinds, "; uploads of >= 1000 values:", uploads[0])
@@ -736,6 +779,326 @@ def test_explicit_cases():
     """16 touching regions of every kind with two full-screen uploads; one
     value too many; one region too many."""
     assert [check_case(*c)[0] for c in EXPLICIT] == ["ok", "err", "err"]
+
+
+# --------------------------------------------------------------------------
+# 1b. Every valid scene builds and plays (CPython)
+# --------------------------------------------------------------------------
+# check_build() for one canonical scene on one display: build() succeeds
+# (plans for texel regions, as a board builds; and again with every texel
+# region rendered by the int, numpy and pure engines), and Scene.amp() at every
+# position (and just outside the display) is a uint16 that is exactly what
+# the region's texture says:
+#   gaps -> the idle amplitude; constant -> round(level * 65535);
+#   reference -> texel.reference_u16(name, n); samples tile -> u16[k mod m];
+#   samples stretch -> the linear interpolation of the uploaded values within
+#     the documented 2.5 LSB, first and last value exact;
+#   texel -> texel.render_u16(params, engine="int") of the region's length
+#     (a plan-backed region too), that map and the pure-engine build within
+#     precision.error_bound of the float64 reference, and the numpy-engine
+#     build the reference rounded.
+# The region table stays board small ints, nbytes == buffer_bytes(), and
+# describe() is JSON.
+
+TEXEL_BOUND_MAX_TEXELS = 4000       # reference + bound per texel region up to this many texels
+
+
+def _texel_params(tex, n):
+    p = {k: tex[k] for k in S.TEXEL_KEYS}
+    p["length_samples"] = n
+    return p
+
+
+def _stretch_exact(u16, n):
+    """The exact linear interpolation the stretch fit approximates."""
+    import numpy as np
+    v = np.asarray(u16, dtype=np.float64)
+    m = len(v)
+    if m == 1 or n == 1:
+        return np.full(n, v[0])
+    i = np.arange(n, dtype=np.int64)
+    num = i * (m - 1)
+    k = num // (n - 1)
+    r = num - k * (n - 1)
+    k1 = np.minimum(k + 1, m - 1)
+    return v[k] + (v[k1] - v[k]) * (r / (n - 1))
+
+
+def check_build(c, display):
+    import numpy as np
+    from texel.gen import engine_numpy
+    from texelpad.analysis import precision as pr
+    positions = display["positions"]
+    sc = S.build(c, display)
+    assert sc.nbytes == S.buffer_bytes(c, display)
+    assert all(0 <= x < 2 ** 30 for x in sc._t)                 # board small ints
+    json.dumps(sc.describe())
+    idle = c.get("idle_amplitude", 0)
+    assert sc.idle == idle
+    amps = [sc.amp(p) for p in range(positions)]
+    assert all(type(v) is int and 0 <= v <= 65535 for v in amps)
+    assert sc.amp(-1) == sc.amp(positions) == idle
+    amps = np.asarray(amps, dtype=np.int64)
+    # the texel regions alone, rendered by the int, numpy and pure engines
+    # (the other regions would only be rendered again)
+    texels = {"regions": [r for r in c["regions"] if r["texture"]["kind"] == "texel"]}
+    by_engine = {}
+    if texels["regions"]:
+        by_engine = {e: S.build(texels, display, engine=e) for e in ("int", "numpy", "pure")}
+    covered = np.zeros(positions, dtype=bool)
+    for k, (s, e, kind, val) in enumerate(sc.spans()):
+        tex = c["regions"][k]["texture"]
+        n = e - s
+        seg = amps[s:e]
+        covered[s:e] = True
+        t = tex["kind"]
+        if t == "constant":
+            assert kind == S.K_CONST and (seg == int(tex["level"] * 65535.0 + 0.5)).all()
+        elif t == "reference":
+            assert (seg == np.asarray(texel.reference_u16(tex["name"], n))).all(), tex["name"]
+        elif t == "samples":
+            u16 = tex["u16"]
+            if tex["fit"] == "tile":
+                assert (seg == np.asarray(u16)[np.arange(n) % len(u16)]).all()
+            else:
+                exact = _stretch_exact(u16, n)
+                assert np.abs(seg - exact).max() <= 2.5, "stretch off by %r" % np.abs(seg - exact).max()
+                assert seg[0] == u16[0] and (n == 1 or seg[-1] == u16[-1])
+        else:
+            assert kind in (S.K_PLAN, S.K_BUF)
+            p = _texel_params(tex, n)
+            q = np.asarray(texel.render_u16(p, engine="int"), dtype=np.int64)
+            assert (seg == q).all(), "texel region does not play the int engine's map"
+            by_int = np.asarray([by_engine["int"].amp(x) for x in range(s, e)])
+            assert (by_int == q).all()
+            plan = texel.make_plan(p)
+            if plan.count <= TEXEL_BOUND_MAX_TEXELS:
+                ref = engine_numpy.render(plan)
+                assert (np.abs(q / 65535.0 - ref) <= pr.error_bound(plan, "int", u16=True)).all()
+                by_np = np.asarray([by_engine["numpy"].amp(x) for x in range(s, e)])
+                assert (by_np == np.floor(ref * 65535.0 + 0.5)).all()
+                by_pure = np.asarray([by_engine["pure"].amp(x) for x in range(s, e)])
+                assert (np.abs(by_pure / 65535.0 - ref) <= pr.error_bound(plan, "pure", u16=True)).all()
+    assert (amps[~covered] == idle).all(), "a gap does not play the idle amplitude"
+    return sc
+
+
+@st.composite
+def display_st(draw):
+    """A display dict: 1 .. 40,000 positions, pitch 0.001 um .. 1 m."""
+    positions = draw(_one_of(st.integers(1, 64), st.integers(1, 40000),
+                             st.sampled_from([1, 2, 3, 19200, 32768, 32769, 40000])))
+    dx_um = draw(_one_of(_finite(0.001, 1000000.0), st.sampled_from([0.001, 2.65, 5.3, 1000.0, 1000000.0])))
+    return {"positions": positions, "dx_um": dx_um}
+
+
+@st.composite
+def scene_on_display(draw):
+    d = draw(display_st())
+    scene, spans = draw(valid_scene(d))
+    if _idx(draw, 6) == 0:
+        # one region over the whole display: long stretches (> 32,768
+        # positions) and long plan-backed texel regions, which random cuts
+        # hardly ever make
+        tex = draw(valid_texture(_choice(draw, ["samples", "texel"])))
+        if tex["kind"] == "samples":
+            tex["fit"] = "stretch"
+        if _idx(draw, 2):
+            d = dict(d, positions=draw(st.integers(32770, 80000)))
+        total = d["positions"] * d["dx_um"] / 1000.0
+        scene = {"regions": [{"start_mm": 0, "end_mm": total, "texture": tex}]}
+    return d, scene
+
+
+N_BUILD_DISPLAYS = 40       # valid scenes on random displays
+
+
+def test_build_property_displays():
+    """Valid scenes on N_BUILD_DISPLAYS random displays validate, build and
+    play what their textures say (the 120 on the virtual board's display are
+    built by test_validate_property_cpython[valid])."""
+    seen = {"scenes": 0, "regions": 0, "long stretch": 0, "plan regions": 0}
+
+    @hyp_settings(N_BUILD_DISPLAYS)
+    @given(scene_on_display())
+    def prop(case):
+        display, scene = case
+        note("display %r" % (display,))
+        c = S.validate(scene, display)
+        assert S.validate(c, display) == c
+        sc = check_build(c, display)
+        seen["scenes"] += 1
+        seen["regions"] += sc.count
+        for (s, e, kind, val), r in zip(sc.spans(), c["regions"]):
+            t = r["texture"]
+            seen["long stretch"] += t["kind"] == "samples" and t["fit"] == "stretch" and e - s > 32769
+            seen["plan regions"] += kind == S.K_PLAN
+
+    prop()
+    print("\n", seen)
+    assert seen["scenes"] >= 0.9 * N_BUILD_DISPLAYS * (NIGHTLY_SCALE if NIGHTLY else 1)
+    assert seen["plan regions"] >= 3 and (NIGHTLY or seen["long stretch"] >= 1)
+
+
+def _long_stretch_scene(positions, dx_um):
+    total = positions * dx_um / 1000.0
+    return {"regions": [
+        {"start_mm": 0, "end_mm": total / 2, "texture": {"kind": "samples", "u16": [0, 65535, 1, 40000, 7],
+                                                         "fit": "stretch"}},
+        {"start_mm": total / 2, "end_mm": total, "texture": {"kind": "texel", "pitch_db": P.PITCH_DB_MAX,
+                                                             "irregularity_db": P.IRREG_DB_MAX,
+                                                             "texel_samples": 5, "seed": P.SEED_MAX}}]}
+
+
+def test_full_house_builds():
+    """16 touching regions of every kind with two full-screen uploads."""
+    c = S.validate(EXPLICIT[0][1], D)
+    sc = check_build(c, D)
+    assert sc.count == S.MAX_REGIONS
+
+
+def test_long_stretch_is_exact():
+    """Regression: a stretch over more than 32,768 positions (a display may
+    have 2^20) computed r << 15 beyond 2^30 - a heap bigint per position on
+    32-bit ports, an OverflowError where a port has no long ints. It now
+    takes the same floor(r*2^15/(n-1)) in two exact steps: the same map."""
+    d = {"positions": 80000, "dx_um": 5.3}
+    c = S.validate(_long_stretch_scene(80000, 5.3), d)
+    check_build(c, d)
+
+
+@pytest.mark.slow
+def test_largest_display_builds():
+    """A 2^20-position display (0.001 um each): a stretch over half of it and
+    a texel region of 104,858 plan-backed texels over the other half."""
+    d = {"positions": P.LENGTH_MAX, "dx_um": 0.001}
+    c = S.validate(_long_stretch_scene(P.LENGTH_MAX, 0.001), d)
+    check_build(c, d)
+
+
+CPY_STRETCH = r"""
+import gc
+from array import array
+from texel.runtime import scene as S
+vals = (0, 65535, 3, 40000)
+out = []
+for n in (1000, 32769, 40000, 200000):
+    buf = array('H', bytes(2 * n))
+    gc.collect()
+    gc.disable()
+    a = gc.mem_alloc()
+    S._fill_samples(vals, 'stretch', n, buf)
+    b = gc.mem_alloc()
+    gc.enable()
+    out.append(b - a)
+    out.append(sum(buf[i] * (i % 7 + 1) for i in range(0, n, 97)) % 1000003)
+print(out)
+"""
+
+
+def test_long_stretch_stays_small_ints_on_a_32_bit_port():
+    """Regression (the hole above, where it bites): on the CircuitPython
+    build (i386: small ints are 31-bit) the stretch of 40,000 positions made
+    694 KB of bigint garbage, 200,000 positions 16 MB. Now nothing is
+    allocated while it fills, and the map is CPython's."""
+    exe = mpy.toolchain.interpreter("circuitpython")
+    if exe is None:
+        pytest.skip("circuitpython instrument not available")
+    got = eval(mpy.run(CPY_STRETCH, exe=exe, heapsize="16m").strip().splitlines()[-1])   # noqa: S307
+    want = []
+    for n in (1000, 32769, 40000, 200000):
+        buf = array("H", bytes(2 * n))
+        S._fill_samples((0, 65535, 3, 40000), "stretch", n, buf)
+        want += [0, sum(buf[i] * (i % 7 + 1) for i in range(0, n, 97)) % 1000003]
+    assert got[1::2] == want[1::2]
+    assert max(got[0::2]) < 256, got            # no per-position allocation
+
+
+# --------------------------------------------------------------------------
+# 1c. The same builds under MicroPython: the same amplitudes
+# --------------------------------------------------------------------------
+
+N_MPY_BUILD = 10            # generated valid scenes built under the unix port (plus the explicit ones)
+
+MP_BUILD = r"""
+import json, gc
+from array import array
+from texel.runtime import scene as S
+f = open(%(src)r)
+while True:
+    line = f.readline()
+    if not line:
+        break
+    display, scene = eval(line)
+    line = None
+    try:
+        c = S.validate(scene, display)
+        sc = S.build(c, display)
+        n = display["positions"]
+        h = 0
+        lo = 65535
+        hi = 0
+        bad = 0
+        for p in range(-1, n + 1):
+            v = sc.amp(p)
+            if not (0 <= v <= 65535):
+                bad += 1
+            h = (h * 31 + v) %% 1000000007
+            lo = min(lo, v)
+            hi = max(hi, v)
+        res = ["ok", h, lo, hi, bad, sc.nbytes, sc.spans()]
+    except Exception as e:
+        res = ["other", "%%s: %%s" %% (type(e).__name__, e)]
+    scene = c = sc = None
+    print(json.dumps(res))
+    res = None
+    gc.collect()
+f.close()
+"""
+
+
+def _amp_digest(sc, n):
+    h = 0
+    vals = [sc.amp(p) for p in range(-1, n + 1)]
+    for v in vals:
+        h = (h * 31 + v) % 1000000007
+    return ["ok", h, min(vals), max(vals), 0, sc.nbytes, [list(x) for x in sc.spans()]]
+
+
+@functools.lru_cache(maxsize=None)
+def mp_build_batch():
+    batch = [(D, EXPLICIT[0][1]), ({"positions": 40000, "dx_um": 5.3}, _long_stretch_scene(40000, 5.3))]
+
+    @hyp_settings(N_MPY_BUILD, scale=False, phases=[Phase.generate])
+    @given(valid_scene())
+    def on_d(case):
+        batch.append((D, case[0]))
+
+    @hyp_settings(N_MPY_BUILD // 2, scale=False, phases=[Phase.generate])
+    @given(scene_on_display())
+    def on_any(case):
+        batch.append(case)
+
+    on_d()
+    on_any()
+    return batch
+
+
+def test_builds_match_under_micropython(tmp_path):
+    """The explicit scenes and a generated batch build under the unix port,
+    and Scene.amp() at every position (and one past each end) gives exactly
+    CPython's amplitudes (digest, min, max), bytes and region table."""
+    batch = mp_build_batch()
+    src = _write_cases(tmp_path, [(d, sc) for d, sc in batch])
+    out = run_mp(MP_BUILD % {"src": str(src)})
+    got = [json.loads(line) for line in out.splitlines() if line.startswith("[")]
+    assert len(got) == len(batch)
+    for (d, scene), g in zip(batch, got):
+        assert g[0] == "ok", (d, g)
+        c = S.validate(scene, d)
+        want = _amp_digest(S.build(c, d), d["positions"])
+        assert g == want, d
+    print("\nMicroPython: %d scenes built and played, identical to CPython" % len(batch))
 
 
 # --------------------------------------------------------------------------
@@ -787,8 +1150,8 @@ def mp_batch():
     by the same strategy."""
     batch = list(EXPLICIT)
     for label in LABELS:
-        @settings(max_examples=N_MPY_VALID if label == "valid" else N_MPY_CORRUPT,
-                  phases=[Phase.generate], **SETTINGS)
+        @hyp_settings(N_MPY_VALID if label == "valid" else N_MPY_CORRUPT, scale=False,
+                      phases=[Phase.generate])
         @given(cases(label))
         def collect(case):
             batch.append(case)
@@ -1046,3 +1409,25 @@ def test_rejected_pushes_leave_the_virtual_board_unchanged(tmp_path):
     assert (adv["position"], adv["amplitude"], adv["duty"]) == (b["position"], b["amplitude"], b["duty"])
     print("\nvirtual board: %d rejected pushes, scene of %d regions kept, %d refreshes after"
           % (len(rejected), b["scene"]["count"], adv["refreshes"] - a["refreshes"]))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["micropython-ulab-f32", "circuitpython"])
+def test_builds_on_float32_ports(tmp_path, name):
+    """The same batch on a board's precision (the float32 MicroPython build;
+    CircuitPython: 30-bit floats, 31-bit small ints, no viper): every scene
+    builds, every amplitude is a uint16, and positions (region table) and
+    bytes are CPython's. (Texel and some reference maps differ: float32.)"""
+    exe = mpy.toolchain.interpreter(name)
+    if exe is None:
+        pytest.skip("%s instrument not available" % name)
+    batch = mp_build_batch()
+    src = _write_cases(tmp_path, [(d, sc) for d, sc in batch])
+    out = mpy.run(MP_BUILD % {"src": str(src)}, exe=exe, heapsize="64m", timeout=600)
+    got = [json.loads(line) for line in out.splitlines() if line.startswith("[")]
+    assert len(got) == len(batch)
+    for (d, scene), g in zip(batch, got):
+        assert g[0] == "ok", (d, g)
+        want = _amp_digest(S.build(S.validate(scene, d), d), d["positions"])
+        assert 0 <= g[2] <= g[3] <= 65535 and g[4] == 0, (d, g[:6])
+        assert g[5:] == want[5:], d

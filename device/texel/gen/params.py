@@ -5,7 +5,7 @@
 
 FORMAT_VERSION = 1
 
-# Geometry of the TPaD display (SPEC §1): 5.3 um per map sample.
+# Geometry of the TPaD display (docs/background.md §1): 5.3 um per map sample.
 DX_MM = 0.0053
 NYQUIST_CPMM = 1.0 / (2.0 * DX_MM)          # 94.34 cycles/mm
 # 10*log10(94.3396) = 19.7470 dB: the highest pitch the display can show.
@@ -57,6 +57,17 @@ def _is_finite(x):
     return x == x and x not in (float("inf"), float("-inf"))
 
 
+# Ints beyond this are shown by name in a message, not by their digits (the
+# same words as texel.runtime.scene): 10**400 must not make a 400-digit line.
+_BIG = 1 << 62
+
+
+def _show(value):
+    if isinstance(value, int) and not -_BIG < value < _BIG:
+        return "a huge int (beyond 2^62)"
+    return repr(value)
+
+
 def check_value(key, value):
     """Return value converted to its canonical type, or raise ValueError."""
     kind, default, lo, hi = SPEC[key]
@@ -74,13 +85,23 @@ def check_value(key, value):
         if not isinstance(value, int):
             raise ValueError("%s: expected an int in %s, got float %r"
                              % (key, _fmt_range(lo, hi), value))
+    elif isinstance(value, int):
+        # An int in a float field becomes a float - unless it has none:
+        # float(10**400) raised OverflowError on CPython (after the key had
+        # been accepted as "a number"), while MicroPython turns it into inf
+        # and called it "not finite". Every float range here is far inside
+        # +-2^62, so an int beyond that is simply out of range, worded alike
+        # on every port and never converted.
+        if not -_BIG < value < _BIG:
+            raise ValueError("%s: %s is out of range %s" % (key, _show(value), _fmt_range(lo, hi)))
+        value = float(value)
     else:
         if not _is_finite(value):
             raise ValueError("%s: %r is not finite (allowed %s)"
                              % (key, value, _fmt_range(lo, hi)))
         value = float(value)
     if value < lo or value > hi:
-        raise ValueError("%s: %r is out of range %s" % (key, value, _fmt_range(lo, hi)))
+        raise ValueError("%s: %s is out of range %s" % (key, _show(value), _fmt_range(lo, hi)))
     if key == "quant_db" and 0.0 < value < QUANT_DB_MIN:
         raise ValueError("quant_db: %r is too fine a grid (0 = off, else %r .. %r dB)"
                          % (value, QUANT_DB_MIN, hi))

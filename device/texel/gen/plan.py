@@ -115,20 +115,65 @@ def _int_buffer(n):
     return array("i", bytes(4 * n))
 
 
+# Largest |z| a replayed draw may have (draws=(u, z_sequence), e.g. the lab's
+# logged MATLAB randn draws: |z| <= 4.6 in ../shared/golden). A standard
+# normal draw beyond 10 has probability 1.5e-23 (the seeded generator's own
+# draws stay within 6.4: u >= 2^-33), so no real log is refused. Without a
+# bound a finite z broke the plan: pull = mu + sigma*z with sigma up to 3.16
+# decades made 10**pull overflow (z = 100: OverflowError on CPython, inf and
+# then "can't convert inf to int" on MicroPython), underflow to a pitch of 0
+# (z = -1e300: pitches_db() raised "math domain error") or leave float32
+# (z = 12: OverflowError on a board; z = -13: a subnormal pitch). With
+# |z| <= 10 every pitch is within 10^+-34.6 c/mm (quantization included):
+# finite and normal in float32 as in float64, and so are t28/d28. (Only phi,
+# the unwrapped float phase the float64 reference engine reads, can pass
+# float32's range on a board, for a metre-long map of such draws; board
+# engines never read it.)
+Z_MAX = 10.0
+
+
+def _shown(v):
+    """A bounded description of a draw for a message."""
+    if isinstance(v, float) or (isinstance(v, int) and -(1 << 62) < v < (1 << 62)):
+        return repr(v)
+    if isinstance(v, int):
+        return "a huge int (beyond 2^62)"
+    return type(v).__name__
+
+
 def _check_draws(draws, count):
     try:
         u, zs = draws
     except (TypeError, ValueError):
         raise ValueError("draws: expected (u, z_sequence)")
     if isinstance(u, bool) or not isinstance(u, (int, float)) or not (0.0 <= u <= 1.0):
-        raise ValueError("draws: u must be a number in [0, 1], got %r" % (u,))
+        raise ValueError("draws: u must be a number in [0, 1], got %s" % _shown(u))
     try:
         m = len(zs)
     except TypeError:
         raise ValueError("draws: z_sequence must be a sequence")
     if m < count:
         raise ValueError("draws: %d z values given, the map needs %d texels" % (m, count))
-    for z in zs:
-        if not (z == z) or z in (float("inf"), float("-inf")):
-            raise ValueError("draws: z values must be finite, got %r" % (z,))
-    return float(u), [float(z) for z in zs[:count]]
+    # Only the first `count` values are used (and checked); each must be a
+    # real number (float() of it: numpy scalars too, never str/bytes, bool or
+    # complex - complex and None raised TypeError in the plan) in
+    # [-Z_MAX, Z_MAX].
+    out = []
+    for i in range(count):
+        try:
+            z = zs[i]
+        except (TypeError, KeyError, IndexError):
+            raise ValueError("draws: z_sequence must be an indexable sequence (list, tuple, array)")
+        ok = not isinstance(z, (bool, str, bytes))
+        if ok:
+            try:
+                f = float(z)
+            except (TypeError, ValueError, OverflowError):
+                ok = False
+        if not ok or not (-Z_MAX <= f <= Z_MAX):       # also refuses nan
+            if ok and not isinstance(z, (int, float)):
+                z = f                                   # a numpy scalar: show its value
+            raise ValueError("draws: z[%d] must be a finite number in [%r, %r], got %s"
+                             % (i, -Z_MAX, Z_MAX, _shown(z)))
+        out.append(f)
+    return float(u), out

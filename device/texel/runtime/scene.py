@@ -613,11 +613,18 @@ def _fill_samples(vals, fit, n, buf):
     # stretch: position i sits at x = i*(m-1)/(n-1) in value units, k its
     # integer part, r/(n-1) its fraction; linear interpolation with the
     # fraction rounded to a 14-bit weight w = round(r*2^14/(n-1)), so every
-    # intermediate stays a small int on boards (|b-a|*w <= 65535*2^14 < 2^30;
-    # r*2^15 < 2^30 for regions up to 32,768 positions). Error <= 2.5 LSB
-    # (weight rounding 65535/2^15 + result rounding 0.5).
+    # intermediate stays a small int on boards (|b-a|*w <= 65535*2^14 < 2^30).
+    # floor(r*2^15/(n-1)) is one division while r*2^15 < 2^30 (regions up to
+    # 32,768 positions); a longer region (a display may have up to 2^20
+    # positions) takes it in two exact steps, 2^9 then 2^6, each below 2^30
+    # because r < n-1 < 2^20: r << 15 there was a heap bigint per position on
+    # 32-bit ports (694 KB of garbage for a 40,000-position stretch on the
+    # CircuitPython build, an OverflowError where a port has no long ints)
+    # for the very same weights. Error <= 2.5 LSB (weight rounding 65535/2^15
+    # + result rounding 0.5).
     den = n - 1
     step = m - 1
+    small = den <= 32768
     k = 0                         # i*(m-1) = k*(n-1) + r
     r = 0
     for i in range(n):
@@ -625,7 +632,12 @@ def _fill_samples(vals, fit, n, buf):
         if r == 0:
             buf[i] = a
         else:
-            w = ((r << 15) // den + 1) >> 1
+            if small:
+                w = ((r << 15) // den + 1) >> 1
+            else:
+                x = r << 9
+                q = x // den
+                w = (((q << 6) + (((x - q * den) << 6) // den)) + 1) >> 1
             buf[i] = a + (((vals[k + 1] - a) * w + 8192) >> 14)
         r += step
         if r >= den:
