@@ -937,7 +937,9 @@ def test_build_property_displays():
     prop()
     print("\n", seen)
     assert seen["scenes"] >= 0.9 * N_BUILD_DISPLAYS * (NIGHTLY_SCALE if NIGHTLY else 1)
-    assert seen["plan regions"] >= 3 and (NIGHTLY or seen["long stretch"] >= 1)
+    # (long stretches are counted for the record; test_long_stretch_is_exact covers
+    # them explicitly: a coverage count over a random property is not a test)
+    assert seen["plan regions"] >= 3
 
 
 def _long_stretch_scene(positions, dx_um):
