@@ -6,6 +6,9 @@ p.set_defaults(func=cmd_<name>)) and `cmd_<name>(args) -> exit code` in a
 module of this package, and add one row to COMMANDS. Conventions (common.py):
 a bad flag or a refused request is one line naming the flag and exit 2; a
 failure of the world (no board, a file that cannot be written) exit 1.
+Output closed early (`texelpad render ... | head -1`): exit 1 quietly, no
+traceback (main(), _broken_pipe). Output files are checked before the work
+that fills them (common.check_output).
 """
 from __future__ import annotations
 
@@ -70,18 +73,75 @@ def build_parser(argv: Sequence[str] = ()) -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    from .common import EXIT_USAGE, CliError, _stderr
     argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        return _main(argv)
+    except BrokenPipeError:             # also from --help, or an error line on a closed stderr
+        return _broken_pipe(_chosen(argv) or "")
+
+
+def _main(argv: list[str]) -> int:
+    from .common import EXIT_USAGE, CliError, _stderr
     parser = build_parser(argv)
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit:                  # --help, --version, a usage error: flush it here
+        sys.stdout.flush()
+        raise
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return EXIT_USAGE
     try:
-        return args.func(args)
+        code = args.func(args)
+        sys.stdout.flush()              # a closed pipe shows here, not at exit
+        return code
     except CliError as e:
         _stderr("texelpad %s: error: %s" % (args.command, e))
         return e.code
     except KeyboardInterrupt:
         _stderr("texelpad %s: interrupted" % args.command)
         return 130
+
+
+def _closed(stream: object) -> bool:
+    """Whether stream is a pipe whose reader has gone (poll: POLLERR);
+    True where that cannot be told (no poll, as on Windows)."""
+    try:
+        fd = stream.fileno()           # type: ignore[attr-defined]
+    except (AttributeError, OSError, ValueError):
+        return False
+    try:
+        import select
+        poller = select.poll()
+        poller.register(fd, select.POLLOUT)
+        return any(ev & (select.POLLERR | select.POLLHUP) for _, ev in poller.poll(0))
+    except (AttributeError, OSError, ValueError):
+        return True
+
+
+def _broken_pipe(command: str) -> int:
+    """The reader of our output went away (`texelpad ... | head`): the Python
+    docs' recipe (library/signal, "Note on SIGPIPE"): point stdout at devnull
+    so the interpreter's final flush cannot fail again, and exit 1 QUIETLY -
+    as a Unix tool cut off by `head` prints nothing. A broken pipe that is not
+    stdout's or stderr's (a subprocess the command feeds) is a failure of the
+    world: one line, exit 1."""
+    import os
+    from .common import EXIT_FAIL, _stderr
+    quiet = False
+    for stream in (sys.stdout, sys.stderr):
+        if _closed(stream):
+            quiet = True
+            try:
+                devnull = os.open(os.devnull, os.O_WRONLY)
+                os.dup2(devnull, stream.fileno())
+                os.close(devnull)
+            except (AttributeError, OSError, ValueError):
+                pass
+    if not quiet:
+        try:
+            _stderr("texelpad%s: error: broken pipe (a process it wrote to went away)"
+                    % (" " + command if command else ""))
+        except OSError:
+            pass
+    return EXIT_FAIL

@@ -6,8 +6,8 @@ import json
 from pathlib import Path
 
 from ..link.transport import LinkError
-from .common import EXIT_FAIL, EXIT_OK, CliError, _fail, _stderr, csv_list, positive_float, \
-    positive_int, write_output
+from .common import EXIT_FAIL, EXIT_OK, CliError, _fail, _stderr, check_output, csv_list, \
+    positive_float, positive_int, write_output
 
 
 def add_bench(p: argparse.ArgumentParser) -> None:
@@ -50,6 +50,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
         if bad:
             raise CliError("--cases", "unknown case %s (known: %s)"
                            % (", ".join(map(repr, bad)), ", ".join(HARD_CASES)))
+    if args.json:                       # before the minutes of work, not after
+        check_output("--json", args.json, (".json",))
     progress = None if args.quiet else (lambda m: _stderr("bench: " + m))
     res = bench.run(args.cases, args.runtimes, args.repeat, progress)
     print(bench.table(res), flush=True)
@@ -81,6 +83,8 @@ def add_bench_refresh(p: argparse.ArgumentParser) -> None:
 
 def cmd_bench_refresh(args: argparse.Namespace) -> int:
     from ..bench import refresh as refresh_bench
+    if args.json:
+        check_output("--json", args.json, (".json",))
     progress = None if args.quiet else (lambda m: _stderr("bench-refresh: " + m))
     res = refresh_bench.run(args.seconds, progress)
     print(refresh_bench.table(res), flush=True)
@@ -106,6 +110,8 @@ def cmd_bench_link(args: argparse.Namespace) -> int:
     from ..bench import link as link_bench
     if args.pushes < 1:
         raise CliError("--pushes", "must be >= 1, got %d" % args.pushes)
+    if args.json:
+        check_output("--json", args.json, (".json",))
     try:
         res = link_bench.run(args.pushes, progress=lambda m: _stderr("bench-link: " + m))
     except LinkError as e:

@@ -12,7 +12,10 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
+import re
 import sys
+import tempfile
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -33,11 +36,30 @@ class CliError(Exception):
         self.code = code
 
 
+# What argparse takes for a negative number (a flag's value, not a flag): its
+# own -5 and -.5, and also -1e5, -inf, -nan and quantities such as -1u (refused
+# by their flag's type with one clear line), so `--pitch-db -inf` reaches the
+# flag's check instead of "expected one argument". No texelpad flag looks like
+# a negative number, so nothing is shadowed.
+NEGATIVE_NUMBER = re.compile(r"^-(\d|\.\d|inf$|infinity$|nan$)", re.IGNORECASE)
+
+
 class _Parser(argparse.ArgumentParser):
-    """argparse, but a usage error is one line (plus a hint), exit 2."""
+    """argparse, but a usage error is one line (plus a hint), exit 2, and
+    negative numbers of every form are values (NEGATIVE_NUMBER)."""
+
+    def __init__(self, *args: Any, **kwargs: Any):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_NUMBER
 
     def error(self, message: str) -> NoReturn:
+        # a value echoed by argparse is cut: `--seed 999...` of 5,000 digits
+        # ("invalid int value: '999...'") stays one short line
+        message = _LONG_QUOTED.sub(lambda m: _show(m.group(1)), message)
         self.exit(EXIT_USAGE, "%s: error: %s (see: %s --help)\n" % (self.prog, message, self.prog))
+
+
+_LONG_QUOTED = re.compile(r"'([^'\n]{41,})'")
 
 
 # --- the texel parameter flags --------------------------------------------------------
@@ -84,6 +106,12 @@ def add_texel_flags(group: Any, keys: tuple[str, ...] = TEXEL_KEYS,
                            help="%s; %s" % (meaning, _range_text(key)))
 
 
+def _show(text: str, n: int = 40) -> str:
+    """repr(text), cut to n characters: error lines stay one short line."""
+    return repr(text) if len(text) <= n else repr(text[:n]) + "... (%s characters)" % format(
+        len(text), ",")
+
+
 def render_params(args: argparse.Namespace) -> dict[str, Any]:
     """The texel parameter dict from the flags that were given."""
     params: dict[str, Any] = {}
@@ -119,6 +147,45 @@ def positive_int(text: str) -> int:
     if v < 1:
         raise argparse.ArgumentTypeError("must be >= 1, got %d" % v)
     return v
+
+
+def check_output(flag: str, path: str, suffixes: tuple[str, ...] = ()) -> Path:
+    """Check an output file BEFORE the work that fills it: its suffix is one
+    of `suffixes` (case-insensitive; any when empty) - else one line naming
+    the flag, exit 2 - and its directory exists and takes a new file (a probe
+    file is made and removed there) - else one line, exit 1. An existing
+    special file (/dev/stdout, a FIFO) is taken as it is."""
+    out = Path(path)
+    try:
+        special = out.exists() and not out.is_file() and not out.is_dir()
+    except OSError:
+        special = False
+    if special:
+        return out
+    if suffixes and out.suffix.lower() not in suffixes:
+        raise CliError(flag, "unsupported file type %r for %s (use %s)"
+                       % (out.suffix or out.name, _show(path), ", ".join(suffixes)))
+    parent = out.parent if str(out.parent) else Path(".")
+
+    def fail(why: str) -> CliError:
+        return CliError(flag, "cannot write %s: %s" % (path, why), EXIT_FAIL)
+    if out.is_dir():
+        raise fail("it is a directory")
+    if not parent.is_dir():
+        raise fail("no such directory %s" % parent if not parent.exists()
+                   else "%s is not a directory" % parent)
+    if out.exists() and not os.access(out, os.W_OK):
+        raise fail("permission denied")
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".texelpad-", dir=parent)
+    except OSError as e:
+        raise fail(e.strerror or str(e)) from None
+    os.close(fd)
+    try:
+        os.unlink(probe)
+    except OSError:
+        pass
+    return out
 
 
 def write_output(flag: str, path: str, write: Any) -> None:
@@ -176,14 +243,36 @@ def read_scene_file(path: str) -> dict[str, Any]:
     except UnicodeDecodeError:
         raise CliError("--scene", "%s is not UTF-8 text" % path) from None
     try:
-        scene = json.loads(text)
+        scene = json.loads(text, parse_int=_json_int)
     except json.JSONDecodeError as e:
         raise CliError("--scene", "%s is not valid JSON: %s (line %d, column %d)"
                        % (path, e.msg, e.lineno, e.colno)) from None
+    except _HugeInt as e:
+        raise CliError("--scene", "%s: the integer %s has %s digits, far too large for any "
+                       "scene value" % (path, e.head, e.digits)) from None
+    except RecursionError:
+        raise CliError("--scene", "%s is nested too deeply (a scene is a few levels deep: "
+                       "{\"regions\": [{\"texture\": {...}}]})" % path) from None
     if not isinstance(scene, dict):
         raise CliError("--scene", "%s: a scene is a JSON object {\"regions\": [...]}, not a %s"
                        % (path, type(scene).__name__))
     return scene
+
+
+class _HugeInt(ValueError):
+    def __init__(self, text: str):
+        super().__init__(text[:12])
+        self.head = text[:12] + "..."
+        self.digits = format(len(text.lstrip("-")), ",")
+
+
+def _json_int(text: str) -> int:
+    # json.loads would fail on an integer beyond Python's int->str limit
+    # (4,300 digits) with a ValueError and no position; no scene value needs
+    # more than 20 digits (the link carries 64 bits: protocol.INT_MAX)
+    if len(text) > 40:
+        raise _HugeInt(text)
+    return int(text)
 
 
 def _value_error(e: Exception, from_flags: bool) -> CliError:

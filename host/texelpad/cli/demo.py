@@ -16,8 +16,8 @@ import texel.runtime.scene
 
 from ..link.protocol import LiteralError
 from ..link.transport import DeviceError, LinkError
-from .common import EXIT_OK, CliError, _fail, _port_arg, _stderr, _value_error, positive_float, \
-    read_scene_file
+from .common import EXIT_FAIL, EXIT_OK, CliError, _fail, _port_arg, _stderr, _value_error, \
+    check_output, positive_float, read_scene_file, write_output
 
 DEFAULT_SCENE = texel.app.DEFAULT_SCENE
 
@@ -168,6 +168,10 @@ def cmd_demo(args: argparse.Namespace) -> int:
             texel.runtime.scene.validate(scene, {"positions": 19200, "dx_um": 5.3})
         except ValueError as e:
             raise _value_error(e, False) from None
+    # both output files are checked before the board is started, not after
+    check_output("--out", args.out, (".png",))
+    if args.json:
+        check_output("--json", args.json, (".json",))
     try:
         rep = run(args.port, args.out, scene, args.board, args.seconds,
                        timeout=args.timeout, progress=lambda m: _stderr("demo: " + m))
@@ -175,6 +179,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
         raise _value_error(e, False) from None
     except LinkError as e:
         raise _fail(e) from None
+    except OSError as e:                # the figure (its directory was checked: a full disk)
+        raise CliError("--out", "cannot write %s: %s" % (args.out, e.strerror or e),
+                       EXIT_FAIL) from None
     print("played on %s (%s): %d telemetry samples (%d lost), %d with the finger down; "
           "played amplitude vs the map at the sensed position: max error %s counts%s"
           % (rep["port"], rep["board"], rep["samples"], rep["lost"], rep.get("down", 0),
@@ -185,7 +192,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
           % (rep["push_ms"], rep["push_bytes"], rep["scene_bytes"], rep["refreshes"],
              rep["overruns"], rep["faults"]))
     if args.json:
-        Path(args.json).write_text(json.dumps(rep, indent=1, default=float))
+        write_output("--json", args.json,
+                     lambda: Path(args.json).write_text(json.dumps(rep, indent=1, default=float)))
     print("wrote %s" % args.out)
     return EXIT_OK
 

@@ -12,10 +12,14 @@ def add_deploy(p: argparse.ArgumentParser) -> None:
     p.description = ("Compile the device image with mpy-cross for the board's own .mpy format "
                     "and architecture (read from the board), compare sha256 hashes with what "
                     "the board holds, and write only the files that changed, each beside its "
-                    "old copy then renamed over it. A playing display is stopped while "
-                    "writing and started again on the new image with the scene it played. "
-                    "Refuses firmware that is too old or of another .mpy format, and an "
-                    "image that does not fit. mpremote users: mpremote mip install "
+                    "old copy then renamed over it; the leftovers of an interrupted deploy "
+                    "are completed or removed (hashes decide). Refuses firmware that is too "
+                    "old or of another .mpy format, an image that does not fit and paths "
+                    "that cannot be written, before anything changes. A playing display is "
+                    "stopped while writing and started again on the new image with the "
+                    "scene it played (also when the deploy fails: the error says what the "
+                    "board holds and what to run). Prints the command to run next. "
+                    "mpremote users: mpremote mip install "
                     "github:<owner>/<repo> installs the source package (package.json).")
     p.add_argument("--source", action="store_true",
                    help="send the .py sources instead of .mpy (the board compiles them; "
@@ -42,10 +46,36 @@ def cmd_deploy(args: argparse.Namespace) -> int:
             raise _fail(e) from None
         finally:
             bar.end()
-    print("%s %s: %d of %d files written (%s bytes), %d unchanged, %d removed, in %.2f s%s" % (
+    rep_fixed = rep["repaired"]
+    print("%s %s: %d of %d files written (%s bytes), %d unchanged, %d removed%s, in %.2f s%s" % (
         "would deploy to" if args.dry_run else "deployed to", b.port, rep["written"],
         rep["files"], format(rep["bytes_written"], ","), rep["unchanged"], len(rep["removed"]),
+        "; %s an interrupted deploy (%d .new file%s completed, %d removed)" % (
+            "would repair" if args.dry_run else "repaired", len(rep_fixed["completed"]), "" if len(rep_fixed["completed"]) == 1 else "s",
+            len(rep_fixed["removed"])) if rep_fixed["completed"] or rep_fixed["removed"] else "",
         rep["seconds"], "; restarted %s with its scene" % rep["restarted"]
         if rep["restarted"] else ""))
+    if not args.dry_run:
+        print(next_step(b.port, rep))
     return EXIT_OK
 
+
+def next_step(port: str, rep: dict) -> str:
+    """What to run after a deploy: the demo, with the board file to start
+    when nothing plays (the shipped boards of this firmware's port)."""
+    if rep.get("playing"):
+        return "next: texelpad demo --port %s   (texelpad plays %s on it)" % (port, rep["playing"])
+    names = rep.get("boards") or []
+    if not names:
+        return ("next: texelpad demo --port %s --board NAME   (NAME: your board file, "
+                "/boards/NAME.json on the board)" % port)
+    family = rep.get("board_port") or "this"
+    text = "next: texelpad demo --port %s --board %s" % (port, names[0])
+    if len(names) > 1:
+        text += ("   (board files for %s firmware: %s; use the one wired like your board, or "
+                 "your own /boards/NAME.json)" % (family, ", ".join(names)))
+    else:
+        text += "   (the board file for %s firmware)" % family
+    if rep.get("main"):
+        text += "; after a reset /main.py starts texelpad by itself"
+    return text

@@ -3,12 +3,12 @@ from __future__ import annotations
 
 import argparse
 import math
-from pathlib import Path
 from typing import Any
 
 import texel
 
-from .common import EXIT_FAIL, EXIT_OK, CliError, add_texel_flags, device_error, render_params
+from .common import EXIT_FAIL, EXIT_OK, CliError, add_texel_flags, check_output, \
+    device_error, render_params
 
 
 OUT_TYPES = (".png", ".csv", ".npy")
@@ -69,11 +69,14 @@ def summary(plan: Any, engine: str) -> str:
 
 def cmd_render(args: argparse.Namespace) -> int:
     import numpy as np
-    out = Path(args.out) if args.out else None
-    if out is not None and out.suffix.lower() not in OUT_TYPES:
-        raise CliError("--out", "unsupported file type %r (use %s)"
-                       % (out.suffix or out.name, ", ".join(OUT_TYPES)))
     params = render_params(args)
+    try:
+        texel.validate(params)          # the flags first (exit 2), then the file (exit 1)
+    except ValueError as e:
+        raise device_error(e) from None
+    # the output file is checked BEFORE rendering: a typo in its directory
+    # costs nothing
+    out = check_output("--out", args.out, OUT_TYPES) if args.out else None
     try:
         plan = texel.make_plan(params)
         engine = args.engine or texel.default_engine()

@@ -40,6 +40,8 @@ def cmd_tank(args: argparse.Namespace) -> int:
                             args.bus_volts, args.q, args.drive)
     except TankInputError as e:
         raise CliError(e.flag, str(e)) from None
+    except (ValueError, ArithmeticError) as e:    # report() turns these into the above
+        raise CliError("", "cannot compute with these values: %s" % e) from None
     print(json.dumps(data, indent=2) if args.json else text)
     return EXIT_OK
 

@@ -3,14 +3,23 @@
 The image (texelpad.image) is compiled for the board's own .mpy format and
 architecture, read from sys.implementation at the handshake. Only files
 whose sha256 on the board differs are written; each is written beside its
-old copy and renamed over it, so an interrupted deploy leaves every module
-either old or new, never half-written. Before writing, the space the new
-files need is checked against the board's free space.
+old copy ("<file>.new") and renamed over it, so an interrupted deploy leaves
+every module either old or new, never half-written.
 
-A display that is playing is stopped first (flash writes stall the timer IRQ
-on an RP2040), the texel modules are dropped from sys.modules, and the same
-board and scene are started again from the new image: nothing the board
-played is lost, and no soft reset is needed.
+Every deploy repairs an interrupted one: its leftover "<file>.new" files are
+found by the survey, completed (renamed into place) when their hash is the
+image's, removed otherwise; files whose hash differs are rewritten.
+
+Nothing changes on the board until every check passed, while a playing
+display keeps playing: the image fits the free space, and each path can be
+written (no file where a folder must be, a probe file can be created).
+Then a playing display is stopped (flash writes stall the timer IRQ on an
+RP2040), the files are written, the texel modules are dropped from
+sys.modules, and the same board and scene are started again from the new
+image: nothing the board played is lost, and no soft reset is needed. If
+anything fails after the display was stopped, the display is started again
+with the code still in the board's memory, and DeployFailed says what the
+board holds and what to run.
 """
 from __future__ import annotations
 
@@ -19,12 +28,19 @@ from typing import Any, Callable
 
 from . import image
 from ..link import protocol
-from ..link.transport import LinkError
+from ..link.transport import LinkError, LinkTimeout
 
 # Filesystems allocate whole blocks: count each file as its size rounded up to
 # 4 KB (littlefs on an RP2040) plus one block, so "fits" means it fits.
 BLOCK = 4096
+# A file is written as "<path>.new" then renamed over "<path>".
+TMP = ".new"
+ERRNO = {2: "ENOENT", 13: "EACCES", 20: "ENOTDIR", 21: "EISDIR", 28: "ENOSPC", 30: "EROFS"}
 
+
+class DeployFailed(LinkError):
+    """A deploy that failed after it began changing the board: the text says
+    what the board holds, whether its display plays, and what to run."""
 
 
 def _blocks(n: int) -> int:
@@ -41,13 +57,14 @@ def on_board(board: Any) -> Callable[[str], str]:
 
 
 def survey(board: Any, files: list[image.ImageFile]) -> tuple[dict, list[str], int | None]:
-    """{image path: sha256 hex, '' or None}, the files under the package
-    directory (image paths), free bytes (None: unknown)."""
+    """{image path: sha256 hex, '' or None}, also for each file's leftover
+    "<path>.new" of an interrupted deploy; the files under the package
+    directory (image paths); free bytes (None: unknown)."""
     dev = on_board(board)
-    paths = [dev(f.remote) for f in files]
-    hashes, present, free = board.link.eval(
-        protocol.survey(paths, dev(image.REMOTE_PACKAGE)), timeout=60)
     back = {dev(f.remote): f.remote for f in files}
+    back.update({dev(f.remote) + TMP: f.remote + TMP for f in files})
+    hashes, present, free = board.link.eval(
+        protocol.survey(list(back), dev(image.REMOTE_PACKAGE)), timeout=60)
     lead = "" if dev("/x") == "/x" else "/"
     return ({back[p]: h for p, h in hashes.items()}, [lead + p for p in present], free)
 
@@ -58,13 +75,76 @@ def _mkdirs(board: Any, path: str) -> None:
     board.link.exec(protocol.mkdirs([lead + "/".join(parts[:i + 1]) for i in range(len(parts))]))
 
 
+def _one_line(e: BaseException) -> str:
+    """An error as one line: a board traceback as its last line."""
+    lines = [ln.strip() for ln in str(e).splitlines() if ln.strip()]
+    if len(lines) > 1 and lines[0].startswith("the board raised an error"):
+        return "the board raised " + lines[-1]
+    return " ".join(lines) or type(e).__name__
+
+
+def _errno_text(n: int) -> str:
+    return "OSError %d%s" % (n, " " + ERRNO[n] if n in ERRNO else "")
+
+
+def preflight(board: Any, todo: list[image.ImageFile], touched: list[str],
+              probe: bool = True) -> None:
+    """Raise ImageError unless the image can be written: no file where a
+    folder must be, no folder where a file must be, and each folder a file
+    goes into (or its deepest existing ancestor) takes a new file (probe=True
+    writes and removes a small file there; a dry run only looks). Runs while
+    the display still plays: a refused deploy changes nothing."""
+    dev = on_board(board)
+    root = "/" if dev("/x") == "/x" else "."
+
+    def show(p: str) -> str:
+        return p if p.startswith("/") else "/" + p
+    folders = sorted({"/".join(f.remote.split("/")[:i])
+                      for f in todo for i in range(2, f.remote.count("/") + 1)})
+    paths = [dev(p) for p in folders] + [dev(f.remote) for f in todo]
+    dirs = sorted({dev(p).rpartition("/")[0] for p in [f.remote for f in todo] + touched})
+    kinds, writable = board.link.eval(protocol.preflight(paths, dirs, root, probe), timeout=60)
+    port = board.port
+    for p in folders:
+        if kinds.get(dev(p)) == "f":
+            raise image.ImageError(
+                "cannot deploy: %s on the board is a file, where the image needs a folder; "
+                "remove it (mpremote connect %s rm :%s) and deploy again" % (p, port, p))
+    for f in todo:
+        if kinds.get(dev(f.remote)) == "d":
+            raise image.ImageError(
+                "cannot deploy: %s on the board is a folder, where the image has a file; "
+                "remove it (mpremote connect %s rm -r :%s) and deploy again"
+                % (f.remote, port, f.remote))
+    for d, err in sorted(writable.items()):
+        if err is None:
+            continue
+        where = show(d) if d else "/"
+        if err == 20:
+            raise image.ImageError(
+                "cannot deploy: %s on the board is a file, where the image needs a folder; "
+                "remove it (mpremote connect %s rm :%s) and deploy again" % (where, port, where))
+        hint = "its filesystem is read-only" if err == 30 else \
+            "its filesystem is full" if err == 28 else "the board refuses new files there"
+        if board.firmware["implementation"] == "circuitpython" and err in (30, 13):
+            hint += (" (CircuitPython: code cannot write while the CIRCUITPY drive is mounted "
+                     "by the computer; eject it, or make the filesystem writable for code in "
+                     "boot.py with storage.remount('/', readonly=False), and reset the board)")
+        raise image.ImageError("cannot deploy: the board cannot write to %s (%s): %s; nothing "
+                               "was changed" % (where, _errno_text(err), hint))
+
+
 def deploy(board: Any, source: bool = False, include_main: bool = True, dry_run: bool = False,
            progress: Callable[[str], None] | None = None,
            bar: Callable[[int, int, str], None] | None = None) -> dict[str, Any]:
     """Deploy the image to `board` (a Board from connect(port, check=False)).
     progress: one-line messages; bar(done_bytes, total_bytes, file): upload
-    progress. Returns what was done. Raises image.ImageError when the image
-    cannot go on this board (too old, other .mpy format, does not fit)."""
+    progress. Returns what was done. Raises image.ImageError, before anything
+    on the board changed, when the image cannot go on this board (too old,
+    other .mpy format, does not fit, a path cannot be written); DeployFailed
+    when it failed after it changed the board (its text says what state the
+    board is in and what to run); other LinkErrors when the board could not
+    even be surveyed."""
     say = progress or (lambda m: None)
     t_start = time.perf_counter()
     fw = board.firmware
@@ -75,64 +155,166 @@ def deploy(board: Any, source: bool = False, include_main: bool = True, dry_run:
     todo = image.plan_upload(files, {p: (h or None) for p, h in hashes.items()})
     if any(h == "" for h in hashes.values()):        # no hashlib: cannot compare, write all
         todo = list(files)
-    stale = image.plan_remove(files, present)
+    # An interrupted deploy's leftovers: "<file>.new" beside image files (found
+    # by the survey's hashes) and any ".new" under the package directory. One
+    # whose hash is the image's completes its file (renamed over it); the rest
+    # are removed (their files are rewritten when their hashes differ).
+    leftovers = sorted({p for p, h in hashes.items() if p.endswith(TMP) and h is not None}
+                       | {p for p in present if p.endswith(TMP)
+                          and p.startswith(image.REMOTE_PACKAGE + "/")})
+    complete = [f for f in todo if hashes.get(f.remote + TMP) == f.sha256]
+    done_by_rename = {f.remote for f in complete}
+    todo = [f for f in todo if f.remote not in done_by_rename]
+    drop = [p for p in leftovers if p[:-len(TMP)] not in done_by_rename]
+    stale = [p for p in image.plan_remove(files, present) if p not in leftovers]
     need = sum(_blocks(f.size) for f in todo)
     total = sum(f.size for f in todo)
+    names = [p.stem for p in image.board_files(target.port)]
     report: dict[str, Any] = {
         "target": target.name, "form": target.form, "arch": target.arch, "files": len(files),
         "image_bytes": image.image_bytes(files), "written": 0, "bytes_written": 0,
-        "removed": stale, "unchanged": len(files) - len(todo), "free_bytes": free,
-        "restarted": None, "dry_run": dry_run}
+        "removed": stale, "unchanged": len(files) - len(todo) - len(complete),
+        "free_bytes": free, "repaired": {"completed": [f.remote for f in complete],
+                                         "removed": drop},
+        "restarted": None, "playing": None, "dry_run": dry_run, "board_port": target.port,
+        "boards": names, "main": include_main}
+
+    # what the display plays (read only: it keeps playing until every check passed)
+    was = None
+    if board.image is not None:
+        try:
+            st = board.status()
+            if st.get("running"):
+                was = (st["board"], board.scene_source(), st["port"] == "virtual")
+        except LinkTimeout:
+            raise
+        except LinkError as e:
+            # an image too old or broken to answer: nothing to restart
+            say("could not read the display's state (%s); deploying without stopping it"
+                % _one_line(e))
+    report["playing"] = was[0] if was else None
+
     say("%s image: %d files, %d bytes; %d to write (%d bytes), %d unchanged, %d stale"
         % (target.name, len(files), report["image_bytes"], len(todo), total,
            report["unchanged"], len(stale)))
+    if leftovers:
+        say("an interrupted deploy left %d .new file%s: %d complete%s (renamed into place), "
+            "%d to remove" % (len(leftovers), "" if len(leftovers) == 1 else "s", len(complete),
+                              "" if len(complete) == 1 else "s", len(drop)))
     if free is not None and need > free:
         raise image.ImageError(
             "the image does not fit: writing %d files needs about %d bytes (in %d-byte blocks) "
             "and the board has %d free; delete files from the board (mpremote fs ls :) or "
             "deploy --no-main" % (len(todo), need, BLOCK, free))
-    if dry_run or (not todo and not stale):
+    if not todo and not stale and not leftovers:
+        report["seconds"] = time.perf_counter() - t_start
+        return report
+    preflight(board, todo, leftovers + stale, probe=not dry_run)
+    if dry_run:
         report["seconds"] = time.perf_counter() - t_start
         return report
 
-    # stop a playing display, remembering what it played
-    was = None
-    if board.image is not None:
-        st = board.status()
-        if st.get("running"):
-            was = (st["board"], board.scene_source(), st["port"] == "virtual")
-            say("stopping the display on %s while the image is written" % st["board"])
-            board.stop()
-
-    done = 0
     dev = on_board(board)
-    for f in todo:
-        path = dev(f.remote)
-        _mkdirs(board, path)
-        tmp = path + ".new"
+    done = 0
+    current = "the survey"
+    try:
+        # stop a playing display (flash writes stall the timer IRQ on an RP2040)
+        if was is not None:
+            current = "stopping the display"
+            say("stopping the display on %s while the image is written" % was[0])
+            board.stop()
+        for f in complete:
+            current = f.remote
+            board.link.exec(protocol.replace_file(dev(f.remote), dev(f.remote) + TMP))
+        if drop:
+            current = "removing leftover .new files"
+            board.link.exec(protocol.remove_files([dev(p) for p in drop]))
+        for f in todo:
+            current = f.remote
+            path = dev(f.remote)
+            _mkdirs(board, path)
+            tmp = path + TMP
 
-        def step(n: int, f: image.ImageFile = f) -> None:
-            if bar:
-                bar(done + n, total, f.remote)
-        board.link.write_file(tmp, f.data, progress=step)
-        board.link.exec(protocol.replace_file(path, tmp))
-        done += f.size
-        report["written"] += 1
-        report["bytes_written"] += f.size
-    for p in stale:
-        board.link.exec(protocol.remove_file(dev(p)))
-    # the new image: check what the board now holds
-    hashes, _, _ = survey(board, files)
-    bad = [f.remote for f in files if hashes.get(f.remote) not in (f.sha256, "")]
-    if bad:
-        raise LinkError("deploy: %d files did not arrive intact (%s); run deploy again"
-                        % (len(bad), ", ".join(bad[:3])))
-    board.link.exec(protocol.PURGE)
+            def step(n: int, f: image.ImageFile = f) -> None:
+                if bar:
+                    bar(done + n, total, f.remote)
+            board.link.write_file(tmp, f.data, progress=step)
+            board.link.exec(protocol.replace_file(path, tmp))
+            done += f.size
+            report["written"] += 1
+            report["bytes_written"] += f.size
+        if stale:
+            current = "removing stale files"
+            board.link.exec(protocol.remove_files([dev(p) for p in stale]))
+        # the new image: check what the board now holds
+        current = "checking the new image"
+        hashes, present, _ = survey(board, files)
+        bad = [f.remote for f in files if hashes.get(f.remote) not in (f.sha256, "")]
+        bad += [p for p, h in hashes.items() if p.endswith(TMP) and h is not None]
+        if bad:
+            raise LinkError("%d files did not arrive intact (%s)" % (len(bad), ", ".join(bad[:3])))
+        board.link.exec(protocol.PURGE)
+    except BaseException as e:
+        state = _recover(board, was, report, len(todo) + len(complete))
+        text = "deploy to %s failed at %s: %s. %s" % (board.port, current, _one_line(e), state)
+        if not isinstance(e, Exception):            # Ctrl-C: say it, then let it end the run
+            say(text)
+            raise
+        raise DeployFailed(text) from None
+
     if was is not None:
-        name, scene, virtual = was
-        say("starting %s again with the new image and the scene it played" % name)
-        # a fresh import on the board: the modules were dropped above
-        board.link.exec(protocol.restart(name, scene, virtual), timeout=60)
-        report["restarted"] = name
+        report["restarted"] = _restart(board, was, say)
+    report["playing"] = report["restarted"]
     report["seconds"] = time.perf_counter() - t_start
     return report
+
+
+def _recover(board: Any, was: tuple | None, report: dict[str, Any], planned: int) -> str:
+    """After a failure mid-deploy: start the display again if it played, and
+    say what state the board is in and what to run. No PURGE: the modules
+    still in the board's memory are the code that played it (the files on
+    the board may be a mix of old and new); after a reset they are imported
+    from the files, which are each whole."""
+    port = board.port
+    files = ("The board's files are each whole, old or new (%d of %d written, none "
+             "half-written): run texelpad deploy --port %s again to finish; it repairs the rest."
+             % (report["written"], planned, port))
+    if was is None:
+        return "The display was not playing. " + files
+    name, scene, virtual = was
+    try:
+        board.link.resync()             # drop a request cut off half-way (Ctrl-C, raw REPL)
+        board.link.exec(protocol.restart(name, scene, virtual),
+                        timeout=max(board.link.timeout, 30))
+    except Exception as e:
+        return ("The display is OFF: it played %s, was stopped for the deploy, and starting it "
+                "again failed (%s). %s Then start it: texelpad demo --port %s --board %s."
+                % (name, _one_line(e), files, port, name))
+    return "The display plays again (%s, the scene it played). %s" % (name, files)
+
+
+def _restart(board: Any, was: tuple, say: Callable[[str], None]) -> str:
+    """Start the display again on the new image with the scene it played (or,
+    if the new image refuses that scene, its default scene)."""
+    name, scene, virtual = was
+    say("starting %s again with the new image and the scene it played" % name)
+    try:
+        # a fresh import on the board: the modules were dropped (PURGE)
+        board.link.exec(protocol.restart(name, scene, virtual), timeout=max(board.link.timeout, 60))
+        return name
+    except LinkTimeout as e:
+        err = e
+    except LinkError as e:
+        say("the new image did not start the scene it played (%s); starting %s with its "
+            "default scene" % (_one_line(e), name))
+        try:
+            board.link.exec(protocol.PURGE)
+            board.link.exec(protocol.restart(name, None, virtual),
+                            timeout=max(board.link.timeout, 60))
+            return name
+        except LinkError as e2:
+            err = e2
+    raise DeployFailed(
+        "deployed to %s (the new image is whole and checked), but starting the display again "
+        "failed: %s. The display is OFF (it played %s): start it with texelpad demo --port %s "
+        "--board %s" % (board.port, _one_line(err), name, board.port, name))

@@ -8,6 +8,11 @@ Every request is validated on the host first with the same `texel` code the
 board runs (a clear error before anything is sent), then again on the board,
 which stays the authority: a refused request raises DeviceError with the
 board's own words and the board keeps playing what it played.
+
+numpy numbers and arrays are welcome (`np.linspace` sweeps, a samples
+region's values): the host converts them exactly to the Python numbers and
+lists they hold before checking (protocol.plain); NaN and inf are refused as
+plain floats are, and np.bool_ as True is (a bool is not a number).
 """
 from __future__ import annotations
 
@@ -55,6 +60,8 @@ class Board:
                          "platform": platform}
         self.image = None if ver[0] == "missing" else {"protocol": ver[0], "texel": ver[1]}
         self.lost = 0           # telemetry samples lost during the last monitor()
+        self.received = 0       # telemetry samples read during the last monitor()
+        self.divider = 0        # refreshes per telemetry sample in the last monitor()
 
     # context manager
     def __enter__(self) -> "Board":
@@ -78,10 +85,11 @@ class Board:
               **opts: Any) -> dict[str, Any]:
         """texel.app.start(board_name, scene, **opts): stops what plays and starts
         again (board name = a file in boards/ on the device)."""
+        board_name = protocol.plain(board_name)
         if not isinstance(board_name, str):
-            raise ValueError("board name: %r is not a string" % (board_name,))
+            raise ValueError("board name: %s is not a string" % type(board_name).__name__)
         if scene is not None:
-            _host_check(scene, None)
+            scene = _host_check(scene, None)
         for k in opts:
             if not isinstance(k, str) or not k.isidentifier():
                 raise ValueError("start(): option %r is not a name" % (k,))
@@ -95,7 +103,7 @@ class Board:
         return st
 
     def _push(self, scene: dict[str, Any], st: dict[str, Any]) -> dict[str, Any]:
-        _host_check(scene, st["display"])
+        scene = _host_check(scene, st["display"])
         return self._app("push", scene, timeout=max(self.link.timeout, 30))
 
     def push(self, scene: dict[str, Any]) -> dict[str, Any]:
@@ -128,22 +136,37 @@ class Board:
         return [tuple(s) for s in samples], lost
 
     def monitor(self, seconds: float | None = None, rate_hz: int = 125,
-                poll_s: float = 0.05) -> Iterator[tuple[int, int, int]]:
+                poll_s: float | None = None) -> Iterator[tuple[int, int, int]]:
         """Yield (t_us, position, amplitude) samples taken by the board's
         refresh at rate_hz, for `seconds` (None: until the caller stops);
-        the stream is turned off again at the end. self.lost counts the
-        samples the board's ring lapped before they were read."""
-        self.stream(rate_hz)
+        the stream is turned off again at the end. The board samples every
+        `self.divider`-th refresh (its refresh rate // rate_hz, at least 1)
+        into a 256-sample ring; the ring is read every `poll_s` seconds
+        (default: often enough to read it a quarter full, back to back at
+        high rates). self.lost counts the samples the ring lapped before
+        they were read, self.received the samples yielded."""
         self.lost = 0
+        self.received = 0
+        self.divider = self.stream(rate_hz)
+        if poll_s is None:
+            # the ring (TELEMETRY_SLOTS) fills in 256 / rate s; a read every
+            # quarter of that, capped at 50 ms, leaves room for a slow round trip
+            poll_s = min(0.05, 64.0 / max(1, rate_hz))
         t_end = None if seconds is None else time.monotonic() + seconds
         try:
             while True:
+                t_poll = time.monotonic()
                 samples, lost = self.telemetry()
                 self.lost += lost
+                self.received += len(samples)
                 yield from samples
-                if t_end is not None and time.monotonic() >= t_end:
+                now = time.monotonic()
+                if t_end is not None and now >= t_end:
                     break
-                time.sleep(poll_s)
+                # sleep only what is left of the poll period after the round trip
+                wait = poll_s - (now - t_poll)
+                if wait > 0:
+                    time.sleep(wait)
         finally:
             try:
                 self.stream(0)
@@ -168,6 +191,9 @@ class Board:
             raise NoUlab("the ulab engine needs ulab, and %s's firmware has none (stock "
                          "MicroPython has no ulab: use a ulab build such as Pimoroni's, or "
                          "CircuitPython; or engine='int')" % self.port)
+        params = protocol.plain(params)             # numpy numbers -> plain ones, checked
+        engine = protocol.plain(engine)
+        literal(params)
         texel.validate(params)                      # the board's own check, here first
         code = protocol.render_u16(params, engine)
         kind, value = self.link.eval(code, timeout=max(self.link.timeout, 60))
@@ -176,10 +202,16 @@ class Board:
         return np.frombuffer(base64.b64decode(value), dtype="<u2").copy()
 
 
-def _host_check(scene: Any, display: dict[str, Any] | None) -> None:
-    """The board's own validation, run here first; plus the literal check."""
+def _host_check(scene: Any, display: dict[str, Any] | None) -> Any:
+    """The literal check, then the board's own validation, run here first;
+    returns the scene as plain data to send (numpy numbers and arrays as the
+    Python numbers and lists they hold: protocol.plain). The literal check
+    comes first: it bounds the nesting depth and the integers before the
+    board's validation walks the scene."""
+    scene = protocol.plain(scene)
     literal(scene)
     texel.runtime.scene.validate(scene, display or {"positions": 19200, "dx_um": 5.3})
+    return scene
 
 
 def connect(port: str | None = None, timeout: float = 10.0, check: bool = True) -> Board:

@@ -9,6 +9,7 @@ handshake); the requests here import texel modules and call them.
 from __future__ import annotations
 
 import math
+import sys
 from typing import Any, Sequence
 
 import texel.app
@@ -28,55 +29,140 @@ class LiteralError(ValueError):
 
 # --- literals -----------------------------------------------------------------
 
+# How deeply a value may nest (a scene needs 5 levels: the scene, its regions,
+# a region, its texture, a samples region's values). Bounds the host's own
+# walk (no RecursionError on a hostile scene: the board's validation,
+# texel.runtime.scene.validate, runs after this check) and what a board's
+# parser must take apart on its small stack.
+MAX_DEPTH = 16
+# Integers cross the link only up to 64 bits (signed or unsigned): the texel
+# ranges are far inside, and a 5,000-digit integer is a typo, not a seed
+# (Python 3.11's int->str limit would make its repr() fail anyway).
+INT_MIN, INT_MAX = -(1 << 63), (1 << 64) - 1
+
+
 def literal(obj: Any, limit: int = MAX_CALL_BYTES) -> str:
     """`repr()` of plain data (dict with str keys, list, tuple, str, int,
     float, bool, None), after checking that it is exactly that: non-finite
-    floats, other types (objects whose repr could be code), cycles and
-    oversized values raise LiteralError naming where in the value."""
-    _check(obj, "", set())
-    text = repr(obj)
+    floats, other types (objects whose repr could be code), cycles, values
+    nested deeper than MAX_DEPTH, integers beyond 64 bits and oversized
+    values raise LiteralError naming where in the value. numpy scalars and
+    arrays are sent as the plain numbers and lists they hold (plain())."""
+    text = repr(plain(obj))
     if len(text) > limit:
         raise LiteralError("value is %d bytes as a literal, more than the link's %d-byte limit"
                            % (len(text), limit))
     return text
 
 
-def _check(v: Any, path: str, seen: set[int]) -> None:
+def plain(obj: Any) -> Any:
+    """obj as plain data, checked as literal() checks it: a copy in which numpy
+    numbers and arrays are the Python numbers and lists they hold, exactly
+    (np.float32(0.1) -> 0.10000000149011612; np.int64 -> int; np.bool_ ->
+    bool, which is not a number: the board refuses it where a number goes,
+    as it refuses True). The input is not changed. The host converts; device
+    code never sees numpy."""
+    return _plain(obj, "", set(), 0, sys.modules.get("numpy"))
+
+
+def _digits(n: int) -> str:
+    """How many decimal digits abs(n) has, without str(n) (refused beyond
+    4,300 digits since Python 3.11)."""
+    n = abs(n)
+    d = int(math.log10(n)) + 1
+    if d < 100_000 and 10 ** (d - 1) > n:       # log10 rounded up (10**30 - 1)
+        d -= 1
+    return format(d, ",")
+
+
+def _plain(v: Any, path: str, seen: set[int], depth: int, np: Any) -> Any:
     # path: where in the value, as the device names it (regions[0].texture.seed)
     t = type(v)
     where = path or "value"
-    if v is None or t in (bool, int, str):
-        return
+    if v is None or t is bool or t is str:
+        return v
+    if t is int:
+        if not INT_MIN <= v <= INT_MAX:
+            raise LiteralError("%s: an integer of about %s digits is too large to send (the link "
+                               "carries integers of at most 64 bits)" % (where, _digits(v)))
+        return v
     if t is float:
         if not math.isfinite(v):
             raise LiteralError("%s: %r is not a finite number" % (where, v))
-        return
+        return v
+    if np is not None and isinstance(v, (np.generic, np.ndarray)):
+        conv = _from_numpy(v, where, np)
+        if conv is not v:
+            return _plain(conv, path, seen, depth, np)
     if t in (dict, list, tuple):
+        if depth >= MAX_DEPTH:
+            raise LiteralError("%s: nested more than %d levels deep (a scene needs 5)"
+                               % (where, MAX_DEPTH))
         if id(v) in seen:
             raise LiteralError("%s: the value contains itself" % where)
         seen.add(id(v))
         if t is dict:
+            out: Any = {}
             for k, x in v.items():
                 if type(k) is not str:
-                    raise LiteralError("%s: key %r is not a string" % (where, k))
-                _check(x, "%s.%s" % (path, k) if path else k, seen)
+                    if np is not None and isinstance(k, np.str_):
+                        k = str(k)
+                    else:
+                        raise LiteralError("%s: key %s is not a string" % (where, _show_key(k)))
+                out[k] = _plain(x, "%s.%s" % (path, k) if path else k, seen, depth + 1, np)
         else:
-            for i, x in enumerate(v):
-                _check(x, "%s[%d]" % (path or "value", i), seen)
+            items = [_plain(x, "%s[%d]" % (where, i), seen, depth + 1, np)
+                     for i, x in enumerate(v)]
+            out = items if t is list else tuple(items)
         seen.discard(id(v))
-        return
+        return out
     raise LiteralError("%s: %s values cannot be sent to the board (plain numbers, strings, "
                        "lists and dicts only)" % (where, t.__name__))
+
+
+def _show_key(k: Any) -> str:
+    if type(k) is int and not INT_MIN <= k <= INT_MAX:
+        return "(an integer of about %s digits)" % _digits(k)
+    try:
+        text = repr(k)
+    except Exception:                   # a repr that fails is no reason for a traceback
+        text = "of type %s" % type(k).__name__
+    return text if len(text) <= 40 else text[:40] + "..."
+
+
+def _from_numpy(v: Any, where: str, np: Any) -> Any:
+    """A numpy scalar or array as the Python value it holds (exactly), or v
+    itself when it holds no plain data (refused by the caller, by type)."""
+    if isinstance(v, np.ndarray):
+        if v.dtype.kind in "biufUO":           # bool, ints, floats, str, objects
+            return v.tolist()                 # 0-d: the scalar; elements checked again
+        return v
+    if isinstance(v, np.bool_):
+        return bool(v)
+    if isinstance(v, np.integer):
+        return int(v)
+    if isinstance(v, np.floating):
+        f = float(v)
+        if f == f and f != v:                 # long double: float64 cannot hold it
+            raise LiteralError("%s: %s %s cannot be sent exactly (the link carries float64)"
+                               % (where, type(v).__name__, np.format_float_positional(v)))
+        return f
+    if isinstance(v, np.str_):
+        return str(v)
+    return v
 
 
 # --- the handshake and calls into texel.app --------------------------------------------
 
 # The board's protocol and image version, firmware and .mpy format (one line).
+# An image that fails to import for any reason (missing, or broken: a corrupt
+# .mpy raises ValueError) reports 'missing', so deploy can still connect and
+# repair it.
 HELLO = """import sys
 try:
  import texel, texel.app as _a
  _v = (_a.PROTOCOL, texel.__version__)
-except ImportError as _e:
+except Exception as _e:
  _v = ('missing', str(_e))
 _i = sys.implementation
 print(repr((_v, _i.name, tuple(_i.version[:3]), getattr(_i, '_mpy', None), sys.platform)))
@@ -103,7 +189,7 @@ def render_u16(params: dict[str, Any], engine: str | None) -> str:
 # --- deploy: the board's files ---------------------------------------------------------
 
 # What the board reports for the image's paths: sha256 hex ('' when it has
-# no hashlib, None when missing), the files under the package directory, and
+# no hashlib, None when missing or unreadable, e.g. a folder in its place), the files under the package directory, and
 # free bytes - all files in one round trip (mpremote's fs_hashfile takes three
 # round trips per file; an unchanged 30-file image is checked in ~0.1 s).
 _SURVEY_CODE = """import os
@@ -117,18 +203,21 @@ def _h(p):
   f = open(p, 'rb')
  except OSError:
   return None
- if _H is None:
+ try:
+  if _H is None:
+   return ''
+  h = _H()
+  b = bytearray(512)
+  while True:
+   n = f.readinto(b)
+   if not n:
+    break
+   h.update(b if n == 512 else b[:n])
+  return binascii.hexlify(h.digest()).decode()
+ except OSError:
+  return None
+ finally:
   f.close()
-  return ''
- h = _H()
- b = bytearray(512)
- while True:
-  n = f.readinto(b)
-  if not n:
-   break
-  h.update(b if n == 512 else b[:n])
- f.close()
- return binascii.hexlify(h.digest()).decode()
 def _ls(d):
  out = []
  try:
@@ -171,13 +260,68 @@ def mkdirs(dirs: Sequence[str]) -> str:
 
 
 def replace_file(path: str, tmp: str) -> str:
-    """Rename tmp over path (a file written beside its old copy)."""
+    """Rename tmp over path (a file written beside its old copy). The old copy
+    is removed first (FAT cannot rename over a file): an interruption between
+    the two leaves path missing and tmp whole, which the next deploy's survey
+    finds (tmp's hash is the image's) and completes."""
     return ("import os\ntry:\n os.remove(%s)\nexcept OSError:\n pass\nos.rename(%s, %s)"
             % (literal(path), literal(tmp), literal(path)))
 
 
+def remove_files(paths: Sequence[str]) -> str:
+    """Remove each file; one already gone is fine (ENOENT), any other error
+    is raised."""
+    return ("import os\nfor _p in %s:\n try:\n  os.remove(_p)\n except OSError as _e:\n"
+            "  if _e.args[0] != 2:\n   raise\n_p = None" % literal(list(paths)))
+
+
 def remove_file(path: str) -> str:
-    return "import os\nos.remove(%s)" % literal(path)
+    return remove_files([path])
+
+
+# Before the display is stopped: can the image be written? For each path the
+# kind of what is there ('d' folder, 'f' file, None nothing), and for each
+# folder a file will be written into, the errno of creating and removing a
+# probe file in it - or in its deepest existing ancestor, where deploy's
+# mkdirs will start (None: writable).
+_PREFLIGHT_CODE = """import os
+def _k(p):
+ try:
+  return 'd' if os.stat(p or %(root)s)[0] & 0x4000 else 'f'
+ except OSError:
+  return None
+_r = {p: _k(p) for p in %(paths)s}
+_w = {}
+for _d in %(dirs)s:
+ while _d and _k(_d) is None:
+  _d = _d.rpartition('/')[0]
+ if _d in _w:
+  continue
+ if _k(_d) != 'd':
+  _w[_d] = 20
+  continue
+ _t = (_d or %(root)s.rstrip('/')) + '/.texelpad-probe'
+ if %(probe)s:
+  try:
+   open(_t, 'w').close()
+   os.remove(_t)
+   _w[_d] = None
+  except OSError as _e:
+   _w[_d] = _e.args[0]
+ else:
+  _w[_d] = None
+print(repr((_r, _w)))
+_k = _r = _w = _d = _t = None
+"""
+
+
+def preflight(paths: Sequence[str], dirs: Sequence[str], root: str, probe: bool = True) -> str:
+    """What is at `paths`, and whether each of `dirs` (or its deepest
+    existing ancestor) takes a new file; root: the filesystem's root as the
+    board names it ('/' on a board, '.' on the unix port, whose paths are
+    relative). probe=False only looks (a dry run writes nothing)."""
+    return _PREFLIGHT_CODE % {"paths": literal(list(paths)), "dirs": literal(list(dirs)),
+                              "root": literal(root), "probe": literal(bool(probe))}
 
 
 def restart(board_name: str, scene: Any, realtime: bool) -> str:

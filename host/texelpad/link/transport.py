@@ -9,15 +9,26 @@ texture playing in the board's timer IRQ keeps playing while the host talks.
 
 Every failure is a `LinkError` whose text says what happened and what to
 do; `DeviceError` carries the device's own ValueError text unchanged.
+
+Every read has a deadline. mpremote's `read_until` checks its timeouts only
+while no byte arrives, so a port that never stops talking (a board running a
+program that prints, a GPS module, a modem) would keep the host reading
+forever. `_DeadlineSerial` stands between mpremote and the serial port: a
+read (or an `in_waiting` poll) after the current operation's deadline raises
+TransportError, whatever mpremote's loop was doing. The raw REPL is entered
+by this module's own `_Transport.enter_raw_repl`, with a bounded flush and no
+printing of what the port sent.
 """
 from __future__ import annotations
 
 import ast
-from typing import Any
+import time
+from contextlib import contextmanager
+from typing import Any, Iterator
 
 # mpremote is pinned (pyproject): its SerialTransport is the raw-REPL /
 # raw-paste implementation used here.
-from mpremote.transport import TransportError
+from mpremote.transport import TransportError, TransportExecError
 from mpremote.transport_serial import SerialTransport
 
 import serial
@@ -99,6 +110,148 @@ def _probe_port(port: str) -> None:
     s.close()
 
 
+# --- deadlines -------------------------------------------------------------------
+
+class _DeadlineSerial:
+    """A serial port whose reads end at a deadline: read(), read_until-style
+    polls (in_waiting / inWaiting) after `deadline` (time.monotonic()) raise
+    TransportError naming what the port kept sending. Everything else is the
+    port's own (attributes are read and set through to it)."""
+
+    _own = ("_port", "deadline", "seconds", "tail")
+
+    def __init__(self, port: Any):
+        object.__setattr__(self, "_port", port)
+        object.__setattr__(self, "deadline", None)     # None: no operation running
+        object.__setattr__(self, "seconds", 0.0)       # the running operation's limit
+        object.__setattr__(self, "tail", b"")          # the last bytes read (for the error)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._port, name)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name in self._own:
+            object.__setattr__(self, name, value)
+        else:
+            setattr(self._port, name, value)
+
+    def _check(self) -> None:
+        if self.deadline is not None and time.monotonic() >= self.deadline:
+            raise TransportError(_late(self.seconds, self.tail))
+
+    def read(self, size: int = 1) -> bytes:
+        self._check()
+        data = self._port.read(size)
+        if data:
+            object.__setattr__(self, "tail", (self.tail + data)[-48:])
+        return data
+
+    def inWaiting(self) -> int:              # mpremote's spelling
+        self._check()
+        return self._port.in_waiting
+
+    @property
+    def in_waiting(self) -> int:
+        self._check()
+        return self._port.in_waiting
+
+
+def _late(seconds: float, tail: bytes) -> str:
+    """'no answer within 2 s; the port kept sending ...': one line."""
+    text = "no answer within %g s" % seconds
+    shown = " ".join(tail.decode("utf-8", "replace").split())[-40:]
+    if shown:
+        text += "; the port kept sending other text (last: %r)" % shown
+    return text
+
+
+def _why(e: BaseException) -> str:
+    """An exception's text on one line."""
+    return " ".join(str(e).split()) or type(e).__name__
+
+
+# The slowest link a request's deadline allows for sending its code: below a
+# 115,200-baud UART's ~11 KB/s (USB CDC boards are far faster).
+MIN_BYTES_PER_S = 5000
+
+
+class _Transport(SerialTransport):
+    """mpremote's SerialTransport with a deadline on every read: each
+    exec_raw (so also each call fs_writefile makes) and the raw-REPL entry
+    run under one, and reads past it raise TransportError."""
+
+    RAW_PROMPT = b"raw REPL; CTRL-B to exit\r\n"
+
+    def __init__(self, port: str, baudrate: int, timeout: float):
+        # pyserial's per-read limit: mpremote reads a pty with blocking
+        # read(1) calls, so a silent board still returns to the deadline check.
+        super().__init__(port, baudrate=baudrate, exclusive=True, timeout=min(1.0, timeout))
+        self.op_timeout = timeout
+        # a port that stops reading (a stuck USB device) must not block a write forever
+        self.serial.write_timeout = max(timeout, 1.0)
+        self.serial = _DeadlineSerial(self.serial)
+
+    @contextmanager
+    def deadline(self, seconds: float, shown: float | None = None) -> Iterator[None]:
+        """Reads in the block end `seconds` from now (or at an earlier
+        deadline already running); the error names `shown` seconds (the
+        timeout the caller asked for), default `seconds`."""
+        s = self.serial
+        old = (s.deadline, s.seconds)
+        end = time.monotonic() + seconds
+        if old[0] is None or end < old[0]:
+            s.deadline, s.seconds = end, seconds if shown is None else shown
+        s.tail = b""
+        try:
+            yield
+        finally:
+            s.deadline, s.seconds = old
+
+    def enter_raw_repl(self, soft_reset: bool = False, timeout_overall: float = 10) -> None:
+        """Ctrl-C, then Ctrl-A and wait for the raw REPL banner, all within
+        timeout_overall: what the port sends meanwhile is read and dropped
+        (mpremote's own flush loop never ends on a port that keeps talking,
+        and prints what it read on failure). Never a soft reset."""
+        if soft_reset:
+            raise ValueError("texelpad never soft-resets a board")
+        with self.deadline(timeout_overall):
+            self.serial.write(b"\r\x03")         # Ctrl-C: interrupt a running program
+            n = self.serial.in_waiting
+            while n > 0:                          # flush (bounded by the deadline)
+                self.serial.read(n)
+                n = self.serial.in_waiting
+            self.serial.write(b"\r\x01")         # Ctrl-A: the raw REPL
+            # Output still in flight (a program that printed until Ctrl-C) is
+            # read in bulk, but never the last len(banner) + 1 bytes waiting:
+            # the banner and its ">" are the last the board sends, and the ">"
+            # is left for exec_raw to read, as mpremote does.
+            keep = len(self.RAW_PROMPT) + 1
+            data = b""
+            while not data.endswith(self.RAW_PROMPT):
+                n = self.serial.in_waiting        # raises at the deadline
+                new = self.serial.read(n - keep if n > keep else 1)
+                if new:
+                    data = (data + new)[-len(self.RAW_PROMPT):]
+        self.in_raw_repl = True
+
+    def read_until(self, min_num_bytes: int, ending: bytes, timeout: float | None = 10,
+                   data_consumer: Any = None, timeout_overall: float | None = None) -> bytes:
+        if timeout_overall is None:
+            return super().read_until(min_num_bytes, ending, timeout, data_consumer)
+        with self.deadline(timeout_overall):
+            return super().read_until(min_num_bytes, ending, timeout, data_consumer,
+                                      timeout_overall)
+
+    def exec_raw(self, command: bytes, timeout: float | None = None,
+                 data_consumer: Any = None) -> tuple[bytes, bytes]:
+        """Send and run `command`; the whole exchange ends within `timeout`
+        (default: the link's) plus the time to send the command at
+        MIN_BYTES_PER_S (a 512 KB scene over a 115,200-baud UART)."""
+        t = self.op_timeout if timeout is None else timeout
+        with self.deadline(t + len(command) / MIN_BYTES_PER_S, t):
+            return super().exec_raw(command, timeout=t, data_consumer=data_consumer)
+
+
 # --- the link -----------------------------------------------------------------
 
 class Link:
@@ -112,10 +265,9 @@ class Link:
         self.received = 0       # bytes of output received
         _probe_port(port)
         try:
-            # timeout: pyserial's per-read limit. mpremote reads a pty with
-            # blocking read(1) calls, so without one a silent board would hang
-            # the host forever instead of ending in LinkTimeout.
-            self.t = SerialTransport(port, baudrate=baudrate, exclusive=True, timeout=1.0)
+            # every read under a deadline (_Transport): a silent board and one
+            # that never stops talking both end in a LinkError
+            self.t = _Transport(port, baudrate=baudrate, timeout=timeout)
         except TransportError as e:
             raise NoBoard("cannot open %s: %s" % (port, e)) from None
         try:
@@ -125,7 +277,7 @@ class Link:
             self._close_port()
             raise NotTexelpad("%s does not answer as a MicroPython board (no raw REPL within "
                               "%g s: %s). Is it a MicroPython/CircuitPython board, and is no "
-                              "program holding its REPL?" % (port, timeout, e)) from None
+                              "program holding its REPL?" % (port, timeout, _why(e))) from None
 
     # context manager
     def __enter__(self) -> "Link":
@@ -150,6 +302,20 @@ class Link:
             pass
         self._close_port()
         self.t = None
+
+    def resync(self, timeout: float | None = None) -> None:
+        """Interrupt what the board runs (Ctrl-C) and enter the raw REPL again,
+        without a reset: a clean state after a request was cut off half-way
+        (a timeout, Ctrl-C on the host). LinkTimeout when the board does not
+        answer within the timeout."""
+        if self.t is None:
+            raise LinkError("the link to %s is closed" % self.port)
+        try:
+            self.t.enter_raw_repl(soft_reset=False,
+                                  timeout_overall=self.timeout if timeout is None else timeout)
+        except (TransportError, serial.SerialException, OSError) as e:
+            raise LinkTimeout("%s does not answer (%s); the board may have reset or been "
+                              "unplugged" % (self.port, _why(e))) from None
 
     def exec(self, code: str, timeout: float | None = None) -> str:
         """Run host-written code on the board; return what it printed.
@@ -198,6 +364,10 @@ class Link:
         try:
             self.t.fs_writefile(path, bytes(data), chunk_size=chunk, progress_callback=(
                 (lambda done, total: progress(done)) if progress else None))
+        except TransportExecError as e:           # the board's own error (after a reset, ...)
+            lines = [ln.strip() for ln in e.error_output.splitlines() if ln.strip()]
+            raise LinkError("the board raised an error while writing %s: %s"
+                            % (path, lines[-1] if lines else "(no text)")) from None
         except TransportError as e:
             raise LinkTimeout("%s stopped answering while writing %s (%s)"
                               % (self.port, path, e)) from None

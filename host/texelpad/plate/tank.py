@@ -18,7 +18,9 @@ tank is tuned to it (hardware/README.md).
     nearest_e12(x)                      the nearest standard (E12) value
 
 All values in SI units (H, F, Hz, V, A, ohm). Non-positive or non-finite
-inputs raise ValueError naming the argument.
+inputs raise ValueError naming the argument; so do inputs so extreme that a
+result leaves the range of floating point numbers (1e-300 H with 1e-300 F:
+the frequency would be 1.6e299 Hz, and L*C underflows to 0 on the way).
 """
 from __future__ import annotations
 
@@ -49,25 +51,46 @@ def _positive(name: str, value: float) -> float:
     return v
 
 
+def _result(name: str, value: float) -> float:
+    """A computed value that must be a positive finite float: the inputs were
+    too extreme when it is not (overflow to inf, underflow to 0)."""
+    if not 0.0 < value < math.inf:
+        raise ValueError("%s: the result is beyond floating point range (%r): the inputs are "
+                         "too extreme (check their units: 390u for 390 uH)" % (name, value))
+    return value
+
+
+def _inv_w2(x: float, frequency_hz: float) -> float:
+    """1 / ((2*pi*f)^2 * x); where the direct product over- or underflows,
+    from logarithms (the result may still be out of range: _result)."""
+    w = TWO_PI * frequency_hz
+    d = w * w * x
+    if 0.0 < d < math.inf:
+        return 1.0 / d
+    lg = -2.0 * (math.log(TWO_PI) + math.log(frequency_hz)) - math.log(x)
+    return math.inf if lg > 709.0 else math.exp(lg)
+
+
 def resonant_frequency(inductance_h: float, capacitance_f: float) -> float:
     """f = 1 / (2*pi*sqrt(L*C)), Hz."""
     L = _positive("inductance_h", inductance_h)
     C = _positive("capacitance_f", capacitance_f)
-    return 1.0 / (TWO_PI * math.sqrt(L * C))
+    # sqrt(L)*sqrt(C): L*C itself can underflow to 0 (1e-300 * 1e-300)
+    return _result("frequency_hz", 1.0 / (TWO_PI * math.sqrt(L) * math.sqrt(C)))
 
 
 def inductance_for(capacitance_f: float, frequency_hz: float) -> float:
     """L = 1 / ((2*pi*f)^2 * C), H."""
     C = _positive("capacitance_f", capacitance_f)
-    w = TWO_PI * _positive("frequency_hz", frequency_hz)
-    return 1.0 / (w * w * C)
+    f = _positive("frequency_hz", frequency_hz)
+    return _result("inductance_h", _inv_w2(C, f))
 
 
 def capacitance_for(inductance_h: float, frequency_hz: float) -> float:
     """C = 1 / ((2*pi*f)^2 * L), F."""
     L = _positive("inductance_h", inductance_h)
-    w = TWO_PI * _positive("frequency_hz", frequency_hz)
-    return 1.0 / (w * w * L)
+    f = _positive("frequency_hz", frequency_hz)
+    return _result("capacitance_f", _inv_w2(L, f))
 
 
 @dataclass(frozen=True)
@@ -81,7 +104,9 @@ class Tank:
     def impedance_ohm(self) -> float:
         """Characteristic impedance sqrt(L/C) = the reactance of L (and of C)
         at resonance: tank current amplitude = capacitor voltage / this."""
-        return math.sqrt(self.inductance_h / self.capacitance_f)
+        # sqrt(L)/sqrt(C): L/C itself can overflow (1e300 / 1e-300)
+        return _result("impedance_ohm",
+                       math.sqrt(self.inductance_h) / math.sqrt(self.capacitance_f))
 
     def as_dict(self) -> dict[str, float]:
         d = asdict(self)
@@ -152,8 +177,8 @@ def tuning_capacitor(inductance_h: float, piezo_capacitance_f: float,
     if abs(need - Cp) <= MATCH_RTOL * Cp:
         return Tuning("none", None, L, Cp, f, Cp, 1.0)
     if need > Cp:
-        return Tuning("parallel", need - Cp, L, Cp, f, need, 1.0)
-    cs = Cp * need / (Cp - need)
+        return Tuning("parallel", _result("capacitance_f", need - Cp), L, Cp, f, need, 1.0)
+    cs = _result("capacitance_f", Cp * (need / (Cp - need)))
     # series capacitors share the tank's capacitor voltage inversely to C
     return Tuning("series", cs, L, Cp, f, need, cs / (cs + Cp))
 
@@ -175,7 +200,7 @@ def piezo_voltage(bus_volts: float, q: float, duty: float = 0.5, drive: str = "s
     resonance: Q times the fundamental. Q (= f0 / -3 dB bandwidth of the
     loaded plate) must be measured per build; this is for choosing voltage
     ratings and for safety, not a prediction of the plate's amplitude."""
-    return _positive("q", q) * fundamental_amplitude(bus_volts, duty, drive)
+    return _result("piezo_volts", _positive("q", q) * fundamental_amplitude(bus_volts, duty, drive))
 
 
 def nearest_e12(value: float, direction: int = 0) -> float:
@@ -186,14 +211,21 @@ def nearest_e12(value: float, direction: int = 0) -> float:
         raise ValueError("direction: must be -1, 0 or 1, got %r" % (direction,))
     decade = math.floor(math.log10(v))
     # candidates, rounded to 2 significant digits so that 3.9e-4 is 3.9e-4
-    cands = sorted(float("%.2g" % (m * 10.0 ** d)) for d in (decade - 1, decade, decade + 1)
-                   for m in E12)
+    # ("%.2g" % m + "e%d" % d: no 10.0 ** d, which overflows at the ends of
+    # the float range); those beyond the range (0, inf) are left out
+    cands = sorted(c for c in (float("%.2ge%d" % (m, d)) for d in (decade - 1, decade, decade + 1)
+                               for m in E12) if 0.0 < c < math.inf)
     tol = v * 1e-12                      # v itself counts as <= and >= v
+    pick = [c for c in cands if c <= v + tol] if direction < 0 else \
+        [c for c in cands if c >= v - tol] if direction > 0 else cands
+    if not pick:
+        raise ValueError("value: %r has no E12 value %s it within floating point range"
+                         % (v, "below" if direction < 0 else "above"))
     if direction < 0:
-        return max(c for c in cands if c <= v + tol)
+        return max(pick)
     if direction > 0:
-        return min(c for c in cands if c >= v - tol)
-    return min(cands, key=lambda c: abs(math.log(c / v)))
+        return min(pick)
+    return min(pick, key=lambda c: abs(math.log(c / v)))
 
 
 # --- quantities as people type them ---------------------------------------------
@@ -248,7 +280,8 @@ def format_quantity(value: float, unit: str, digits: int = 4) -> str:
     if value == 0 or not math.isfinite(value):
         return "%g %s" % (value, unit)
     exp3 = int(math.floor(math.log10(abs(value)) / 3.0)) * 3
-    exp3 = max(-12, min(6, exp3))
+    if not -12 <= exp3 <= 6:            # beyond the prefixes: 1.592e-301 Hz, not "0 pHz"
+        return "%.*g %s" % (digits, value, unit)
     prefix = {-12: "p", -9: "n", -6: "\u00b5", -3: "m", 0: "", 3: "k", 6: "M"}[exp3]
     mant = value / 10.0 ** exp3
     text = "%.*g" % (digits, mant)
@@ -287,7 +320,7 @@ def _f(x: float) -> str:
 
 
 def _v(volts: float) -> str:
-    return "%.3g" % volts if volts < 100 else "%.0f" % volts
+    return "%.3g" % volts if volts < 100 or volts >= 1e6 else "%.0f" % volts
 
 
 def _pct(a: float, b: float) -> str:
@@ -306,7 +339,7 @@ def _tuning_line(t: Tuning) -> str:
         return ("add %s in parallel with the piezo (nearest E12 %s gives %s, %s)"
                 % (format_quantity(t.capacitance_f, "F"), format_quantity(e12, "F"),
                    _f(f12), _pct(f12, t.frequency_hz)))
-    cs = t.piezo_capacitance_f * e12 / (t.piezo_capacitance_f + e12)
+    cs = t.piezo_capacitance_f * (e12 / (t.piezo_capacitance_f + e12))   # no overflow
     f12 = resonant_frequency(t.inductance_h, cs)
     return ("add %s in series with the piezo (nearest E12 %s gives %s, %s); the piezo then "
             "gets only %.0f %% of the tank voltage: a smaller inductor, %s, tunes the bare "
@@ -325,7 +358,33 @@ def report(inductance_h: float | None = None, capacitance_f: float | None = None
     Without piezo_f: exactly two of L, C, f give the third. With piezo_f (the
     piezo's clamped capacitance): + f -> the series inductor; + L + f -> the
     tuning capacitor; + L -> the bare piezo's frequency. bus_volts and q
-    together add the ESTIMATED voltage across the piezo at full amplitude."""
+    together add the ESTIMATED voltage across the piezo at full amplitude.
+    Inputs whose results leave the floating point range raise
+    TankInputError (no flag to blame: it is the combination)."""
+    try:
+        text, data = _report(inductance_h, capacitance_f, frequency_hz, piezo_f, bus_volts, q,
+                             drive)
+        _finite(data, "")
+    except TankInputError:
+        raise
+    except (ValueError, ArithmeticError) as e:
+        raise TankInputError("", "cannot compute with these values: %s" % e) from None
+    return text, data
+
+
+def _finite(v: Any, where: str) -> None:
+    """Every float in the report is finite (none overflowed on the way)."""
+    if isinstance(v, dict):
+        for k, x in v.items():
+            _finite(x, "%s.%s" % (where, k) if where else k)
+    elif isinstance(v, float) and not math.isfinite(v):
+        raise ValueError("%s: the result is beyond floating point range (%r): the inputs are "
+                         "too extreme (check their units: 390u for 390 uH)" % (where, v))
+
+
+def _report(inductance_h: float | None, capacitance_f: float | None,
+            frequency_hz: float | None, piezo_f: float | None, bus_volts: float | None,
+            q: float | None, drive: str) -> tuple[str, dict[str, Any]]:
     L, C, f, Cp = inductance_h, capacitance_f, frequency_hz, piezo_f
     if (bus_volts is None) != (q is None):
         raise TankInputError("--q" if q is None else "--bus-volts",
@@ -406,5 +465,6 @@ def report(inductance_h: float | None = None, capacitance_f: float | None = None
                      "fundamental %s V, piezo %s V amplitude (%s V peak-to-peak), tank "
                      "current %.3g A amplitude. Q must be measured per build (f0 / -3 dB "
                      "bandwidth); rate the inductor, capacitors and wiring above this."
-                     % (drive, bus_volts, q, _v(vf), _v(vc * share), _v(2 * vc * share), i_amp))
+                     % (drive, bus_volts, q, _v(vf), _v(vc * share),
+                        _v(_result("piezo_volts", 2 * vc * share)), i_amp))
     return "\n".join(lines), data
