@@ -40,10 +40,12 @@ def slope_per_push(ys: list[float]) -> float:
 def run(pushes: int = 200, deploy: bool = True,
         progress: Callable[[str], None] | None = None) -> dict[str, Any]:
     from ..link.board import connect
-    from ..link.virtual import VirtualBoard
+    from ..link.virtual import VirtualBoard, stop_on_signals
     say = progress or (lambda m: None)
     res: dict[str, Any] = {"pushes": pushes}
-    with VirtualBoard(image=None if deploy else "source") as vb:
+    # SIGTERM/SIGHUP unwind like Ctrl-C: the board's interpreter and its
+    # temporary flash go with it
+    with stop_on_signals(), VirtualBoard(image=None if deploy else "source") as vb:
         if deploy:
             from ..deploy.install import deploy as do_deploy
             for label in ("cold", "warm"):

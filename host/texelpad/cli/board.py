@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import time
 from typing import Any
 
@@ -63,6 +64,7 @@ def cmd_push(args: argparse.Namespace) -> int:
     if not args.scene and not params:
         raise CliError("", "nothing to push: give --pitch-db and --irregularity-db, or --scene")
     scene = read_scene_file(args.scene) if args.scene else None
+    _one_board(args)
     with _connect(args) as b:
         try:
             st = b.status()
@@ -71,7 +73,9 @@ def cmd_push(args: argparse.Namespace) -> int:
                     raise CliError("--board", "texelpad is not running on %s: say which board "
                                    "file to start it with (--board pico, --board virtual, ...)"
                                    % b.port)
-                b.start(args.board)
+                # realtime: a virtual board started from the host plays in real
+                # time (stepped, it would play nothing); other ports ignore it
+                b.start(args.board, realtime=True)
             sent0 = b.link.sent
             t0 = time.perf_counter()
             st = b.push(scene) if scene is not None else b.push_texel(params)
@@ -120,13 +124,52 @@ def format_status(st: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+STEPPED = ("the virtual board's time is stepped (texel.app.start('virtual') without "
+           "realtime=True): no refresh runs unless app.advance(ms) runs it; start it in real "
+           "time with app.start('virtual', realtime=True) (texelpad virtual and texelpad push "
+           "--board virtual do)")
+
+
+def _stepped(b: Any, st: dict[str, Any]) -> bool:
+    """A running virtual board whose refresh does not advance by itself:
+    started without realtime=True, it plays nothing when driven over its pty."""
+    if not st.get("running") or st.get("port") != "virtual":
+        return False
+    time.sleep(0.1)                 # ~800 refreshes at 8,333 Hz in real time
+    return b.status().get("refreshes") == st.get("refreshes")
+
+
+def _one_board(args: argparse.Namespace) -> None:
+    """No --port: the one board there is, a running `texelpad virtual`
+    included (connect() itself only knows USB boards)."""
+    if getattr(args, "port", None) is not None:
+        return
+    from ..link.transport import ports
+    from ..link.virtual import running_boards
+    found = [p["port"] for p in ports()] + [e["port"] + " (virtual)" for e in running_boards()]
+    if len(found) > 1:
+        raise CliError("--port", "%d boards found (%s): say which with --port"
+                       % (len(found), ", ".join(found)), EXIT_FAIL)
+    if found:
+        args.port = found[0].split(" ")[0]
+
+
 def cmd_status(args: argparse.Namespace) -> int:
+    _one_board(args)
     with _connect(args) as b:
         try:
             st = b.status()
+            stepped = _stepped(b, st)
         except LinkError as e:
             raise _fail(e) from None
-    print(json.dumps(st, indent=1, sort_keys=True) if args.json else format_status(st))
+    if args.json:
+        print(json.dumps(st, indent=1, sort_keys=True))
+        if stepped:
+            _stderr("status: warning: " + STEPPED)
+    else:
+        print(format_status(st))
+        if stepped:
+            print("WARNING: " + STEPPED)
     return EXIT_OK
 
 
@@ -135,9 +178,11 @@ def add_monitor(p: argparse.ArgumentParser) -> None:
                                    "refresh loop takes itself (it is not disturbed) until "
                                    "Ctrl-C or --seconds.")
     p.add_argument("--rate", type=int, default=125, metavar="HZ",
-                   help="samples per second, 1 .. the refresh rate (default 125)")
+                   help="samples per second, 1 .. the board's refresh rate (default 125); "
+                        "the board samples every (refresh rate // HZ)-th refresh")
     p.add_argument("--seconds", type=positive_float, metavar="S", help="stop after S seconds")
-    p.add_argument("--csv", metavar="FILE", help="write t_us,position,position_mm,amplitude rows")
+    p.add_argument("--csv", metavar="FILE", help="write t_us,position,position_mm,amplitude rows "
+                   "(checked writable before the board is opened)")
     _port_arg(p, "the one board plugged in")
     p.set_defaults(func=cmd_monitor)
 
@@ -147,60 +192,120 @@ def _bar(amp: int, width: int = 40) -> str:
     return "#" * n + "." * (width - n)
 
 
+def _csv_error(path: str, e: OSError) -> CliError:
+    return CliError("--csv", "cannot write %s: %s" % (path, e.strerror or e), EXIT_FAIL)
+
+
 def cmd_monitor(args: argparse.Namespace) -> int:
     if not 1 <= args.rate <= 50000:
-        raise CliError("--rate", "must be 1 .. 50,000 samples/s, got %d" % args.rate)
+        raise CliError("--rate", "must be 1 .. the board's refresh rate (at most 50,000) "
+                       "samples/s, got %d" % args.rate)
     out = None
+    created = False
     if args.csv:
+        created = not os.path.exists(args.csv)
         try:
             out = open(args.csv, "w", encoding="utf-8")
+            out.write("t_us,position,position_mm,amplitude\n")
+            out.flush()
         except OSError as e:
-            raise CliError("--csv", "cannot write %s: %s" % (args.csv, e.strerror or e),
-                           EXIT_FAIL) from None
-        out.write("t_us,position,position_mm,amplitude\n")
+            if out:
+                out.close()
+            raise _csv_error(args.csv, e) from None
     n = 0
+    b = None
+    failed = True
     try:
+        _one_board(args)
         with _connect(args) as b:
             try:
                 st = b.status()
                 if not st.get("running"):
                     raise CliError("", "texelpad is not running on %s (texelpad push --board "
                                    "NAME starts it)" % b.port, EXIT_FAIL)
+                hz = st["refresh_hz"]
+                if args.rate > hz:
+                    raise CliError("--rate", "must be 1 .. %s samples/s, the refresh rate of %s "
+                                   "(one sample per refresh at most), got %d"
+                                   % (hz, b.port, args.rate))
+                if _stepped(b, st):
+                    raise CliError("", "no samples would come: " + STEPPED, EXIT_FAIL)
                 dx = st["display"]["dx_um"] / 1000.0
                 if not out:
                     print("%10s  %9s  %6s  amplitude" % ("t_ms", "mm", "amp"))
-                for t, pos, amp in b.monitor(args.seconds, rate_hz=args.rate):
-                    n += 1
-                    mm = pos * dx if pos >= 0 else float("nan")
-                    if out:
-                        out.write("%d,%d,%.4f,%d\n" % (t, pos, mm, amp))
-                    else:
-                        print("%10.1f  %9s  %6d  %s" % (t / 1000, "lifted" if pos < 0 else
-                                                        "%.3f" % mm, amp, _bar(amp)), flush=True)
+                samples = b.monitor(args.seconds, rate_hz=args.rate)
+                try:
+                    for t, pos, amp in samples:
+                        n += 1
+                        mm = pos * dx if pos >= 0 else float("nan")
+                        if out:
+                            try:
+                                out.write("%d,%d,%.4f,%d\n" % (t, pos, mm, amp))
+                            except OSError as e:
+                                raise _csv_error(args.csv, e) from None
+                        else:
+                            print("%10.1f  %9s  %6d  %s" % (t / 1000, "lifted" if pos < 0 else
+                                                            "%.3f" % mm, amp, _bar(amp)),
+                                  flush=True)
+                finally:
+                    samples.close()         # the stream off before the link closes
+                actual = hz / b.divider if b.divider else 0
+                if actual and abs(actual - args.rate) > 0.01 * args.rate:
+                    _stderr("monitor: the board sampled every %srefresh of %s Hz: %.1f "
+                            "samples/s, not %d" % ("%d%s " % (b.divider, _ordinal(b.divider))
+                                                   if b.divider > 1 else "", hz, actual,
+                                                   args.rate))
             except LinkError as e:
                 raise _fail(e) from None
+        failed = False
     except KeyboardInterrupt:
-        pass
+        failed = False
     finally:
         if out:
-            out.close()
-            _stderr("monitor: %d samples written to %s" % (n, args.csv))
+            try:
+                out.close()
+            except OSError as e:
+                if not failed:
+                    failed = True
+                    raise _csv_error(args.csv, e) from None
+            if failed and n == 0 and created:
+                try:
+                    os.unlink(args.csv)         # nothing but a header: leave no file behind
+                except OSError:
+                    pass
+            elif not failed:
+                _stderr("monitor: %d samples written to %s" % (n, args.csv))
+        lost = getattr(b, "lost", 0) if b is not None else 0
+        if lost:
+            _stderr("monitor: warning: %s of %s samples lost: the board's 256-sample telemetry "
+                    "ring was lapped between two reads (the link did not keep up with %d "
+                    "samples/s; a lower --rate loses fewer)"
+                    % (format(lost, ","), format(lost + n, ","), args.rate))
     return EXIT_OK
+
+
+def _ordinal(k: int) -> str:
+    return "th" if 10 <= k % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(k % 10, "th")
 
 
 def add_ports(p: argparse.ArgumentParser) -> None:
     p.description = ("List serial ports whose USB vendor is a MicroPython or "
                                    "CircuitPython board maker (Raspberry Pi, MicroPython, "
-                                   "Adafruit, ST).")
+                                   "Adafruit, ST), and the running texelpad virtual boards.")
     p.set_defaults(func=cmd_ports)
 
 
 def cmd_ports(args: argparse.Namespace) -> int:
     from ..link.transport import ports
+    from ..link.virtual import running_boards
     found = ports()
-    if not found:
+    virtual = running_boards()
+    if not found and not virtual:
         print("no boards found (texelpad virtual starts a virtual one)")
     for p in found:
         print("%-20s %-24s %s" % (p["port"], p["vendor"], p["description"]))
+    for e in virtual:
+        print("%-20s %-24s %s" % (e["port"], "virtual", "texelpad virtual (pid %s, flash %s)"
+                                  % (e["pid"], e["flash"])))
     return EXIT_OK
 

@@ -10,19 +10,24 @@ checkout instead (no deploy needed: what the tests use).
 """
 from __future__ import annotations
 
+import contextlib
+import errno
+import json
 import os
 import pty
+import select
 import shutil
+import signal
 import subprocess
 import tempfile
+import threading
 import time
 import tty
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 from .. import toolchain
 from .transport import LinkError
-
 
 
 def device_source() -> Path:
@@ -30,14 +35,33 @@ def device_source() -> Path:
     return toolchain.device_package().parent
 
 
+SOFT_REBOOT = b"MPY: soft reboot\r\n"
+RAW_BANNER = b"raw REPL; CTRL-B to exit\r\n"
+# a child that dies this often (or before its first prompt) is broken, not reset
+RESTARTS_MAX = 5
+RESTARTS_WINDOW_S = 5.0
+OUT_BUFFER_MAX = 1 << 20        # bytes held for a client that does not read the port
+
+
 class VirtualBoard:
-    """A MicroPython unix-port REPL on a pty. `port` is the serial port path.
+    """A MicroPython unix-port REPL behind a pty. `port` is the serial port path.
 
     flash: the board's filesystem folder (default: a fresh temporary one,
     removed on stop). image: "source" puts this checkout's device/ on the
     module path (nothing to deploy); None leaves the flash as it is (deploy
     fills it). heapsize: e.g. "256k" for a Pico-sized heap (default: the
-    unix port's)."""
+    unix port's).
+
+    A supervisor thread relays bytes between the port and the unix port's
+    own pty and behaves like a board's firmware around it: when the unix
+    port exits (Ctrl-D at an empty raw-REPL or REPL prompt - mpremote's
+    default soft reset -, or sys.exit()), it prints "MPY: soft reboot",
+    starts a fresh interpreter (Python state cleared: a playing display
+    stops, as a board's does) and puts it back into the REPL mode the old
+    one was in. The port never changes. The unix port runs in its own
+    session; stop() kills it and removes the temporary flash; if this
+    process dies without stop(), the interpreter's pty hangs up and it
+    exits."""
 
     def __init__(self, flash: str | os.PathLike | None = None, image: str | None = "source",
                  heapsize: str | None = None):
@@ -49,9 +73,19 @@ class VirtualBoard:
         self.flash.mkdir(parents=True, exist_ok=True)
         self.image = image
         self.heapsize = heapsize
-        self.proc: subprocess.Popen | None = None
+        self.proc: subprocess.Popen | None = None      # the interpreter running now
         self.port = ""
-        self._slave = -1
+        self.resets = 0             # soft resets so far
+        self.failure = ""           # why the board died (empty while it runs)
+        self._slave = -1            # the port's slave end, held open (no hang-up)
+        self._master = -1           # the port's master end (the relay's)
+        self._child_fd = -1         # the interpreter's pty master (the relay's)
+        self._wake_r = self._wake_w = -1
+        self._thread: threading.Thread | None = None
+        self._stopping = False
+        self._ready = threading.Event()
+        self._registry: Path | None = None
+        self._exe = ""
 
     def __enter__(self) -> "VirtualBoard":
         self.start()
@@ -68,55 +102,341 @@ class VirtualBoard:
             path.insert(0, str(device_source()))
         return path
 
-    def start(self) -> str:
+    # --- life cycle -------------------------------------------------------------
+    def start(self, timeout: float = 15.0) -> str:
         if self.image not in ("source", None):
             raise ValueError("image must be 'source' or None, not %r" % (self.image,))
         try:
-            exe = toolchain.require_micropython()
+            self._exe = toolchain.require_micropython()
         except toolchain.ToolchainError as e:
             raise LinkError("the virtual board needs %s" % e) from None
         master, slave = pty.openpty()
         tty.setraw(slave)
         self.port = os.ttyname(slave)
-        # -i: the interactive REPL (raw REPL and raw-paste included) on the pty
-        self.proc = toolchain.popen(["-i"], exe=exe, path=self.module_path(),
-                                    heapsize=self.heapsize, stdin=master, stdout=master,
-                                    stderr=master, cwd=str(self.flash), close_fds=True)
-        os.close(master)
         # The slave end stays open here for the board's lifetime: when the last
-        # client closes the port the REPL must not see a hang-up.
-        self._slave = slave
-        time.sleep(0.05)
-        if self.proc.poll() is not None:
-            raise LinkError("the virtual board exited at once (code %s)" % self.proc.returncode)
+        # client closes the port the relay must not see a hang-up.
+        self._master, self._slave = master, slave
+        os.set_blocking(master, False)
+        self._wake_r, self._wake_w = os.pipe()
+        self._stopping = False
+        self.failure = ""
+        self._ready.clear()
+        self._thread = threading.Thread(target=self._relay, name="texelpad-virtual-board",
+                                        daemon=True)
+        self._thread.start()
+        if not self._ready.wait(timeout) or self.failure:
+            why = self.failure or "no REPL prompt within %g s" % timeout
+            self.stop()
+            raise LinkError("the virtual board did not start: %s" % why)
         return self.port
 
     def alive(self) -> bool:
-        return self.proc is not None and self.proc.poll() is None
+        return self._thread is not None and self._thread.is_alive() and not self.failure
 
     def stop(self) -> None:
-        if self.proc is not None:
-            self.proc.kill()
-            self.proc.wait(timeout=10)
-            self.proc = None
-        if self._slave >= 0:
-            os.close(self._slave)
-            self._slave = -1
+        """Stop the interpreter (killed, reaped), the relay, and remove the
+        temporary flash and the registry entry. Safe to call twice and from
+        the cleanup of a signal."""
+        self._stopping = True
+        if self._wake_w >= 0:
+            with contextlib.suppress(OSError):
+                os.write(self._wake_w, b"x")
+        t = self._thread
+        if t is not None and t is not threading.current_thread():
+            t.join(timeout=10)
+        self._thread = None
+        self._kill_child()                      # in case the relay could not
+        for name in ("_master", "_slave", "_wake_r", "_wake_w", "_child_fd"):
+            fd = getattr(self, name)
+            if fd >= 0:
+                with contextlib.suppress(OSError):
+                    os.close(fd)
+                setattr(self, name, -1)
+        self.unannounce()
         if self._tmp:
             shutil.rmtree(self._tmp, ignore_errors=True)
             self._tmp = None
+
+    # --- the interpreter ----------------------------------------------------------
+    def _spawn(self) -> None:
+        """Start a fresh unix port on a pty of its own (its own session, so a
+        Ctrl-C meant for the host never reaches it)."""
+        cm, cs = pty.openpty()
+        tty.setraw(cs)
+        try:
+            # -i: the interactive REPL (raw REPL and raw-paste included)
+            self.proc = toolchain.popen(["-i"], exe=self._exe, path=self.module_path(),
+                                        heapsize=self.heapsize, stdin=cs, stdout=cs, stderr=cs,
+                                        cwd=str(self.flash), close_fds=True,
+                                        start_new_session=True)
+        finally:
+            os.close(cs)
+        os.set_blocking(cm, False)
+        self._child_fd = cm
+
+    def _kill_child(self) -> None:
+        p = self.proc
+        if p is None:
+            return
+        if p.poll() is None:
+            with contextlib.suppress(OSError):
+                p.kill()
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            p.wait(timeout=10)
+
+    def _relay(self) -> None:
+        """The supervisor: port <-> interpreter, soft resets, until stop()."""
+        to_child = bytearray()      # what the client sent, not yet taken by the interpreter
+        to_port = bytearray()       # what the interpreter said, not yet taken by the port
+        boot = bytearray()          # an interpreter's output while it boots
+        raw = False                 # the REPL mode (to restore after a soft reset)
+        booting = "friendly"        # None once the interpreter is at the mode's prompt
+        tail = b""                  # the last bytes of output (to spot the raw banner)
+        restarts: list[float] = []
+        try:
+            self._spawn()
+        except OSError as e:
+            self.failure = "cannot run %s: %s" % (self._exe, e)
+            self._ready.set()
+            return
+        try:
+            while not self._stopping:
+                rl = [self._wake_r, self._master]
+                if len(to_port) < OUT_BUFFER_MAX:
+                    rl.append(self._child_fd)
+                wl = []
+                if to_port:
+                    wl.append(self._master)
+                if to_child and booting is None:
+                    wl.append(self._child_fd)
+                r, w, _ = select.select(rl, wl, [], 1.0)
+                if self._wake_r in r:
+                    break
+                if self._master in r:
+                    data = _read(self._master)
+                    if data:
+                        if raw and b"\x02" in data:       # Ctrl-B: back to the friendly REPL
+                            raw = False
+                        to_child += data
+                if self._master in w:
+                    to_port = to_port[_write(self._master, to_port):]
+                if self._child_fd in w:
+                    to_child = to_child[_write(self._child_fd, to_child):]
+                if self._child_fd not in r:
+                    continue
+                data = _read(self._child_fd)
+                if data is None:                         # nothing after all
+                    continue
+                if data:
+                    if booting is None:
+                        to_port += data
+                        tail = (tail + data)[-64:]
+                        if RAW_BANNER in tail:
+                            raw = True
+                            tail = b""
+                        continue
+                    boot += data
+                    if booting == "friendly" and boot.endswith(b">>> "):
+                        if not self._ready.is_set():    # the first boot: the port as it was
+                            to_port += boot
+                            self._ready.set()
+                            booting = None
+                        elif raw:                       # back into the raw REPL, silently
+                            booting = "raw"
+                            boot.clear()
+                            _write_all(self._child_fd, b"\r\x01")
+                        else:
+                            to_port += boot
+                            booting = None
+                    elif booting == "raw" and boot.endswith(RAW_BANNER + b">"):
+                        to_port += RAW_BANNER + b">"
+                        booting = None
+                    continue
+                # EOF: the interpreter exited - a soft reset, or a death
+                code = self.proc.wait(timeout=10) if self.proc is not None else None
+                os.close(self._child_fd)
+                self._child_fd = -1
+                if self._stopping:
+                    break
+                now = time.monotonic()
+                restarts = [t for t in restarts if now - t < RESTARTS_WINDOW_S] + [now]
+                if booting is not None or len(restarts) > RESTARTS_MAX:
+                    self.failure = ("the MicroPython unix port exited (code %s) %s: %s" % (
+                        code, "before its REPL prompt" if booting is not None else
+                        "%d times in %g s" % (len(restarts), RESTARTS_WINDOW_S),
+                        bytes(boot[-200:] or tail).decode("utf-8", "replace").strip()
+                        or "no output"))
+                    self._ready.set()
+                    break
+                self.resets += 1
+                to_port += SOFT_REBOOT
+                boot.clear()
+                tail = b""
+                booting = "friendly"
+                self._spawn()
+        except (OSError, subprocess.TimeoutExpired) as e:
+            if not self._stopping:
+                self.failure = "the virtual board's relay failed: %s" % e
+                self._ready.set()
+        finally:
+            self._kill_child()
+            if self._child_fd >= 0:
+                with contextlib.suppress(OSError):
+                    os.close(self._child_fd)
+                self._child_fd = -1
+
+    # --- the registry: `texelpad ports` finds a running `texelpad virtual` ------------
+    def announce(self) -> Path:
+        """Write this board's registry entry (its pty, pid, flash); removed by
+        stop(). `running_boards()` lists the entries of live processes."""
+        d = registry_dir()
+        d.mkdir(parents=True, exist_ok=True)
+        entry = {"port": self.port, "pid": os.getpid(), "started": _proc_start(os.getpid()),
+                 "flash": str(self.flash), "temporary": bool(self._tmp)}
+        f = d / ("%d.json" % os.getpid())
+        tmp = f.with_suffix(".tmp")
+        tmp.write_text(json.dumps(entry))
+        os.replace(tmp, f)
+        self._registry = f
+        return f
+
+    def unannounce(self) -> None:
+        if self._registry is not None:
+            with contextlib.suppress(OSError):
+                self._registry.unlink()
+            self._registry = None
+
+
+def _read(fd: int) -> bytes | None:
+    """Bytes from a non-blocking fd: b"" at its end (EIO: the other side of a
+    pty is gone), None when there was nothing after all."""
+    try:
+        return os.read(fd, 65536)
+    except BlockingIOError:
+        return None
+    except OSError as e:
+        if e.errno == errno.EIO:
+            return b""
+        raise
+
+
+def _write(fd: int, data: bytearray) -> int:
+    try:
+        return os.write(fd, data)
+    except BlockingIOError:
+        return 0
+
+
+def _write_all(fd: int, data: bytes) -> None:
+    while data:
+        n = _write(fd, bytearray(data))
+        data = data[n:]
+        if data:
+            select.select([], [fd], [], 1.0)
+
+
+def registry_dir() -> Path:
+    """Where running `texelpad virtual` boards announce themselves:
+    $TEXELPAD_RUNTIME_DIR, else $XDG_RUNTIME_DIR/texelpad, else a per-user
+    folder in the temporary directory."""
+    d = os.environ.get("TEXELPAD_RUNTIME_DIR")
+    if d:
+        return Path(d) / "virtual"
+    d = os.environ.get("XDG_RUNTIME_DIR")
+    if d and os.path.isdir(d):
+        return Path(d) / "texelpad" / "virtual"
+    uid = os.getuid() if hasattr(os, "getuid") else 0
+    return Path(tempfile.gettempdir()) / ("texelpad-%d" % uid) / "virtual"
+
+
+def _proc_start(pid: int) -> str:
+    """The process's start time (/proc/PID/stat field 22), to tell a live
+    announcer from a later process that reused its pid; "" where unknown."""
+    try:
+        stat = Path("/proc/%d/stat" % pid).read_text()
+        return stat.rsplit(")", 1)[1].split()[19]
+    except (OSError, IndexError):
+        return ""
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def running_boards() -> list[dict[str, Any]]:
+    """The virtual boards announced by live `texelpad virtual` processes:
+    [{"port", "pid", "flash", ...}]. Stale entries (the process is gone,
+    or its pty) are removed, and with them a temporary flash left behind."""
+    d = registry_dir()
+    out = []
+    try:
+        files = sorted(d.glob("*.json"))
+    except OSError:
+        return out
+    for f in files:
+        try:
+            e = json.loads(f.read_text())
+            pid, port = int(e["pid"]), str(e["port"])
+        except (OSError, ValueError, KeyError, TypeError):
+            continue
+        live = (_pid_alive(pid) and os.path.exists(port)
+                and (not e.get("started") or _proc_start(pid) in ("", e["started"])))
+        if live:
+            out.append(e)
+            continue
+        with contextlib.suppress(OSError):
+            f.unlink()
+        flash = str(e.get("flash", ""))
+        if e.get("temporary") and Path(flash).name.startswith("texelpad-flash-"):
+            shutil.rmtree(flash, ignore_errors=True)
+    return out
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP arrived: stop as cleanly as on Ctrl-C."""
+
+
+@contextlib.contextmanager
+def stop_on_signals() -> Iterator[None]:
+    """While active (main thread only), SIGTERM and SIGHUP raise Terminated
+    (a KeyboardInterrupt) once, so `finally`/`with` blocks stop the virtual
+    board and remove its flash; a second signal during that cleanup is
+    ignored. The previous handlers come back at the end."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    fired = []
+
+    def handler(signum: int, frame: Any) -> None:
+        if fired:
+            return
+        fired.append(signum)
+        raise Terminated("signal %d" % signum)
+    sigs = [s for s in (getattr(signal, "SIGTERM", None), getattr(signal, "SIGHUP", None)) if s]
+    old = {s: signal.signal(s, handler) for s in sigs}
+    try:
+        yield
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
 
 
 def open_virtual(flash: str | None = None, source: bool = False, start: bool = True,
                  progress: Callable[[str], None] | None = None) -> VirtualBoard:
     """A started VirtualBoard with texelpad's image (deployed into its flash,
     or the installed source) playing the default scene in real time."""
-    from ..deploy.install import deploy
     from .board import connect
     vb = VirtualBoard(flash, image="source" if source else None)
     vb.start()
     try:
         if not source:
+            from ..deploy.install import deploy
             with connect(vb.port, check=False) as b:
                 deploy(b, include_main=False,
                        progress=(lambda m: progress("deploy: " + m)) if progress else None)
