@@ -2,8 +2,8 @@
 """Regenerate package.json at the repository root: mip's description of the
 device package, so a board can install it without texelpad:
 
-    mpremote mip install github:<owner>/<repo>      # from GitHub
     mpremote mip install ./package.json             # from this checkout
+    mpremote mip install github:OWNER/REPO          # from a GitHub copy of it
 
 Both install the `texel` package as source .py files under the board's /lib
 (the same layout `texelpad deploy` writes, see host/texelpad/deploy/image.py).

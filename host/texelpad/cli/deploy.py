@@ -19,8 +19,8 @@ def add_deploy(p: argparse.ArgumentParser) -> None:
                     "stopped while writing and started again on the new image with the "
                     "scene it played (also when the deploy fails: the error says what the "
                     "board holds and what to run). Prints the command to run next. "
-                    "mpremote users: mpremote mip install "
-                    "github:<owner>/<repo> installs the source package (package.json).")
+                    "mpremote users: mpremote mip install ./package.json, run in a "
+                    "texelpad checkout, installs the source package.")
     p.add_argument("--source", action="store_true",
                    help="send the .py sources instead of .mpy (the board compiles them; "
                         "slower imports, more RAM)")
