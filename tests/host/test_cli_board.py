@@ -13,9 +13,9 @@ import sys
 import pytest
 
 import texelpad
-from texelpad.cli import main
 from texelpad.link.virtual import VirtualBoard
 from support.vboard import mpremote
+from support.cli import run_cli
 
 pytestmark = [pytest.mark.vboard]
 
@@ -36,14 +36,6 @@ def _state(port):
         return st["pushes"], b.scene_source(), st["refreshes"], st["faults"]
 
 
-def run_cli(capsys, *argv):
-    """main(argv) -> (exit code, stdout, stderr); argparse's own exits too."""
-    try:
-        code = main(list(argv))
-    except SystemExit as e:
-        code = e.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 # --- texelpad virtual + mpremote ------------------------------------------------

@@ -13,25 +13,18 @@ import hashlib
 import pytest
 
 import texelpad
-from texelpad.cli import main
 from texelpad.cli.deploy import next_step
 from texelpad.deploy import image
 from texelpad.deploy.install import DeployFailed, deploy
 from texelpad.link import protocol
 from texelpad.link.virtual import VirtualBoard
+from support.cli import run_cli
 
 pytestmark = [pytest.mark.vboard]
 
 TEXEL = {"pitch_db": 3.0, "irregularity_db": -10.0, "seed": 5}
 
 
-def run_cli(capsys, *argv):
-    try:
-        code = main(list(argv))
-    except SystemExit as e:
-        code = e.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def _image_files():

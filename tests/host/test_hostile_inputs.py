@@ -30,18 +30,13 @@ from texelpad import cli
 from texelpad.link import LiteralError, literal
 from texelpad.link.protocol import MAX_DEPTH, plain
 from texelpad.plate import tank
+from support.cli import run_cli
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
 def _run(argv, capsys):
-    """cli.main(argv) -> (exit code, stdout, stderr); argparse's exit too."""
-    try:
-        rc = cli.main(argv)
-    except SystemExit as e:
-        rc = e.code
-    cap = capsys.readouterr()
-    return rc, cap.out, cap.err
+    return run_cli(capsys, *argv)
 
 
 def _one_line(err):

@@ -6,9 +6,9 @@ fast enough at high rates that every sample is either read or counted lost."""
 import pytest
 
 import texelpad
-from texelpad.cli import main
 from texelpad.link.board import Board
 from texelpad.link.virtual import VirtualBoard
+from support.cli import run_cli
 
 pytestmark = [pytest.mark.vboard]
 
@@ -21,13 +21,6 @@ def port():
         yield vb.port
 
 
-def run_cli(capsys, *argv):
-    try:
-        code = main(list(argv))
-    except SystemExit as e:
-        code = e.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 @pytest.mark.parametrize("rate", ["50000", "8334"])

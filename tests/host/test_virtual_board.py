@@ -16,9 +16,9 @@ from pathlib import Path
 import pytest
 
 import texelpad
-from texelpad.cli import main
 from texelpad.link.virtual import VirtualBoard, running_boards
 from support.vboard import mpremote
+from support.cli import run_cli
 
 pytestmark = [pytest.mark.vboard]
 
@@ -26,13 +26,6 @@ TEXELPAD = [sys.executable, "-m", "texelpad.cli"]
 MPREMOTE = os.path.join(os.path.dirname(sys.executable), "mpremote")
 
 
-def run_cli(capsys, *argv):
-    try:
-        code = main(list(argv))
-    except SystemExit as e:
-        code = e.code
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def _gone(pid):
