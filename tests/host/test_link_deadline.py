@@ -141,6 +141,7 @@ def test_cli_status_on_a_chatty_port_fails_in_one_line_exit_1(fake):
     assert "kept sending other text" in lines[0]
 
 
+@pytest.mark.slow
 @pytest.mark.vboard
 def test_a_request_whose_output_never_ends_times_out_and_resync_recovers(tmp_path):
     """A board running a program that keeps printing: the request ends at its

@@ -740,7 +740,8 @@ def test_virtual_board_display_is_the_one_tested():
 # 1. CPython
 # --------------------------------------------------------------------------
 
-@pytest.mark.parametrize("label", LABELS)
+@pytest.mark.parametrize("label", [pytest.param(lab, marks=pytest.mark.slow) if lab == "valid"
+                                   else lab for lab in LABELS])
 def test_validate_property_cpython(label):
     """N_VALID valid scenes, N_CORRUPT cases of each corruption: 120 +
     34 x 20 = 800 cases in all."""
@@ -1086,6 +1087,7 @@ def mp_build_batch():
     return batch
 
 
+@pytest.mark.slow
 def test_builds_match_under_micropython(tmp_path):
     """The explicit scenes and a generated batch build under the unix port,
     and Scene.amp() at every position (and one past each end) gives exactly
