@@ -54,11 +54,17 @@ def cmd_bench(args: argparse.Namespace) -> int:
         check_output("--json", args.json, (".json",))
     progress = None if args.quiet else (lambda m: _stderr("bench: " + m))
     res = bench.run(args.cases, args.runtimes, args.repeat, progress)
-    print(bench.table(res), flush=True)
-    if args.json:
-        write_output("--json", args.json, lambda: bench.write_json(res, args.json))
+    return _report(bench, res, args.json, progress)
+
+
+def _report(module, res, json_path: str | None, progress) -> int:
+    """A bench's ending: its table on stdout, its JSON if asked (the path was
+    checked before the work), exit 1 when a runtime failed."""
+    print(module.table(res), flush=True)
+    if json_path:
+        write_output("--json", json_path, lambda: module.write_json(res, json_path))
         if progress:
-            progress("wrote %s" % args.json)
+            progress("wrote %s" % json_path)
     return EXIT_FAIL if res.failed else EXIT_OK
 
 
@@ -86,13 +92,7 @@ def cmd_bench_refresh(args: argparse.Namespace) -> int:
     if args.json:
         check_output("--json", args.json, (".json",))
     progress = None if args.quiet else (lambda m: _stderr("bench-refresh: " + m))
-    res = refresh_bench.run(args.seconds, progress)
-    print(refresh_bench.table(res), flush=True)
-    if args.json:
-        write_output("--json", args.json, lambda: refresh_bench.write_json(res, args.json))
-        if progress:
-            progress("wrote %s" % args.json)
-    return EXIT_FAIL if res.failed else EXIT_OK
+    return _report(refresh_bench, refresh_bench.run(args.seconds, progress), args.json, progress)
 
 
 def add_bench_link(p: argparse.ArgumentParser) -> None:
