@@ -353,16 +353,21 @@ def test_map_within_bound(device, name, case):
     assert (erru <= bu).all(), (worst, pr.in_pwm_steps(erru[worst]), pr.in_pwm_steps(bu[worst]))
 
 
+def _within_one_step(run, case):
+    """The float map and the uint16 map both within one PWM step of the
+    float64 reference."""
+    _, ref = run.ref(case)
+    f, u = run.maps(case)
+    assert np.abs(f - ref).max() <= pr.PWM_STEP, pr.in_pwm_steps(np.abs(f - ref).max())
+    assert np.abs(u / 65535 - ref).max() <= pr.PWM_STEP
+
+
 @pytest.mark.instruments
 @pytest.mark.parametrize("case", WELL_CONDITIONED)
 def test_float64_within_one_pwm_step(device, case):
     """float64 plan and arrays: the only loss is the fixed-point plan's
     rounding (texel-long: 0.36 step after 19,200 samples of one texel)."""
-    run = device("micropython-ulab-f64")
-    _, ref = run.ref(case)
-    f, u = run.maps(case)
-    assert np.abs(f - ref).max() <= pr.PWM_STEP, pr.in_pwm_steps(np.abs(f - ref).max())
-    assert np.abs(u / 65535 - ref).max() <= pr.PWM_STEP
+    _within_one_step(device("micropython-ulab-f64"), case)
 
 
 @pytest.mark.instruments
@@ -370,11 +375,7 @@ def test_float64_within_one_pwm_step(device, case):
 def test_float32_board_typical_textures_within_one_step(device, case):
     """A float32 plan + float32 ulab, as on an rp2/stm32 board (measured: at
     most 0.18 step, study)."""
-    run = device("micropython-ulab-f32")
-    _, ref = run.ref(case)
-    f, u = run.maps(case)
-    assert np.abs(f - ref).max() <= pr.PWM_STEP, pr.in_pwm_steps(np.abs(f - ref).max())
-    assert np.abs(u / 65535 - ref).max() <= pr.PWM_STEP
+    _within_one_step(device("micropython-ulab-f32"), case)
 
 
 # The plan in 30-bit floats misses the one-step goal on seed-0 (measured 1.48
@@ -394,11 +395,7 @@ _CP_TYPICAL = [pytest.param(c, marks=pytest.mark.xfail(
 @pytest.mark.instruments
 @pytest.mark.parametrize("case", _CP_TYPICAL)
 def test_circuitpython_typical_textures_within_one_step(device, case):
-    run = device("circuitpython")
-    _, ref = run.ref(case)
-    f, u = run.maps(case)
-    assert np.abs(f - ref).max() <= pr.PWM_STEP, pr.in_pwm_steps(np.abs(f - ref).max())
-    assert np.abs(u / 65535 - ref).max() <= pr.PWM_STEP
+    _within_one_step(device("circuitpython"), case)
 
 
 # --- 3. the API on the interpreters -------------------------------------------------------

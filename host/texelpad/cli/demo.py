@@ -12,7 +12,6 @@ from typing import Any, Callable
 
 import numpy as np
 import texel.app
-import texel.runtime.scene
 
 from ..link.protocol import LiteralError
 from ..link.transport import DeviceError, LinkError
@@ -162,10 +161,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
         raise CliError("--out", "the demo writes a PNG: give a FILE.png, not %r" % args.out)
     scene = read_scene_file(args.scene) if args.scene else None
     if scene is not None:
-        from ..link.protocol import literal
+        from ..link.board import host_check
         try:                      # the board's own check, before starting anything
-            literal(scene)
-            texel.runtime.scene.validate(scene, {"positions": 19200, "dx_um": 5.3})
+            host_check(scene)
         except ValueError as e:
             raise _value_error(e, False) from None
     # both output files are checked before the board is started, not after

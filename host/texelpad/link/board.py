@@ -89,7 +89,7 @@ class Board:
         if not isinstance(board_name, str):
             raise ValueError("board name: %s is not a string" % type(board_name).__name__)
         if scene is not None:
-            scene = _host_check(scene, None)
+            scene = host_check(scene)
         for k in opts:
             if not isinstance(k, str) or not k.isidentifier():
                 raise ValueError("start(): option %r is not a name" % (k,))
@@ -103,7 +103,7 @@ class Board:
         return st
 
     def _push(self, scene: dict[str, Any], st: dict[str, Any]) -> dict[str, Any]:
-        scene = _host_check(scene, st["display"])
+        scene = host_check(scene, st["display"])
         return self._app("push", scene, timeout=max(self.link.timeout, 30))
 
     def push(self, scene: dict[str, Any]) -> dict[str, Any]:
@@ -202,12 +202,13 @@ class Board:
         return np.frombuffer(base64.b64decode(value), dtype="<u2").copy()
 
 
-def _host_check(scene: Any, display: dict[str, Any] | None) -> Any:
+def host_check(scene: Any, display: dict[str, Any] | None = None) -> Any:
     """The literal check, then the board's own validation, run here first;
     returns the scene as plain data to send (numpy numbers and arrays as the
     Python numbers and lists they hold: protocol.plain). The literal check
     comes first: it bounds the nesting depth and the integers before the
-    board's validation walks the scene."""
+    board's validation walks the scene. display None: the TPaD's 19,200 x
+    5.3 um (the board's own display is checked again when it is pushed)."""
     scene = protocol.plain(scene)
     literal(scene)
     texel.runtime.scene.validate(scene, display or {"positions": 19200, "dx_um": 5.3})
