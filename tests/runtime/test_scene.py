@@ -95,16 +95,16 @@ ERRORS = [
     ("scene-type", "[1, 2]", None, "scene: expected a dict with 'regions', got list of 2 items"),
     ("scene-str", "'import os'", None, "scene: expected a dict with 'regions', got str 'import os'"),
     ("scene-unknown", "with_(split(), bogus=1)", None,
-     "scene: unknown key 'bogus' (allowed: regions, idle_amplitude)"),
+     "scene: unknown key 'bogus' (allowed: regions, idle_amplitude, name, notes)"),
     ("scene-unknown-nonstr", "{'regions': [], 7: 1}", None,
-     "scene: unknown key int 7 (allowed: regions, idle_amplitude)"),
+     "scene: unknown key int 7 (allowed: regions, idle_amplitude, name, notes)"),
     ("scene-unknown-smallest", "with_(split(), zz=1, aa=2, mm=3)", None,
-     "scene: unknown key 'aa' (allowed: regions, idle_amplitude)"),
+     "scene: unknown key 'aa' (allowed: regions, idle_amplitude, name, notes)"),
     ("scene-unknown-quotes", "put(split(), 'a\"b\\'\\nc', 1)", None,
-     "scene: unknown key 'a\"b\\'\\nc' (allowed: regions, idle_amplitude)"),
+     "scene: unknown key 'a\"b\\'\\nc' (allowed: regions, idle_amplitude, name, notes)"),
     ("scene-unknown-long", "put(split(), 'x' * 1000, 1)", None,
      "scene: unknown key 'xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx'... (1000 chars) "
-     "(allowed: regions, idle_amplitude)"),
+     "(allowed: regions, idle_amplitude, name, notes)"),
     ("scene-missing-regions", "{'idle_amplitude': 0}", None,
      "scene: missing required key 'regions' (a list of 1 .. 16 regions)"),
     ("regions-type", "{'regions': 'left'}", None, "regions: expected a list of 1 .. 16 regions, got str 'left'"),
@@ -1295,3 +1295,20 @@ def test_scene_compiles_for_rp2040(tmp_path):
     p = mpy.mpy_cross(src, tmp_path / "scene.mpy", "armv6m")
     assert p.returncode == 0, p.stdout + p.stderr
     assert (tmp_path / "scene.mpy").read_bytes()[:2] == b"M\x06"
+
+
+def test_scene_name_and_notes_kept_and_bounded():
+    """A scene's own words: kept in the canonical form, the name shown by
+    describe(); bad ones refused by key."""
+    reg = [{"start_mm": 0, "end_mm": 10, "texture": {"kind": "constant", "level": 0.5}}]
+    c = scene.validate({"name": "half", "notes": "why: a test", "regions": reg}, D)
+    assert c["name"] == "half" and c["notes"] == "why: a test"
+    assert scene.validate(c, D) == c
+    assert scene.build(c, D).describe()["name"] == "half"
+    assert "name" not in scene.build(scene.validate({"regions": reg}, D), D).describe()
+    for bad, msg in [({"name": ""}, "name: expected a string of 1 .. 64 characters, got 0 characters"),
+                     ({"name": 3}, "name: expected a string of 1 .. 64 characters, got int 3"),
+                     ({"name": "x" * 65}, "got 65 characters"),
+                     ({"notes": "a" * 2001}, "notes: expected a string of at most 2000 characters")]:
+        with pytest.raises(ValueError, match=re.escape(msg)):
+            scene.validate(dict(bad, regions=reg), D)

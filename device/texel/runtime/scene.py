@@ -8,7 +8,8 @@
 # A scene is a plain dict that crosses the serial link as a literal:
 #   {"regions": [{"start_mm": 0, "end_mm": 50.88,
 #                 "texture": {"kind": "reference", "name": "4sin"}}, ...],
-#    "idle_amplitude": 0}          # optional uint16; else the board's default
+#    "idle_amplitude": 0,          # optional uint16; else the board's default
+#    "name": "split 4sin | texel", "notes": "..."}   # optional text (NAME_MAX, NOTES_MAX)
 #
 # Texture kinds (every other key is refused):
 #   texel      the texel parameter keys (params.KEYS) except length_samples,
@@ -31,7 +32,7 @@
 # textures with every default filled in (no length_samples); samples as
 # {"kind": "samples", "u16": tuple of ints, "fit": ...} ("values" become
 # round(v * 65535), half up; a tuple is kept as it is, a list is copied once);
-# "idle_amplitude" only when the scene gave one.
+# "idle_amplitude", "name" and "notes" only when the scene gave them.
 #
 # Positions: start_mm/end_mm are converted to display indices by rounding to
 # the nearest sample, halves up: pos = floor(mm * 1000 / dx_um + 0.5); the
@@ -71,7 +72,12 @@ MAX_SAMPLES = 19200         # values per samples region (one full TPaD screen)
 U16_MAX = 65535
 KINDS = ("texel", "reference", "constant", "samples")
 FITS = ("tile", "stretch")
-SCENE_KEYS = ("regions", "idle_amplitude")
+SCENE_KEYS = ("regions", "idle_amplitude", "name", "notes")
+# A scene's own words: "name" (shown by status, listed by `texelpad scenes`)
+# and "notes" (what it is for, where it comes from). Bounded so a scene file
+# stays a scene and status() stays small; any text, checked as a str only.
+NAME_MAX = 64
+NOTES_MAX = 2000
 REGION_KEYS = ("start_mm", "end_mm", "texture")
 TEXEL_KEYS = tuple(k for k in _TEXEL_ALL_KEYS if k != "length_samples")
 TEXTURE_KEYS = {
@@ -390,6 +396,15 @@ def _check(scene, display):
     out = {}
     if "idle_amplitude" in scene:
         out["idle_amplitude"] = _int("idle_amplitude", scene["idle_amplitude"], 0, U16_MAX)
+    for k, top in (("name", NAME_MAX), ("notes", NOTES_MAX)):
+        if k in scene:
+            v = scene[k]
+            if not isinstance(v, str) or (k == "name" and not v) or len(v) > top:
+                raise ValueError("%s: expected a string of %s%d characters, got %s"
+                                 % (k, "1 .. " if k == "name" else "at most ", top,
+                                    _got(v) if not isinstance(v, str)
+                                    else "%d characters" % len(v)))
+            out[k] = v
     spans = []
     canon = []
     for i in range(len(regs)):
@@ -743,6 +758,9 @@ class Scene:
                 d["values"] = len(tex["u16"])
                 d["fit"] = tex["fit"]
             regs.append(d)
-        return {"regions": regs, "count": self.count, "idle": self.idle,
+        out = {"regions": regs, "count": self.count, "idle": self.idle,
                 "positions": self.positions, "bytes": self.nbytes,
                 "buffer_bytes": self.buffer_bytes, "table_bytes": self.table_bytes}
+        if "name" in self.source:
+            out["name"] = self.source["name"]
+        return out
