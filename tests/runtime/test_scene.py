@@ -1301,14 +1301,14 @@ def test_scene_name_and_notes_kept_and_bounded():
     """A scene's own words: kept in the canonical form, the name shown by
     describe(); bad ones refused by key."""
     reg = [{"start_mm": 0, "end_mm": 10, "texture": {"kind": "constant", "level": 0.5}}]
-    c = scene.validate({"name": "half", "notes": "why: a test", "regions": reg}, D)
+    c = S.validate({"name": "half", "notes": "why: a test", "regions": reg}, D)
     assert c["name"] == "half" and c["notes"] == "why: a test"
-    assert scene.validate(c, D) == c
-    assert scene.build(c, D).describe()["name"] == "half"
-    assert "name" not in scene.build(scene.validate({"regions": reg}, D), D).describe()
+    assert S.validate(c, D) == c
+    assert S.build(c, D).describe()["name"] == "half"
+    assert "name" not in S.build(S.validate({"regions": reg}, D), D).describe()
     for bad, msg in [({"name": ""}, "name: expected a string of 1 .. 64 characters, got 0 characters"),
                      ({"name": 3}, "name: expected a string of 1 .. 64 characters, got int 3"),
                      ({"name": "x" * 65}, "got 65 characters"),
                      ({"notes": "a" * 2001}, "notes: expected a string of at most 2000 characters")]:
         with pytest.raises(ValueError, match=re.escape(msg)):
-            scene.validate(dict(bad, regions=reg), D)
+            S.validate(dict(bad, regions=reg), D)
