@@ -17,7 +17,7 @@ plain floats are, and np.bool_ as True is (a bool is not a number).
 from __future__ import annotations
 
 import time
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 import texel
 import texel.app
@@ -102,15 +102,18 @@ class Board:
                             "(texelpad push --board NAME, or Board.start)" % self.port)
         return st
 
-    def _push(self, scene: dict[str, Any], st: dict[str, Any]) -> dict[str, Any]:
+    def _push(self, scene: dict[str, Any], st: dict[str, Any],
+              progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
         scene = host_check(scene, st["display"])
         return self._app("push", scene, timeout=max(self.link.timeout, 30))
 
-    def push(self, scene: dict[str, Any]) -> dict[str, Any]:
+    def push(self, scene: dict[str, Any],
+             progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
         """Play `scene` (a dict of regions). Checked on the host, then on the
         board; returns the board's status with the new scene. On any error
-        the board keeps playing what it played."""
-        return self._push(scene, self._running_status())
+        the board keeps playing what it played. progress(done, total): bytes
+        of large sample data sent so far (called during long uploads)."""
+        return self._push(scene, self._running_status(), progress)
 
     def push_texel(self, params: dict[str, Any]) -> dict[str, Any]:
         """Play one texel parameter set over the whole display."""
