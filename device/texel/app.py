@@ -4,6 +4,8 @@
 #   texel.app.push(scene)                    -> status dict (raises ValueError,
 #                                               and the old scene keeps playing)
 #   texel.app.status()                       -> dict
+#   texel.app.upload_begin/upload_write/take_upload: long samples regions
+#                                               as data, not code (below)
 #   texel.app.stream(rate_hz=125)            -> divider (refreshes per sample; 0 stops)
 #   texel.app.telemetry()                    -> ([(t_us, position, amplitude), ...], lost)
 #   texel.app.stop()
@@ -63,26 +65,65 @@ def _reader(hw, i):
 def start(board_name, scene=None, realtime=False, fast=None, **hw_opts):
     """Start the display on board `board_name` (a file in boards/) playing
     `scene` (default: the study's split screen). Stops a running display
-    first. Returns status().
+    first - but only once everything that can be checked was (the board
+    file, that it fits this firmware, the scene), and if the new start still
+    fails, the display that played is started again. Returns status().
 
     fast: the fused viper refresh (refresh_viper.py) - default on wherever
     the port has viper and the sensor is a linear ADC; on an RP2040 its IRQ
     then reads the ADC and writes the PWM compare register itself."""
-    global _rt
     board = _boards.load(board_name)
     mode = board["refresh"]["mode"]
     if mode == "core1_viper":
         raise ValueError("board %r: refresh.mode 'core1_viper' is not implemented yet; use "
                          "'timer_irq' (a hard timer IRQ on core 0) or 'loop'" % board["name"])
+    why = _boards.fits(board)
+    if why is not None:
+        raise ValueError("%s; board files that fit: %s%s" % (
+            why, ", ".join(_boards.fitting()) or "none",
+            "; the display keeps playing" if _rt is not None else ""))
     # build the scene before touching the hardware: a bad scene changes nothing
     canonical = _scene.validate(DEFAULT_SCENE if scene is None else scene, board["display"])
+    prev = None
     if _rt is not None:
+        sc = _rt.refresh.scene
+        prev = (_rt.board["name"], sc.source if sc is not None else None, _rt.start_opts)
+        sc = None                       # the old maps go with stop(): only the source stays
         stop()
+    try:
+        try:
+            _start(board, canonical, realtime, fast, hw_opts)
+        except MemoryError:
+            # once more after a full collection: a stale pointer on the C
+            # stack (the GC is conservative) can hold the old display's
+            # buffers for one more cycle
+            gc.collect()
+            _start(board, canonical, realtime, fast, hw_opts)
+    except Exception as e:
+        # one line for the host, whatever the hardware raised (a ValueError
+        # crosses the link as text; anything else would be a board traceback)
+        why = str(e) if isinstance(e, ValueError) else "%s: %s" % (type(e).__name__, e)
+        now = "the display is off"
+        if prev is not None:
+            try:
+                start(prev[0], prev[1], **prev[2])
+                now = "the display plays what it played before (board %r)" % prev[0]
+            except Exception:
+                pass
+        raise ValueError("board %r did not start (%s); %s" % (board["name"], why, now))
+    return status()
+
+
+def _start(board, canonical, realtime, fast, hw_opts):
+    global _rt
+    mode = board["refresh"]["mode"]
     hw = _make_hw(board, hw_opts)
     hw.off()
     try:
         rt = _Runtime()
         rt.board = board
+        rt.start_opts = {"realtime": realtime, "fast": fast}
+        rt.start_opts.update(hw_opts)
         rt.hw = hw
         rt.hz = board["refresh"]["hz"]
         rt.period_us = 1000000 // rt.hz
@@ -136,7 +177,6 @@ def start(board_name, scene=None, realtime=False, fast=None, **hw_opts):
         hw.off()
         _rt = None
         raise
-    return status()
 
 
 def _install(canonical):
@@ -209,13 +249,128 @@ def status():
     return st
 
 
-def scene_source():
+def scene_source(inline_max=None):
     """The canonical dict of the scene playing (None when stopped): what the
-    host needs to redraw it. Uploaded samples come back in full."""
+    host needs to redraw it. A samples region longer than inline_max values
+    comes back as its count (an int) instead of the values: the host reads
+    those with samples_b64() in pieces (a 19,200-value repr would need some
+    120 KB of the board's heap at once). inline_max None: everything inline."""
     rt = _rt
     if rt is None or rt.refresh.scene is None:
         return None
-    return rt.refresh.scene.source
+    src = rt.refresh.scene.source
+    out = {}
+    for k in src:
+        out[k] = src[k]
+    regs = []
+    for r in src["regions"]:
+        tex = r["texture"]
+        if tex["kind"] == "samples" and (inline_max is not None and len(tex["u16"]) > inline_max
+                                         or not isinstance(tex["u16"], tuple)):
+            tex = {"kind": "samples", "fit": tex["fit"],
+                   "u16": len(tex["u16"]) if inline_max is not None and len(tex["u16"]) > inline_max
+                   else tuple(tex["u16"])}
+            r = {"start_mm": r["start_mm"], "end_mm": r["end_mm"], "texture": tex}
+        regs.append(r)
+    out["regions"] = regs
+    return out
+
+
+def samples_b64(region, offset, count):
+    """Values offset .. offset+count of the playing scene's samples region
+    `region` (its index in the canonical order), as base64 of little-endian
+    uint16: the read side of upload_write."""
+    import binascii
+    rt = _running()
+    sc = rt.refresh.scene
+    regs = sc.source["regions"] if sc is not None else ()
+    if not (isinstance(region, int) and 0 <= region < len(regs)) \
+            or regs[region]["texture"]["kind"] != "samples":
+        raise ValueError("samples_b64: region %r is not a samples region of the scene playing"
+                         % (region,))
+    vals = regs[region]["texture"]["u16"]
+    n = len(vals)
+    if not (isinstance(offset, int) and isinstance(count, int) and 0 <= offset <= n
+            and 0 <= count <= UPLOAD_PIECE_MAX):
+        raise ValueError("samples_b64: offset %r, count %r outside 0 .. %d (at most %d per piece)"
+                         % (offset, count, n, UPLOAD_PIECE_MAX))
+    end = min(n, offset + count)
+    if not isinstance(vals, tuple):     # an uploaded array('H'): its own bytes
+        from .runtime.upload import u16_bytes
+        return binascii.b2a_base64(u16_bytes(vals, offset, end)).strip().decode()
+    b = bytearray(2 * (end - offset))
+    for i in range(offset, end):
+        v = vals[i]
+        j = 2 * (i - offset)
+        b[j] = v & 0xFF
+        b[j + 1] = v >> 8
+    return binascii.b2a_base64(b).strip().decode()
+
+
+# --- uploads ---------------------------------------------------------------------------
+# Large sample data crosses the link as data: the host stages each long
+# samples region with upload_begin, sends it in pieces of base64 text
+# (upload_write: one short call each, so the board never compiles a literal
+# of thousands of numbers - a 9,000-int list literal overflowed the
+# bytecode emitter - and the refresh is never held up for long), then
+# pushes the scene with take_upload(slot) in place of the values. Nothing
+# plays until that push, which validates the upload like any scene: an
+# interrupted upload changes nothing (the next upload_begin frees it).
+UPLOAD_PIECE_MAX = 2048         # values per piece: 4 KB of data, ~5.5 KB of base64
+_uploads = []
+
+
+def upload_begin(sizes):
+    """Stage one upload per entry of `sizes` (values each, 1 .. MAX_SAMPLES),
+    freeing any earlier one. Returns the number of slots."""
+    global _uploads
+    _uploads = []
+    gc.collect()
+    if not isinstance(sizes, (list, tuple)) or not 1 <= len(sizes) <= _scene.MAX_REGIONS:
+        raise ValueError("upload_begin: expected a list of 1 .. %d sizes" % _scene.MAX_REGIONS)
+    from .runtime.upload import Upload
+    try:
+        ups = [Upload(n) for n in sizes]
+    except MemoryError:
+        gc.collect()
+        raise ValueError("not enough memory on the board to receive %d sample values (%d bytes "
+                         "free); the current scene keeps playing"
+                         % (sum(sizes), compat.heap_free() or 0))
+    _uploads = ups
+    return len(ups)
+
+
+def upload_write(slot, offset, b64):
+    """The next piece of upload `slot`: base64 text of little-endian uint16
+    values starting at value `offset`. Returns the values arrived so far."""
+    import binascii
+    if not (isinstance(slot, int) and 0 <= slot < len(_uploads)):
+        raise ValueError("upload_write: no upload %r (upload_begin first)" % (slot,))
+    if not isinstance(b64, str) or len(b64) > 4 * UPLOAD_PIECE_MAX // 3 * 2 + 8:
+        raise ValueError("upload_write: a piece is base64 text of at most %d values"
+                         % UPLOAD_PIECE_MAX)
+    try:
+        data = binascii.a2b_base64(b64)
+    except ValueError:
+        raise ValueError("upload_write: the piece is not base64")
+    return _uploads[slot].write(offset, data)
+
+
+def take_upload(slot):
+    """Upload `slot`, handed over for a scene's samples region (and no longer
+    staged). Validation refuses it unless every value arrived."""
+    if not (isinstance(slot, int) and 0 <= slot < len(_uploads)) or _uploads[slot] is None:
+        raise ValueError("take_upload: no upload %r" % (slot,))
+    up = _uploads[slot]
+    _uploads[slot] = None
+    return up
+
+
+def upload_discard():
+    """Free whatever is staged (an interrupted upload)."""
+    global _uploads
+    _uploads = []
+    gc.collect()
 
 
 def stream(rate_hz=125):

@@ -114,9 +114,9 @@ def test_numpy_arrays_become_lists():
 
 
 @pytest.mark.parametrize("bad, where", [
-    ({"a": np.float64("nan")}, "a: nan is not a finite number"),
-    ({"a": np.float32("-inf")}, "a: -inf is not a finite number"),
-    ({"a": np.array([0.0, np.inf])}, "a[1]: inf is not a finite number"),
+    ({"a": np.float64("nan")}, "a: nan is not finite"),
+    ({"a": np.float32("-inf")}, "a: -inf is not finite"),
+    ({"a": np.array([0.0, np.inf])}, "a[1]: inf is not finite"),
     ({"a": np.complex128(1j)}, "a: complex128 values cannot be sent"),
     ({"a": np.array([1j])}, "a: ndarray values cannot be sent"),
     ({"a": np.datetime64("2026-01-01")}, "a: datetime64 values cannot be sent"),

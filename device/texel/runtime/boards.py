@@ -233,6 +233,66 @@ def names(search=None):
     return found
 
 
+# What each port's firmware calls itself (sys.platform; CircuitPython by its
+# implementation name). Any other platform (the unix port, CPython) is a
+# development host: there a board file fits only if its backend's modules
+# import (a test puts stand-in machine/pyb/pwmio modules on the path) - or it is "virtual".
+PLATFORM_PORT = {"rp2": "rp2", "pyboard": "stm32"}
+PORT_CHIP = {"rp2": "an RP2040 (MicroPython rp2 port)", "stm32": "an STM32 (MicroPython stm32 port, "
+             "sys.platform 'pyboard')", "circuitpython": "CircuitPython",
+             "virtual": "any firmware (the virtual board)"}
+
+
+def firmware_port():
+    """The port this firmware is (rp2, stm32, circuitpython), or None on a
+    development host (unix port, CPython)."""
+    import sys
+    if sys.implementation.name == "circuitpython":
+        return "circuitpython"
+    return PLATFORM_PORT.get(sys.platform)
+
+
+def fits(board):
+    """None when this firmware can run `board` (a loaded board dict), else
+    why not - one line naming the firmware. Only looks: no pin, timer or
+    register is touched, so a running display is not disturbed."""
+    import sys
+    port = board["port"]
+    if port == "virtual":
+        return None
+    here = firmware_port()
+    fw = "%s on %r" % (sys.implementation.name, sys.platform)
+    if here is not None:
+        if here == port:
+            return None
+        return ("board file %r is for %s, but this board runs %s (%s)"
+                % (board["name"], PORT_CHIP[port], fw, PORT_CHIP[here]))
+    try:                                # a development host: the backend's modules?
+        if port == "rp2":
+            import machine
+            machine.freq
+        elif port == "stm32":
+            import pyb  # noqa: F401 (only: does it import)
+        else:
+            import pwmio  # noqa: F401
+    except (ImportError, AttributeError) as e:
+        return ("board file %r is for %s, but this is %s (%s)"
+                % (board["name"], PORT_CHIP[port], fw, e))
+    return None
+
+
+def fitting(search=None):
+    """Names of the board files found that this firmware can run."""
+    out = []
+    for n in names(search):
+        try:
+            if fits(load(n, search)) is None:
+                out.append(n)
+        except ValueError:              # a broken file fits nothing
+            pass
+    return out
+
+
 def load(name, search=None):
     """Read and validate boards/<name>.json from the first directory of the
     search path that has it. ValueError when there is none, or when the file

@@ -18,7 +18,10 @@
 #   reference  "name": one of texel.reference_names(); rendered region-long.
 #   constant   "level": friction reduction 0..1 (no buffer: one table entry).
 #   samples    an upload: exactly one of "values" (numbers 0..1) or "u16"
-#              (ints 0..65535), 1..MAX_SAMPLES of them, and "fit":
+#              (ints 0..65535; or an Upload (runtime/upload.py) the host filled
+#              through texel.app.upload_* - large data crosses the link as data,
+#              not as a literal the board compiles), 1..MAX_SAMPLES of them,
+#              and "fit":
 #              "tile" (default): value k plays at region position k mod m -
 #                  one value per display position (5.3 um), so the spatial
 #                  frequencies the host designed are the ones felt;
@@ -31,7 +34,8 @@
 # the same dict with regions sorted by start; numbers as floats/ints; texel
 # textures with every default filled in (no length_samples); samples as
 # {"kind": "samples", "u16": tuple of ints, "fit": ...} ("values" become
-# round(v * 65535), half up; a tuple is kept as it is, a list is copied once);
+# round(v * 65535), half up; a tuple is kept as it is, a list is copied once;
+# an Upload becomes its array('H'), which an array('H') stays);
 # "idle_amplitude", "name" and "notes" only when the scene gave them.
 #
 # Positions: start_mm/end_mm are converted to display indices by rounding to
@@ -330,7 +334,12 @@ def _samples(path, tex):
     key = "u16" if has_u else "values"
     seq = tex[key]
     p = path + "." + key
-    if not isinstance(seq, (list, tuple)):
+    if has_u and getattr(seq, "UPLOAD", False):     # texel.runtime.upload.Upload
+        if seq.filled != len(seq.buf):
+            raise ValueError("%s: the upload is incomplete (%d of %d values arrived)"
+                             % (p, seq.filled, len(seq.buf)))
+        seq = seq.buf
+    if not isinstance(seq, (list, tuple)) and not (has_u and isinstance(seq, array)):
         raise ValueError("%s: expected a list of %s, got %s"
                          % (p, "ints in [0, 65535]" if has_u else "numbers in [0.0, 1.0]", _got(seq)))
     m = len(seq)
@@ -342,8 +351,10 @@ def _samples(path, tex):
             x = seq[i]
             if isinstance(x, bool) or not isinstance(x, int) or x < 0 or x > U16_MAX:
                 _int("%s[%d]" % (p, i), x, 0, U16_MAX)
-        # a tuple is immutable: the canonical form may share it
-        vals = seq if type(seq) is tuple else tuple(seq)
+        # a tuple is immutable: the canonical form may share it; an array
+        # comes from an Upload (or a canonical form holding one) and is kept:
+        # a tuple of 19,200 ints would cost twice its 38,400 bytes
+        vals = seq if type(seq) is tuple or isinstance(seq, array) else tuple(seq)
     else:
         for i in range(m):
             x = seq[i]
@@ -560,7 +571,10 @@ def _make(c, spans, positions, dx_um, idle, engine):
         else:
             table[j + 2] = K_BUF
             table[j + 3] = len(bufs)
-            bufs.append(_u16(e - s))            # exactly region-long
+            if _plays_as_is(tex, e - s):
+                bufs.append(tex["u16"])         # an uploaded map, exactly region-long
+            else:
+                bufs.append(_u16(e - s))        # exactly region-long
     # 2. render into them
     for k in range(count):
         j = STRIDE * k
@@ -575,9 +589,17 @@ def _make(c, spans, positions, dx_um, idle, engine):
         elif kind == "reference":
             from .. import reference_u16
             reference_u16(tex["name"], n, buf)
-        else:
+        elif buf is not tex["u16"]:
             _fill_samples(tex["u16"], tex["fit"], n, buf)
     return Scene(table, tuple(bufs), idle, c, spans, positions, dx_um, tuple(plans))
+
+
+def _plays_as_is(tex, n):
+    """An uploaded samples map (an array) that tiles a region of exactly its
+    length is played from its own buffer: no second copy (38,400 bytes for a
+    full TPaD screen). Nothing ever writes to it after the upload."""
+    return (tex["kind"] == "samples" and tex["fit"] == "tile" and isinstance(tex["u16"], array)
+            and len(tex["u16"]) == n)
 
 
 def _plan_of(tex, n):

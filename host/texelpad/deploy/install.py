@@ -284,8 +284,7 @@ def _recover(board: Any, was: tuple | None, report: dict[str, Any], planned: int
     name, scene, virtual = was
     try:
         board.link.resync()             # drop a request cut off half-way (Ctrl-C, raw REPL)
-        board.link.exec(protocol.restart(name, scene, virtual),
-                        timeout=max(board.link.timeout, 30))
+        board.restart(name, scene, virtual)
     except Exception as e:
         return ("The display is OFF: it played %s, was stopped for the deploy, and starting it "
                 "again failed (%s). %s Then start it: texelpad demo --port %s --board %s."
@@ -300,7 +299,7 @@ def _restart(board: Any, was: tuple, say: Callable[[str], None]) -> str:
     say("starting %s again with the new image and the scene it played" % name)
     try:
         # a fresh import on the board: the modules were dropped (PURGE)
-        board.link.exec(protocol.restart(name, scene, virtual), timeout=max(board.link.timeout, 60))
+        board.restart(name, scene, virtual)
         return name
     except LinkTimeout as e:
         err = e
@@ -309,8 +308,7 @@ def _restart(board: Any, was: tuple, say: Callable[[str], None]) -> str:
             "default scene" % (_one_line(e), name))
         try:
             board.link.exec(protocol.PURGE)
-            board.link.exec(protocol.restart(name, None, virtual),
-                            timeout=max(board.link.timeout, 60))
+            board.restart(name, None, virtual)
             return name
         except LinkError as e2:
             err = e2

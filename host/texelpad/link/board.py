@@ -16,6 +16,7 @@ plain floats are, and np.bool_ as True is (a bool is not a number).
 """
 from __future__ import annotations
 
+import sys
 import time
 from typing import Any, Callable, Iterator
 
@@ -26,8 +27,8 @@ import texel.runtime.scene
 from .. import __version__
 from . import protocol
 from .protocol import PROTOCOL, literal
-from .transport import DeviceError, ImageTooOld, Link, LinkError, NoBoard, NotTexelpad, NoUlab, \
-    ports
+from .transport import DeviceError, ImageTooOld, Interrupted, Link, LinkError, NoBoard, \
+    NotTexelpad, NoUlab, ports
 
 HOST_IMAGE_VERSION = texel.__version__
 
@@ -82,9 +83,11 @@ class Board:
         return self._app("status")
 
     def start(self, board_name: str, scene: dict[str, Any] | None = None,
-              **opts: Any) -> dict[str, Any]:
+              progress: Callable[[int, int], None] | None = None, **opts: Any) -> dict[str, Any]:
         """texel.app.start(board_name, scene, **opts): stops what plays and starts
-        again (board name = a file in boards/ on the device)."""
+        again (board name = a file in boards/ on the device). The board checks
+        the board file against its firmware and the scene first: a start that
+        cannot succeed leaves what plays playing."""
         board_name = protocol.plain(board_name)
         if not isinstance(board_name, str):
             raise ValueError("board name: %s is not a string" % type(board_name).__name__)
@@ -93,7 +96,15 @@ class Board:
         for k in opts:
             if not isinstance(k, str) or not k.isidentifier():
                 raise ValueError("start(): option %r is not a name" % (k,))
-        return self._app("start", board_name, scene, timeout=max(self.link.timeout, 30), **opts)
+        return self._send("start", [board_name, scene], 1, opts, progress)
+
+    def restart(self, board_name: str, scene: dict[str, Any] | None,
+                realtime: bool = False) -> dict[str, Any]:
+        """Start the display again with a scene this board played (its own
+        canonical form from scene_source(), checked by the board alone: it
+        fits the board's display, which need not be the TPaD's)."""
+        return self._send("start", [board_name, protocol.plain(scene)], 1,
+                          {"realtime": True} if realtime else None, None)
 
     def _running_status(self) -> dict[str, Any]:
         st = self.status()
@@ -105,7 +116,82 @@ class Board:
     def _push(self, scene: dict[str, Any], st: dict[str, Any],
               progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
         scene = host_check(scene, st["display"])
-        return self._app("push", scene, timeout=max(self.link.timeout, 30))
+        return self._send("push", [scene], 0, None, progress, st)
+
+    def _send(self, func: str, args: list[Any], scene_at: int, kwargs: dict | None,
+              progress: Callable[[int, int], None] | None,
+              before: dict[str, Any] | None = None) -> dict[str, Any]:
+        """texel.app.push / start with the scene in args[scene_at]: its long
+        samples regions go first as uploads (data in pieces, with progress),
+        then the call takes them in place of their values. Ctrl-C on the host
+        (KeyboardInterrupt) interrupts the board too and says exactly what
+        the board plays afterwards (Interrupted)."""
+        timeout = max(self.link.timeout, 30)
+        scene = args[scene_at]
+        try:
+            if scene is None:
+                return self._app(func, *args, timeout=timeout, **(kwargs or {}))
+            scene, uploads = protocol.split_uploads(scene)
+            if not uploads:
+                args = list(args)
+                args[scene_at] = scene
+                return self._app(func, *args, timeout=timeout, **(kwargs or {}))
+            self._upload([u for _, u in uploads], progress)
+            args = list(args)
+            args[scene_at] = scene
+            kind, value = self.link.eval(protocol.staged_call(
+                protocol.APP, func, args, scene_at, {i: k for k, (i, _) in enumerate(uploads)},
+                kwargs), timeout)
+            if kind == "err":
+                raise DeviceError(value)
+            return value
+        except KeyboardInterrupt:
+            raise self._interrupted(func, before) from None
+
+    def _upload(self, values: list[list[int]],
+                progress: Callable[[int, int], None] | None) -> list[int]:
+        """Stage each list of uint16 values on the board (texel.app.upload_*),
+        in pieces of protocol.UPLOAD_PIECE values; progress(bytes done, total)."""
+        import base64
+        from array import array
+        self._app("upload_begin", [len(v) for v in values])
+        total = 2 * sum(len(v) for v in values)
+        done = 0
+        if progress:
+            progress(0, total)
+        for slot, vals in enumerate(values):
+            for o in range(0, len(vals), protocol.UPLOAD_PIECE):
+                part = array("H", vals[o:o + protocol.UPLOAD_PIECE])
+                if sys.byteorder == "big":
+                    part.byteswap()
+                self._app("upload_write", slot, o, base64.b64encode(part.tobytes()).decode())
+                done += 2 * len(part)
+                if progress:
+                    progress(done, total)
+        return list(range(len(values)))
+
+    def _interrupted(self, func: str, before: dict[str, Any] | None) -> Interrupted:
+        """After Ctrl-C on the host: stop the board's half-done request
+        (Ctrl-C to the board: an upload or a scene still being built is
+        dropped), free what was staged, and find out what plays now. A push
+        switched if the board counted it or what plays changed (the swap and
+        the count are two steps on the board; either shows it)."""
+        try:
+            self.link.resync()
+            self._app("upload_discard")
+            st = self.status()
+        except LinkError as e:
+            return Interrupted("interrupted; the board did not answer afterwards (%s), so what "
+                               "it plays is unknown: texelpad status tells" % e)
+        if func == "push" and before is not None:
+            if st.get("pushes") != before.get("pushes") or st.get("scene") != before.get("scene"):
+                return Interrupted("interrupted too late: the board had already switched to the "
+                                   "new scene (texelpad status shows it)")
+            return Interrupted("interrupted: nothing changed, the board plays what it played")
+        if st.get("running"):
+            return Interrupted("interrupted: the board runs board file %r (texelpad status "
+                               "shows what it plays)" % st.get("board"))
+        return Interrupted("interrupted: the display is stopped")
 
     def push(self, scene: dict[str, Any],
              progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
@@ -122,13 +208,33 @@ class Board:
         st = self._running_status()
         return self._push(full_screen_texel(params, st["display"]), st)
 
+
     def stop(self) -> None:
         """Carrier to its safe off state."""
         self._app("stop")
 
     def scene_source(self) -> dict[str, Any] | None:
-        """The canonical scene playing now (to redraw it on the host)."""
-        return self._app("scene_source")
+        """The canonical scene playing now (to redraw it on the host, save it
+        or play it again); long samples regions are read in pieces."""
+        import base64
+        from array import array
+        src = self._app("scene_source", protocol.INLINE_SAMPLES_MAX)
+        if src is None:
+            return None
+        for i, r in enumerate(src["regions"]):
+            tex = r["texture"]
+            if tex["kind"] == "samples" and isinstance(tex["u16"], int):
+                n = tex["u16"]
+                vals = array("H")
+                while len(vals) < n:
+                    vals.frombytes(base64.b64decode(self._app(
+                        "samples_b64", i, len(vals), protocol.UPLOAD_PIECE)))
+                if sys.byteorder == "big":
+                    vals.byteswap()
+                tex["u16"] = vals.tolist()
+            elif tex["kind"] == "samples":
+                tex["u16"] = list(tex["u16"])
+        return src
 
     # --- telemetry --------------------------------------------------------------
     def stream(self, rate_hz: int = 125) -> int:
@@ -259,3 +365,82 @@ def check_image(board: Board) -> None:
             "(protocol %s): %s" % (board.port, ver, proto, __version__, PROTOCOL,
                                    "run texelpad deploy --port %s to update it" % board.port
                                    if older else "update the host (pip install -U texelpad)"))
+
+
+def full_screen(texture: dict[str, Any], display: dict[str, Any]) -> dict[str, Any]:
+    """A scene of one region of `texture` (any kind: {"kind": "reference",
+    "name": "4sin"}, {"kind": "constant", "level": 0.5}, ...) over the whole
+    display."""
+    total = display["positions"] * display["dx_um"] / 1000.0
+    return {"regions": [{"start_mm": 0, "end_mm": round(total, 6), "texture": dict(texture)}]}
+
+
+# --- the power-up scene -----------------------------------------------------------
+# The board's /main.py (texel/main.py) starts {"board": NAME, "scene": {...}}
+# from this file at power-up when it is there; `texelpad deploy` leaves it
+# alone (it is not an image file).
+BOOT_FILE = "/texelpad.json"
+
+
+def on_board_path(board: Board, path: str) -> str:
+    """A board path ("/texelpad.json") as this board names it: the unix port
+    (the virtual board) has the host's filesystem, its "/" is its flash
+    folder, the working directory, so paths go relative there - the rule of
+    texelpad.deploy.install.on_board, which main.py follows too."""
+    if board.firmware["platform"] in ("linux", "darwin", "win32"):
+        return path.lstrip("/")
+    return path
+
+
+def board_display(board: Board, name: str) -> dict[str, Any]:
+    """The display of board file `name` as this board would start it (its own
+    /boards/NAME.json first), after checking that it fits the firmware;
+    DeviceError (the board's words) when it has no such file or it does not
+    fit. Nothing that plays is touched."""
+    name = protocol.plain(name)
+    if not isinstance(name, str):
+        raise ValueError("board name: %s is not a string" % type(name).__name__)
+    kind, value = board.link.eval(protocol.board_display(name))
+    if kind == "err":
+        raise DeviceError(value)
+    return value
+
+
+def boot_config(board_name: str, scene: Any, display: dict[str, Any]) -> dict[str, Any]:
+    """{"board": NAME, "scene": canonical} for the power-up file, the scene
+    checked here first (host_check) and kept in its canonical form: every
+    default filled in, so it plays the same after the board's texel is
+    updated; ValueError (the board's own words) when it would not start."""
+    if not isinstance(board_name, str) or not board_name:
+        raise ValueError("board name: expected a board file's name, got %r" % (board_name,))
+    canonical = texel.runtime.scene.validate(host_check(scene, display), display)
+    return {"board": board_name, "scene": protocol.plain(canonical)}
+
+
+def write_boot(board: Board, config: dict[str, Any]) -> int:
+    """Write `config` (boot_config()) to BOOT_FILE: beside the old copy
+    ("<file>.new"), then renamed over it, so a failure half-way leaves the
+    old file whole (a half-written ".new" is removed). Returns its size."""
+    import json
+    data = (json.dumps(config, separators=(",", ":"), allow_nan=False) + "\n").encode("utf-8")
+    path = on_board_path(board, BOOT_FILE)
+    tmp = path + ".new"
+    try:
+        board.link.write_file(tmp, data)
+        board.link.exec(protocol.replace_file(path, tmp))
+    except LinkError:
+        try:
+            board.link.exec(protocol.remove_file(tmp))
+        except LinkError:
+            pass
+        raise
+    return len(data)
+
+
+def clear_boot(board: Board) -> bool:
+    """Remove BOOT_FILE (and a leftover "<file>.new"); False when there was none."""
+    path = on_board_path(board, BOOT_FILE)
+    found = board.link.eval(protocol.kinds([path, path + ".new"]))
+    if any(found.values()):
+        board.link.exec(protocol.remove_files([path, path + ".new"]))
+    return found.get(path) is not None

@@ -88,7 +88,8 @@ def _plain(v: Any, path: str, seen: set[int], depth: int, np: Any) -> Any:
         return v
     if t is float:
         if not math.isfinite(v):
-            raise LiteralError("%s: %r is not a finite number" % (where, v))
+            # the board's own wording (texel.gen.params, texel.runtime.scene)
+            raise LiteralError("%s: %r is not finite" % (where, v))
         return v
     if np is not None and isinstance(v, (np.generic, np.ndarray)):
         conv = _from_numpy(v, where, np)
@@ -176,6 +177,57 @@ def call(module: str, func: str, args: Sequence[Any] = (), kwargs: dict | None =
     argtext = ", ".join([literal(a) for a in args] + (["**" + literal(kwargs)] if kwargs else []))
     return ("import %s as _m\ntry:\n _r = ('ok', _m.%s(%s))\nexcept ValueError as _e:\n"
             " _r = ('err', str(_e))\nprint(repr(_r))\n_m = _r = None" % (module, func, argtext))
+
+
+# --- long samples regions: data, not code -------------------------------------------
+
+# A samples region of more values than this crosses the link as an upload
+# (texel.app.upload_*: base64 pieces of UPLOAD_PIECE values) instead of a
+# list literal inside the scene. A literal of thousands of numbers is code
+# the board must compile in one go: 9,000 ints overflowed MicroPython's
+# bytecode emitter, and the compile held the virtual board's refresh for
+# 0.33 s. 512 values are ~3.5 KB of literal, compiled in a few ms.
+INLINE_SAMPLES_MAX = 512
+UPLOAD_PIECE = texel.app.UPLOAD_PIECE_MAX
+
+
+def split_uploads(scene: dict[str, Any]) -> tuple[dict[str, Any], list[tuple[int, list[int]]]]:
+    """A checked plain scene -> (the scene with every long samples region's
+    values taken out ("u16": None), [(region index, its uint16 values)]).
+    "values" (0..1) become uint16 here exactly as the board's validation
+    makes them (round(v * 65535), half up; texel.runtime.scene._samples) -
+    in float64, where a float32 board would round a few differently."""
+    regions = list(scene["regions"])
+    out: list[tuple[int, list[int]]] = []
+    for i, r in enumerate(regions):
+        tex = r["texture"]
+        if tex.get("kind") != "samples":
+            continue
+        key = "u16" if "u16" in tex else "values"
+        vals = tex[key]
+        if len(vals) <= INLINE_SAMPLES_MAX:
+            continue
+        u16 = list(vals) if key == "u16" else [int(x * 65535.0 + 0.5) for x in vals]
+        regions[i] = dict(r, texture={"kind": "samples", "u16": None,
+                                      "fit": tex.get("fit", "tile")})
+        out.append((i, u16))
+    if not out:
+        return scene, out
+    return dict(scene, regions=regions), out
+
+
+def staged_call(module: str, func: str, args: Sequence[Any], scene_at: int,
+                slots: dict[int, int], kwargs: dict | None = None) -> str:
+    """call(), with the scene in args[scene_at] completed on the board: the
+    samples region i gets upload slots[i] (texel.app.take_upload) in place of
+    its values before `func` runs."""
+    argtext = ", ".join(["_s" if k == scene_at else literal(a) for k, a in enumerate(args)]
+                        + (["**" + literal(kwargs)] if kwargs else []))
+    fill = "".join(" _g[%d]['texture']['u16'] = _m.take_upload(%d)\n" % (int(i), int(slot))
+                   for i, slot in sorted(slots.items()))
+    return ("import %s as _m\ntry:\n _s = %s\n _g = _s['regions']\n%s _r = ('ok', _m.%s(%s))\n"
+            "except ValueError as _e:\n _r = ('err', str(_e))\nprint(repr(_r))\n"
+            "_m = _r = _s = _g = None" % (module, literal(args[scene_at]), fill, func, argtext))
 
 
 def render_u16(params: dict[str, Any], engine: str | None) -> str:
@@ -324,7 +376,29 @@ def preflight(paths: Sequence[str], dirs: Sequence[str], root: str, probe: bool 
                               "root": literal(root), "probe": literal(bool(probe))}
 
 
-def restart(board_name: str, scene: Any, realtime: bool) -> str:
-    """Start the display again, from a fresh import of the image."""
-    return ("import texel.app as _a\n_a.start(%s, %s%s)\n_a = None"
-            % (literal(board_name), literal(scene), ", realtime=True" if realtime else ""))
+# --- the power-up scene (/texelpad.json, read by the board's /main.py) -----------------
+
+_KINDS_CODE = """import os
+def _k(p):
+ try:
+  return 'd' if os.stat(p)[0] & 0x4000 else 'f'
+ except OSError:
+  return None
+print(repr({p: _k(p) for p in %s}))
+_k = None
+"""
+
+
+def kinds(paths: Sequence[str]) -> str:
+    """What is at each path: {path: 'f' file, 'd' folder, None nothing}."""
+    return _KINDS_CODE % literal(list(paths))
+
+
+def board_display(name: str) -> str:
+    """Board file `name` loaded as texel.app.start loads it (a user's
+    /boards/NAME.json first) and checked to fit this firmware, without
+    touching what plays: ('ok', its display) or ('err', why not)."""
+    return ("import texel.runtime.boards as _b\ntry:\n _d = _b.load(%s)\n _w = _b.fits(_d)\n"
+            " _r = ('err', _w) if _w else ('ok', {'positions': _d['display']['positions'], "
+            "'dx_um': _d['display']['dx_um']})\nexcept ValueError as _e:\n _r = ('err', str(_e))\n"
+            "print(repr(_r))\n_b = _d = _w = _r = None" % literal(name))

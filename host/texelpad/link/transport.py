@@ -64,6 +64,10 @@ class LinkTimeout(LinkError):
     """The board stopped answering."""
 
 
+class Interrupted(KeyboardInterrupt):
+    """Ctrl-C during a request; the text says what the board does now."""
+
+
 class DeviceError(LinkError, ValueError):
     """The device refused the request; the text is the device's own."""
 

@@ -1,0 +1,76 @@
+# Uploads: long samples regions arriving over the link as data (base64
+# pieces, texel.app.upload_*), not as a literal the board compiles. In its
+# own module so the scene code every board imports stays small (the unix
+# port's heap test, tests/runtime/test_scene.py, builds the split screen on
+# a 176 KB heap); imported only when an upload begins.
+#
+# The array <-> bytes conversions below differ between runtimes (a
+# MicroPython array reads bytes as raw memory, CPython's needs frombytes)
+# and would belong in texel/compat.py, but every board imports compat and
+# only an upload needs them: kept here, the unix port's 176 KB heap test
+# still builds the split screen (compat grown by them, it did not).
+from array import array
+from ..compat import u16_buffer
+from .scene import MAX_SAMPLES
+
+
+def u16_put_bytes(buf, offset, data):
+    """Write the little-endian uint16 values in `data` (bytes, even length)
+    into buf[offset:]: how uploaded samples reach their buffer (the link
+    carries them as base64 data, never as code). MicroPython and
+    CircuitPython read array('H', bytes) as raw memory (every board here is
+    little-endian); CPython needs frombytes (and a swap on a big-endian
+    host). A port without array slice assignment takes the loop."""
+    try:
+        part = array("H", data)
+    except TypeError:                   # CPython: no bytes initializer for 'H'
+        import sys
+        part = array("H")
+        part.frombytes(data)
+        if sys.byteorder == "big":
+            part.byteswap()
+    k = len(part)
+    try:
+        buf[offset:offset + k] = part
+    except (TypeError, NotImplementedError):     # no MICROPY_PY_ARRAY_SLICE_ASSIGN
+        for i in range(k):
+            buf[offset + i] = part[i]
+    return k
+
+
+def u16_bytes(buf, start, end):
+    """buf[start:end] (an array('H')) as little-endian bytes: the read side
+    of u16_put_bytes."""
+    part = buf[start:end]
+    if hasattr(part, "tobytes"):        # CPython
+        import sys
+        if sys.byteorder == "big":
+            part.byteswap()
+        return part.tobytes()
+    return bytes(part)                  # MicroPython: an array's raw memory
+
+
+class Upload:
+    """n uint16 samples arriving in pieces over the link (texel.app.upload_*):
+    a buffer filled in order, then handed to validate() as a samples
+    region's "u16"; validate refuses it until every value has arrived."""
+
+    UPLOAD = True               # what scene.validate looks for (no literal has it)
+
+    def __init__(self, n):
+        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_SAMPLES:
+            raise ValueError("upload: %r values; allowed 1 .. %d" % (n, MAX_SAMPLES))
+        self.buf = u16_buffer(n)
+        self.filled = 0
+
+    def write(self, offset, data):
+        """The next piece: `data` little-endian uint16 bytes for positions
+        offset.. (pieces arrive in order: offset must be what has arrived)."""
+        if offset != self.filled:
+            raise ValueError("upload: piece at value %d, expected %d (pieces arrive in order)"
+                             % (offset, self.filled))
+        if len(data) & 1 or offset + len(data) // 2 > len(self.buf):
+            raise ValueError("upload: %d bytes at value %d do not fit %d values"
+                             % (len(data), offset, len(self.buf)))
+        self.filled += u16_put_bytes(self.buf, offset, data)
+        return self.filled
