@@ -11,11 +11,19 @@
 import sys
 
 
+# `texelpad scene boot` writes it (atomically: beside the old copy, renamed over).
+# The unix port (the virtual board) has the host's filesystem: its "/" is its
+# flash folder, the working directory, so the path is relative there (the
+# rule of texelpad.deploy.install.on_board).
+CONFIG = "texelpad.json" if sys.platform in ("linux", "darwin", "win32") else "/texelpad.json"
+
+
 def _config():
     try:
         import json
-        with open("/texelpad.json") as f:
-            return json.load(f)
+        with open(CONFIG) as f:
+            cfg = json.load(f)
+        return cfg if isinstance(cfg, dict) else {}
     except (OSError, ValueError):
         return {}
 

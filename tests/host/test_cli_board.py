@@ -85,8 +85,8 @@ def test_push_scene_file(capsys, port, tmp_path):
 
 
 BAD_FLAGS = [
-    (["--pitch-db", "nan", "--irregularity-db", "-9"], "--pitch-db: nan is not a finite number"),
-    (["--pitch-db", "inf", "--irregularity-db", "-9"], "--pitch-db: inf is not a finite number"),
+    (["--pitch-db", "nan", "--irregularity-db", "-9"], "--pitch-db: nan is not finite"),
+    (["--pitch-db", "inf", "--irregularity-db", "-9"], "--pitch-db: inf is not finite"),
     (["--pitch-db", "40", "--irregularity-db", "-9"], "--pitch-db: 40.0 is out of range"),
     (["--pitch-db", "4", "--irregularity-db", "-9", "--seed", "-1"], "--seed: -1 is out of range"),
     (["--pitch-db", "4", "--irregularity-db", "-9", "--gain", "2"], "--gain: 2.0 is out of range"),
@@ -108,7 +108,7 @@ def test_bad_flags_refused_state_unchanged(capsys, port, flags, msg):
 
 BAD_SCENES = [
     ('{"regions": [{"start_mm": 0, "end_mm": 10, "texture": {"kind": "texel", '
-     '"pitch_db": NaN, "irregularity_db": -9}}]}', "regions[0].texture.pitch_db: nan is not a finite"),
+     '"pitch_db": NaN, "irregularity_db": -9}}]}', "regions[0].texture.pitch_db: nan is not finite"),
     ('{"regions": [{"start_mm": 0, "end_mm": 10, "texture": {"kind": "texel", '
      '"pitch_db": Infinity, "irregularity_db": -9}}]}', "regions[0].texture.pitch_db: inf"),
     ('{"regions": [{"start_mm": 0, "end_mm": 500, "texture": {"kind": "constant", "level": 1}}]}',

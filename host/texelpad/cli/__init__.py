@@ -24,11 +24,16 @@ from .. import __version__
 COMMANDS: dict[str, tuple[str, str, str]] = {
     "demo": ("demo", "demo",
              "the quick start: play the study's split screen, sweep a finger, plot it"),
-    "push": ("board", "push", "play a texel texture (flags) or a scene (JSON file) on the board"),
+    "push": ("board", "push", "play a texel texture (flags), a reference texture, a constant "
+                              "level or a scene (JSON file) on the board"),
     "deploy": ("deploy", "deploy",
                "install or update the device image on the board (only what changed)"),
     "virtual": ("virtual", "virtual", "run a virtual board; prints its serial port (a pty) first"),
+    "stop": ("board", "stop", "safety: turn the carrier off now"),
     "status": ("board", "status", "what the board plays and how its loop runs"),
+    "scene": ("scene", "scene", "save the scene playing to a file (pull), or set the scene the "
+                                "board plays at power-up (boot)"),
+    "scenes": ("scene", "scenes", "list the example scenes shipped with texelpad"),
     "monitor": ("board", "monitor",
                 "live finger position and amplitude, to the terminal or a CSV file"),
     "ports": ("board", "ports", "list the boards plugged in"),

@@ -7,20 +7,21 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import sys
 import time
 from typing import Any
 
-from ..link.protocol import LiteralError
 from ..link.transport import DeviceError, LinkError
-from .common import EXIT_FAIL, EXIT_OK, CliError, _connect, _fail, _port_arg, _stderr, \
-    _value_error, TEXEL_KEYS, add_texel_flags, positive_float, read_scene_file, render_params
+from .common import EXIT_FAIL, EXIT_OK, CliError, ProgressBar, _connect, _fail, _one_board, \
+    _port_arg, device_error, _stderr, _value_error, TEXEL_KEYS, add_texel_flags, not_running, positive_float, \
+    read_scene_file, render_params
 
 
 def describe_scene(desc: dict[str, Any] | None) -> str:
     """status()['scene'] as lines a person reads."""
     if not desc:
         return "nothing (the board plays its idle level)"
-    lines = []
+    lines = ["  %s" % desc["name"]] if desc.get("name") else []
     for r in desc["regions"]:
         what = r["kind"]
         if what == "texel":
@@ -40,15 +41,22 @@ def describe_scene(desc: dict[str, Any] | None) -> str:
 
 
 def add_push(p: argparse.ArgumentParser) -> None:
-    p.description = ("Send a texel parameter set (as one full-display region) or a scene file "
-                    "to the board and print what now plays. The scene is checked on the host "
-                    "with the board's own validation, then on the board; if anything fails "
-                    "the board keeps playing what it played.")
+    p.description = ("Send a texel parameter set, a reference texture or a constant level (as "
+                     "one full-display region) or a scene file to the board and print what "
+                     "now plays. The scene is checked on the host with the board's own "
+                     "validation, then on the board; if anything fails the board keeps "
+                     "playing what it played.")
     g = p.add_argument_group("a texel texture over the whole display")
     add_texel_flags(g, tuple(k for k in TEXEL_KEYS if k != "length_samples"))
     p.add_argument("--scene", metavar="FILE.json",
                    help="a scene file: {\"regions\": [{\"start_mm\": .., \"end_mm\": .., "
-                        "\"texture\": {...}}, ...]} (docs/runtime.md)")
+                        "\"texture\": {...}}, ...]} (docs/runtime.md); - reads it from stdin; "
+                        "a shipped scene's name (texelpad scenes) when no such file exists")
+    p.add_argument("--reference", metavar="NAME",
+                   help="a reference texture of the study over the whole display (2sin, 4sin, "
+                        "square, pink, bp-4-0.5, ...)")
+    p.add_argument("--constant", type=float, metavar="LEVEL",
+                   help="a constant friction reduction 0 .. 1 over the whole display")
     p.add_argument("--board", metavar="NAME",
                    help="start texelpad with this board file first if it is not running "
                         "(e.g. pico, pyboard, virtual)")
@@ -57,35 +65,102 @@ def add_push(p: argparse.ArgumentParser) -> None:
     p.set_defaults(func=cmd_push)
 
 
-def cmd_push(args: argparse.Namespace) -> int:
+# Sample uploads of at least this many bytes show a progress bar also when
+# stderr is not a terminal (a log then gets one line); on a terminal always.
+PROGRESS_MIN_BYTES = 16 * 1024
+
+
+class _UploadProgress:
+    """Board.push's progress(done, total) as common.ProgressBar on stderr."""
+
+    def __init__(self) -> None:
+        self.bar: ProgressBar | None = None
+
+    def __call__(self, done: int, total: int) -> None:
+        if self.bar is None:
+            if not (sys.stderr.isatty() or total >= PROGRESS_MIN_BYTES):
+                return
+            self.bar = ProgressBar(sys.stderr, label="push")
+        self.bar(done, total, "samples upload")
+
+    def end(self) -> None:
+        if self.bar is not None:
+            self.bar.end()
+
+
+def _what_to_push(args: argparse.Namespace) -> tuple[str, Any]:
+    """Exactly one of: texel flags, --scene, --reference, --constant, as
+    (kind, its value); checked before the board is opened."""
+    import math
+
+    import texel
     params = render_params(args)
-    if args.scene and params:
-        raise CliError("--scene", "give either a scene file or texel flags, not both")
-    if not args.scene and not params:
-        raise CliError("", "nothing to push: give --pitch-db and --irregularity-db, or --scene")
-    scene = read_scene_file(args.scene) if args.scene else None
+    given = [name for name, on in (("texel flags", bool(params)),
+                                   ("--scene", args.scene is not None),
+                                   ("--reference", args.reference is not None),
+                                   ("--constant", args.constant is not None)) if on]
+    if len(given) > 1:
+        raise CliError("", "give one of texel flags, --scene, --reference or --constant, "
+                       "not %s" % " and ".join(given))
+    if not given:
+        raise CliError("", "nothing to push: give --pitch-db and --irregularity-db, --scene, "
+                       "--reference or --constant")
+    if params:
+        try:
+            texel.validate(params)      # the generator's own words, as render says them
+        except ValueError as e:
+            raise device_error(e) from None
+        return "texel", params
+    if args.scene is not None:
+        return "scene", read_scene_file(args.scene)
+    if args.reference is not None:
+        known = texel.reference_names()
+        if args.reference not in known:
+            raise CliError("--reference", "unknown reference texture %r (known: %s)"
+                           % (args.reference[:40], ", ".join(known)))
+        return "texture", {"kind": "reference", "name": args.reference}
+    if not (math.isfinite(args.constant) and 0 <= args.constant <= 1):
+        raise CliError("--constant", "must be a friction level 0 .. 1, got %s" % args.constant)
+    return "texture", {"kind": "constant", "level": args.constant}
+
+
+def _refused(e: ValueError, kind: str, args: argparse.Namespace) -> CliError:
+    """A refused push, naming the flag it came from."""
+    if kind == "texture":
+        return CliError("--reference" if args.reference is not None else "--constant",
+                        ("the board refused it: " if isinstance(e, DeviceError) else "") + str(e))
+    return _value_error(e, kind == "texel")
+
+
+def cmd_push(args: argparse.Namespace) -> int:
+    from ..link.board import full_screen
+    kind, what = _what_to_push(args)
     _one_board(args)
+    progress = _UploadProgress()
     with _connect(args) as b:
         try:
             st = b.status()
             if not st.get("running"):
                 if not args.board:
-                    raise CliError("--board", "texelpad is not running on %s: say which board "
-                                   "file to start it with (--board pico, --board virtual, ...)"
-                                   % b.port)
+                    raise not_running(b.port, "--board NAME starts it: --board pico, "
+                                      "--board virtual, ...")
                 # realtime: a virtual board started from the host plays in real
                 # time (stepped, it would play nothing); other ports ignore it
-                b.start(args.board, realtime=True)
+                st = b.start(args.board, realtime=True)
             sent0 = b.link.sent
             t0 = time.perf_counter()
-            st = b.push(scene) if scene is not None else b.push_texel(params)
+            if kind == "texel":
+                st = b.push_texel(what)
+            else:
+                scene = what if kind == "scene" else full_screen(what, st["display"])
+                st = b.push(scene, progress=progress)
             dt = time.perf_counter() - t0
-        except (LiteralError, DeviceError) as e:
-            raise _value_error(e, scene is None) from None
-        except ValueError as e:                # the host-side check (the board's own code)
-            raise _value_error(e, scene is None) from None
+        except ValueError as e:    # LiteralError, DeviceError, the host-side check (the
+            raise _refused(e, kind, args) from None     # board's own code)
         except LinkError as e:
             raise _fail(e) from None
+        finally:
+            progress.end()
         if args.json:
             print(json.dumps(st, indent=1, sort_keys=True))
         else:
@@ -139,21 +214,6 @@ def _stepped(b: Any, st: dict[str, Any]) -> bool:
     return b.status().get("refreshes") == st.get("refreshes")
 
 
-def _one_board(args: argparse.Namespace) -> None:
-    """No --port: the one board there is, a running `texelpad virtual`
-    included (connect() itself only knows USB boards)."""
-    if getattr(args, "port", None) is not None:
-        return
-    from ..link.transport import ports
-    from ..link.virtual import running_boards
-    found = [p["port"] for p in ports()] + [e["port"] + " (virtual)" for e in running_boards()]
-    if len(found) > 1:
-        raise CliError("--port", "%d boards found (%s): say which with --port"
-                       % (len(found), ", ".join(found)), EXIT_FAIL)
-    if found:
-        args.port = found[0].split(" ")[0]
-
-
 def cmd_status(args: argparse.Namespace) -> int:
     _one_board(args)
     with _connect(args) as b:
@@ -170,6 +230,58 @@ def cmd_status(args: argparse.Namespace) -> int:
         print(format_status(st))
         if stepped:
             print("WARNING: " + STEPPED)
+    return EXIT_OK
+
+
+def add_stop(p: argparse.ArgumentParser) -> None:
+    p.description = ("Safety: turn the carrier off now (texel.app.stop(): the refresh stops, "
+                     "the carrier goes to its safe off state). Says what played; a board "
+                     "already stopped is fine (exit 0). Works with an image older than this "
+                     "host too. texelpad push --board NAME starts it again.")
+    _port_arg(p, "the one board plugged in")
+    p.set_defaults(func=cmd_stop)
+
+
+def scene_line(desc: dict[str, Any] | None) -> str:
+    """status()['scene'] in a few words: its name, else its regions."""
+    if not desc:
+        return "nothing"
+    if desc.get("name"):
+        return repr(desc["name"])
+    parts = []
+    for r in desc["regions"]:
+        k = r["kind"]
+        parts.append("texel %s dB" % r["pitch_db"] if k == "texel" else
+                     "reference %s" % r["name"] if k == "reference" else
+                     "constant %.4f" % (r["amplitude"] / 65535) if k == "constant" else
+                     "samples")
+    more = len(parts) - 3
+    return ", ".join(parts[:3]) + (" and %d more region%s" % (more, "s" * (more > 1))
+                                   if more > 0 else "")
+
+
+def cmd_stop(args: argparse.Namespace) -> int:
+    _one_board(args)
+    # check=False: a safety command must work on an image older than this host
+    # (texel.app.stop and status have been there since the first one)
+    with _connect(args, check=False) as b:
+        if b.image is None:
+            print("%s has no texelpad image: texelpad plays nothing there" % b.port)
+            return EXIT_OK
+        try:
+            st = b.status()
+            if not st.get("running"):
+                print("texelpad is not running on %s: the carrier is already off" % b.port)
+                return EXIT_OK
+            b.stop()
+            after = b.status()
+        except LinkError as e:
+            raise _fail(e) from None
+    if after.get("running"):         # the board's stop() returned but the display runs
+        raise CliError("", "%s still runs texelpad after stop(); unplug the board's power "
+                       "stage" % b.port, EXIT_FAIL)
+    print("stopped %s (board %s): it played %s; the carrier is off"
+          % (b.port, st.get("board"), scene_line(st.get("scene"))))
     return EXIT_OK
 
 
@@ -221,8 +333,7 @@ def cmd_monitor(args: argparse.Namespace) -> int:
             try:
                 st = b.status()
                 if not st.get("running"):
-                    raise CliError("", "texelpad is not running on %s (texelpad push --board "
-                                   "NAME starts it)" % b.port, EXIT_FAIL)
+                    raise not_running(b.port)
                 hz = st["refresh_hz"]
                 if args.rate > hz:
                     raise CliError("--rate", "must be 1 .. %s samples/s, the refresh rate of %s "

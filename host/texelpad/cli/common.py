@@ -129,6 +129,11 @@ def device_error(e: ValueError) -> CliError:
     key, sep, rest = text.partition(": ")
     if sep and key in PARAM_FLAGS:
         return CliError(PARAM_FLAGS[key], rest)
+    missing = "missing required key '"
+    if text.startswith(missing):
+        key, _, more = text[len(missing):].partition("'")
+        if key in PARAM_FLAGS:
+            return CliError(PARAM_FLAGS[key], "required%s" % more)
     return CliError("", text)
 
 
@@ -235,27 +240,60 @@ def _connect(args: argparse.Namespace, check: bool = True) -> Any:
         raise _fail(e) from None
 
 
-def read_scene_file(path: str) -> dict[str, Any]:
+# The shipped example scenes: texelpad/scenes/<stem>.json (package data).
+SCENES_PACKAGE = "texelpad.scenes"
+
+
+def shipped_scenes() -> dict[str, Any]:
+    """{stem: the shipped scene file (an importlib Traversable)}, sorted."""
+    from importlib import resources
+    found = {}
+    for f in resources.files(SCENES_PACKAGE).iterdir():
+        if f.name.endswith(".json") and f.is_file():
+            found[f.name[:-5]] = f
+    return dict(sorted(found.items()))
+
+
+def read_scene_file(path: str, flag: str = "--scene") -> dict[str, Any]:
+    """A scene from a JSON file; "-" reads stdin; a name with no file of
+    that name is a shipped scene (`texelpad scenes` lists them: "split-4sin"
+    or "split-4sin.json"). Every problem is one line naming `flag`, exit 2."""
+    shown = path
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        if path == "-":
+            shown = "stdin"
+            data = getattr(sys.stdin, "buffer", sys.stdin).read()
+            text = data.decode("utf-8") if isinstance(data, bytes) else data
+        else:
+            f = Path(path)
+            stem = path[:-5] if path.endswith(".json") else path
+            shipped = {} if f.exists() or "/" in path or os.sep in path else shipped_scenes()
+            if stem in shipped:
+                shown = "shipped scene %s" % stem
+                text = shipped[stem].read_text(encoding="utf-8")
+            else:
+                text = f.read_text(encoding="utf-8")
     except OSError as e:
-        raise CliError("--scene", "cannot read %s: %s" % (path, e.strerror or e)) from None
+        hint = ""
+        if not Path(path).exists() and "/" not in path and os.sep not in path:
+            hint = " (nor is it a shipped scene: texelpad scenes lists them)"
+        raise CliError(flag, "cannot read %s: %s%s" % (path, e.strerror or e, hint)) from None
     except UnicodeDecodeError:
-        raise CliError("--scene", "%s is not UTF-8 text" % path) from None
+        raise CliError(flag, "%s is not UTF-8 text" % shown) from None
     try:
         scene = json.loads(text, parse_int=_json_int)
     except json.JSONDecodeError as e:
-        raise CliError("--scene", "%s is not valid JSON: %s (line %d, column %d)"
-                       % (path, e.msg, e.lineno, e.colno)) from None
+        raise CliError(flag, "%s is not valid JSON: %s (line %d, column %d)"
+                       % (shown, e.msg, e.lineno, e.colno)) from None
     except _HugeInt as e:
-        raise CliError("--scene", "%s: the integer %s has %s digits, far too large for any "
-                       "scene value" % (path, e.head, e.digits)) from None
+        raise CliError(flag, "%s: the integer %s has %s digits, far too large for any "
+                       "scene value" % (shown, e.head, e.digits)) from None
     except RecursionError:
-        raise CliError("--scene", "%s is nested too deeply (a scene is a few levels deep: "
-                       "{\"regions\": [{\"texture\": {...}}]})" % path) from None
+        raise CliError(flag, "%s is nested too deeply (a scene is a few levels deep: "
+                       "{\"regions\": [{\"texture\": {...}}]})" % shown) from None
     if not isinstance(scene, dict):
-        raise CliError("--scene", "%s: a scene is a JSON object {\"regions\": [...]}, not a %s"
-                       % (path, type(scene).__name__))
+        raise CliError(flag, "%s: a scene is a JSON object {\"regions\": [...]}, not a %s"
+                       % (shown, type(scene).__name__))
     return scene
 
 
@@ -296,8 +334,9 @@ class ProgressBar:
     """Upload progress on stderr: a redrawn bar on a terminal, a line per
     file otherwise (logs, CI)."""
 
-    def __init__(self, stream: Any = None, width: int = 30):
+    def __init__(self, stream: Any = None, width: int = 30, label: str = "deploy"):
         self.stream = stream or sys.stderr
+        self.label = label
         self.tty = self.stream.isatty()
         self.width = width
         self.last = None
@@ -311,10 +350,30 @@ class ProgressBar:
                 format(total, ","), name[-32:]))
             self.stream.flush()
         elif name != self.last:
-            self.stream.write("deploy: %3d%% %s\n" % (frac * 100, name))
+            self.stream.write("%s: %3d%% %s\n" % (self.label, frac * 100, name))
         self.last = name
 
     def end(self) -> None:
         if self.tty and self.last is not None:
             self.stream.write("\n")
 
+
+def _one_board(args: argparse.Namespace) -> None:
+    """No --port: the one board there is, a running `texelpad virtual`
+    included (connect() itself only knows USB boards)."""
+    if getattr(args, "port", None) is not None:
+        return
+    from ..link.transport import ports
+    from ..link.virtual import running_boards
+    found = [p["port"] for p in ports()] + [e["port"] + " (virtual)" for e in running_boards()]
+    if len(found) > 1:
+        raise CliError("--port", "%d boards found (%s): say which with --port"
+                       % (len(found), ", ".join(found)), EXIT_FAIL)
+    if found:
+        args.port = found[0].split(" ")[0]
+
+
+def not_running(port: str, hint: str = "texelpad push --board NAME starts it") -> CliError:
+    """texelpad is not running on the board: a state of the world, not a
+    bad flag (exit 1), in the same words from every command."""
+    return CliError("", "texelpad is not running on %s (%s)" % (port, hint), EXIT_FAIL)

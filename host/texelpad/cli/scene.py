@@ -1,0 +1,236 @@
+"""Scenes as files: `texelpad scene pull FILE` saves what the board plays,
+`texelpad scene boot FILE` makes a scene the board's power-up scene
+(/texelpad.json, read by its /main.py), and `texelpad scenes` lists the
+example scenes shipped with texelpad (texelpad/scenes/*.json), which
+`--scene NAME` and `scene boot NAME` find by name.
+
+Output files are checked before the board is opened and written atomically
+(a temporary file beside them, renamed over): a failure never leaves a half
+file or clobbers the old one. The power-up file is checked on the host with
+the board's own validation and written beside its old copy on the board,
+then renamed over it, so a bad scene or a failed write leaves it as it was."""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from ..link.transport import DeviceError, LinkError
+from .common import EXIT_FAIL, EXIT_OK, CliError, _connect, _fail, _one_board, _port_arg, \
+    check_output, not_running, read_scene_file, shipped_scenes, write_output
+
+
+def add_scene(p: argparse.ArgumentParser) -> None:
+    from .common import _Parser
+    p.description = ("Scenes as files: save what the board plays (pull), or make a scene the "
+                     "one the board plays at power-up (boot).")
+    sub = p.add_subparsers(dest="action", metavar="ACTION", parser_class=_Parser)
+    s = sub.add_parser("pull", aliases=["save"], help="write the scene playing now to a file",
+                       description="Write the scene the board plays now (its canonical form: "
+                                   "every default filled in) to FILE as JSON, ready for "
+                                   "texelpad push --scene FILE. FILE is checked writable "
+                                   "before the board is opened and written atomically.")
+    s.add_argument("file", metavar="FILE", help="the JSON file to write; - for stdout")
+    _port_arg(s, "the one board plugged in")
+    s.set_defaults(func=cmd_scene_pull)
+    s = sub.add_parser("boot", help="set (or --clear) the scene the board plays at power-up",
+                       description="Make a scene the board's power-up scene: it is checked on "
+                                   "the host with the board's own validation and written to "
+                                   "/texelpad.json on the board with the board file to start "
+                                   "(the board's /main.py reads it at power-up; texelpad "
+                                   "deploy leaves it alone). The file is written beside its "
+                                   "old copy and renamed over it: a bad scene or a failed "
+                                   "write leaves the old one.")
+    s.add_argument("file", metavar="FILE", nargs="?",
+                   help="a scene file, - for stdin, or a shipped scene's name (texelpad scenes)")
+    s.add_argument("--current", action="store_true", help="the scene the board plays now")
+    s.add_argument("--clear", action="store_true",
+                   help="remove /texelpad.json: the board plays its default at power-up")
+    s.add_argument("--board", metavar="NAME",
+                   help="the board file to start at power-up (default: the one running now)")
+    _port_arg(s, "the one board plugged in")
+    s.set_defaults(func=cmd_scene_boot)
+    p.set_defaults(func=_no_action)
+
+
+def _no_action(args: argparse.Namespace) -> int:
+    raise CliError("", "say what to do: texelpad scene pull FILE, or texelpad scene boot "
+                   "FILE|--current|--clear (see: texelpad scene --help)")
+
+
+# --- pull ----------------------------------------------------------------------------
+
+# key order in a written scene (the board's dicts have no order of their own)
+_FIRST = ("kind", "name", "notes", "idle_amplitude", "regions", "start_mm", "end_mm", "texture")
+
+
+def _ordered(v: Any) -> Any:
+    if isinstance(v, dict):
+        keys = [k for k in _FIRST if k in v] + sorted(k for k in v if k not in _FIRST)
+        return {k: _ordered(v[k]) for k in keys}
+    if isinstance(v, (list, tuple)):
+        return [_ordered(x) for x in v]
+    return v
+
+
+def scene_json(scene: dict[str, Any]) -> str:
+    """A scene as JSON a person reads: one key a line, but each list of
+    numbers (a samples region's values) on one line."""
+    def fmt(v: Any, ind: str) -> str:
+        if isinstance(v, dict) and v:
+            inner = ind + "  "
+            return "{\n%s\n%s}" % (",\n".join("%s%s: %s" % (inner, json.dumps(k), fmt(x, inner))
+                                              for k, x in v.items()), ind)
+        if isinstance(v, list) and v and any(isinstance(x, (dict, list)) for x in v):
+            inner = ind + "  "
+            return "[\n%s\n%s]" % (",\n".join(inner + fmt(x, inner) for x in v), ind)
+        return json.dumps(v, allow_nan=False)
+    return fmt(_ordered(scene), "") + "\n"
+
+
+def write_atomic(path: str, text: str) -> None:
+    """Write text to path through a temporary file beside it, renamed over
+    it: readers see the old file or the new one, never half of one. A
+    special file (/dev/stdout, a FIFO) is written as it is."""
+    out = Path(path)
+    if out.exists() and not out.is_file():
+        with open(out, "w", encoding="utf-8") as f:
+            f.write(text)
+        return
+    parent = out.parent if str(out.parent) else Path(".")
+    fd, tmp = tempfile.mkstemp(prefix="." + out.name + ".", suffix=".tmp", dir=parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        # mkstemp makes 0600: give the file the mode a plain open() would
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, out)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+def cmd_scene_pull(args: argparse.Namespace) -> int:
+    if args.file != "-":
+        check_output("", args.file)          # before the board is opened
+    _one_board(args)
+    with _connect(args) as b:
+        try:
+            st = b.status()
+            if not st.get("running"):
+                raise not_running(b.port)
+            scene = b.scene_source()
+        except LinkError as e:
+            raise _fail(e) from None
+    if scene is None:
+        raise not_running(b.port)
+    text = scene_json(scene)
+    if args.file == "-":
+        sys.stdout.write(text)
+        return EXIT_OK
+    write_output("", args.file, lambda: write_atomic(args.file, text))
+    print("saved the scene playing on %s (%d region%s%s) to %s" % (
+        b.port, len(scene["regions"]), "" if len(scene["regions"]) == 1 else "s",
+        ", %r" % scene["name"] if scene.get("name") else "", args.file))
+    return EXIT_OK
+
+
+# --- boot ----------------------------------------------------------------------------
+
+def cmd_scene_boot(args: argparse.Namespace) -> int:
+    from ..link.board import BOOT_FILE, board_display, boot_config, clear_boot, write_boot
+    given = [n for n, on in (("FILE", args.file is not None), ("--current", args.current),
+                             ("--clear", args.clear)) if on]
+    if len(given) != 1:
+        raise CliError("", "give one of FILE, --current or --clear%s"
+                       % (", not %s" % " and ".join(given) if given else ""))
+    if args.clear and args.board:
+        raise CliError("--board", "--clear removes the power-up file; there is no board to name")
+    scene = read_scene_file(args.file, "FILE") if args.file is not None else None
+    _one_board(args)
+    with _connect(args) as b:
+        try:
+            if args.clear:
+                removed = clear_boot(b)
+                print("%s %s on %s: at power-up the board plays its default (the study's split "
+                      "screen, on the board file its firmware picks)"
+                      % ("removed" if removed else "there was no", BOOT_FILE, b.port))
+                return EXIT_OK
+            st = b.status()
+            running = st.get("running")
+            name = args.board or st.get("board")
+            if not name:
+                raise not_running(b.port, "--board NAME says which board file to start at "
+                                  "power-up")
+            if running and name == st.get("board"):
+                display = st["display"]
+            else:                               # the named board file, as the board reads it
+                display = board_display(b, name)
+            if args.current:
+                if not running:
+                    raise not_running(b.port)
+                scene = b.scene_source()
+            config = boot_config(name, scene, display)
+            size = write_boot(b, config)
+        except DeviceError as e:                # only the named board file is the board's
+            raise CliError("--board", "the board refused it: %s" % e) from None
+        except ValueError as e:                 # the host-side check (the board's own code)
+            raise CliError("", "%s: %s" % (_source(args), e)) from None
+        except LinkError as e:
+            raise _fail(e) from None
+    desc = config["scene"]
+    print("power-up scene of %s: board %s, %s (%d region%s); %s bytes in %s"
+          % (b.port, name, repr(desc["name"]) if desc.get("name") else _source(args),
+             len(desc["regions"]), "" if len(desc["regions"]) == 1 else "s",
+             format(size, ","), BOOT_FILE))
+    return EXIT_OK
+
+
+def _source(args: argparse.Namespace) -> str:
+    if args.current:
+        return "the scene playing now"
+    return "stdin" if args.file == "-" else args.file
+
+
+# --- the shipped scenes ------------------------------------------------------------
+
+def add_scenes(p: argparse.ArgumentParser) -> None:
+    p.description = ("List the example scenes shipped with texelpad: name, what to type "
+                     "(texelpad push --scene NAME, texelpad scene boot NAME) and the first "
+                     "line of their notes.")
+    p.add_argument("--json", action="store_true",
+                   help="print them as JSON: [{\"stem\", \"name\", \"notes\"}]")
+    p.set_defaults(func=cmd_scenes)
+
+
+def cmd_scenes(args: argparse.Namespace) -> int:
+    rows = []
+    for stem, f in shipped_scenes().items():
+        try:
+            scene = json.loads(f.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as e:
+            raise CliError("", "shipped scene %s cannot be read: %s" % (stem, e), EXIT_FAIL)
+        rows.append({"stem": stem, "name": scene.get("name", stem),
+                     "notes": scene.get("notes", "")})
+    if args.json:
+        print(json.dumps(rows, indent=1))
+        return EXIT_OK
+    ws = max([len(r["stem"]) for r in rows] + [4])
+    wn = max([len(r["name"]) for r in rows] + [4])
+    print("%-*s  %-*s  %s" % (ws, "SCENE", wn, "NAME", "NOTES"))
+    for r in rows:
+        first = (r["notes"].splitlines() or [""])[0]
+        print("%-*s  %-*s  %s" % (ws, r["stem"], wn, r["name"], first))
+    print("(texelpad push --scene NAME plays one; texelpad scene boot NAME plays it at power-up)")
+    return EXIT_OK
