@@ -246,3 +246,20 @@ def test_next_step_names_the_board_files_of_the_firmware():
     assert text.startswith("next: texelpad demo --port /dev/ttyACM0 --board %s " % rp2[0])
     assert "rp2 firmware: %s" % ", ".join(rp2) in text and "/main.py" in text
     assert "pyboard" not in text
+
+
+def test_a_damaged_image_file_is_replaced_without_being_imported(capsys, deployed):
+    """A truncated .mpy (a copy cut off by hand, flash trouble) hangs the
+    MicroPython loader that imports it. Deploy's handshake never imports the
+    image from its files (protocol.HELLO_LOADED), so deploy still reaches the
+    board, finds the file by its hash and rewrites it; the board then starts."""
+    flash, start = deployed
+    app = flash / "lib" / "texel" / "app.mpy"
+    app.write_bytes(app.read_bytes()[:300])
+    vb = start()                        # a fresh interpreter: nothing of texel imported
+    code, out, err = run_cli(capsys, "deploy", "--port", vb.port, "--timeout", "5")
+    assert code == 0, err
+    assert "1 of" in out and "files written" in out, out
+    _assert_image_intact(flash)
+    with texelpad.connect(vb.port) as b:
+        assert b.start("virtual")["running"]

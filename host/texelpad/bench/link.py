@@ -49,7 +49,7 @@ def run(pushes: int = 200, deploy: bool = True,
         if deploy:
             from ..deploy.install import deploy as do_deploy
             for label in ("cold", "warm"):
-                with connect(vb.port, check=False) as b:
+                with connect(vb.port, check=False, import_image=False) as b:
                     t0 = time.perf_counter()
                     rep = do_deploy(b)
                     res["deploy_%s_s" % label] = time.perf_counter() - t0

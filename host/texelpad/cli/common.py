@@ -232,10 +232,10 @@ def _fail(e: LinkError) -> CliError:
     return CliError("", str(e), EXIT_FAIL)
 
 
-def _connect(args: argparse.Namespace, check: bool = True) -> Any:
+def _connect(args: argparse.Namespace, check: bool = True, import_image: bool = True) -> Any:
     from ..link.board import connect
     try:
-        return connect(args.port, timeout=args.timeout, check=check)
+        return connect(args.port, timeout=args.timeout, check=check, import_image=import_image)
     except LinkError as e:
         raise _fail(e) from None
 

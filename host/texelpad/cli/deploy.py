@@ -36,7 +36,7 @@ def cmd_deploy(args: argparse.Namespace) -> int:
     from ..deploy.install import deploy
     from ..deploy.image import ImageError
     bar = ProgressBar()
-    with _connect(args, check=False) as b:
+    with _connect(args, check=False, import_image=False) as b:
         try:
             rep = deploy(b, source=args.source, include_main=not args.no_main,
                          dry_run=args.dry_run, progress=lambda m: _stderr("deploy: " + m), bar=bar)

@@ -324,10 +324,13 @@ def host_check(scene: Any, display: dict[str, Any] | None = None) -> Any:
     return scene
 
 
-def connect(port: str | None = None, timeout: float = 10.0, check: bool = True) -> Board:
+def connect(port: str | None = None, timeout: float = 10.0, check: bool = True,
+            import_image: bool = True) -> Board:
     """Open the board at `port` (None: the one board found) and shake hands:
     the board must run texelpad's device image of this host's protocol and
-    version (check=False skips that, e.g. to deploy)."""
+    version (check=False skips that, e.g. to deploy). import_image=False
+    (deploy): the handshake never imports the image from its files
+    (protocol.HELLO_LOADED); board.image is None unless the board runs it."""
     if port is None:
         found = ports()
         if not found:
@@ -339,7 +342,7 @@ def connect(port: str | None = None, timeout: float = 10.0, check: bool = True) 
         port = found[0]["port"]
     link = Link(port, timeout=timeout)
     try:
-        hello = link.eval(protocol.HELLO)
+        hello = link.eval(protocol.HELLO if import_image else protocol.HELLO_LOADED)
         board = Board(link, hello)
         if check:
             check_image(board)

@@ -171,6 +171,18 @@ _v = _i = _a = None
 """
 
 
+# The handshake for deploy: the same answer, but the image is never imported
+# from its files - only read from sys.modules when the board already runs it.
+# A damaged image file (a truncated .mpy hangs the unix port's loader, and
+# can hang a board's) must not keep deploy from replacing it; a display can
+# only be playing if texel.app is loaded, so nothing that plays is missed.
+HELLO_LOADED = HELLO.replace(
+    " import texel, texel.app as _a\n",
+    " _a = sys.modules['texel.app']\n texel = sys.modules['texel']\n").replace(
+    "except Exception as _e:\n _v = ('missing', str(_e))",
+    "except KeyError:\n _v = ('missing', 'not loaded')")
+
+
 def call(module: str, func: str, args: Sequence[Any] = (), kwargs: dict | None = None) -> str:
     """`module.func(*args, **kwargs)`, answering ('ok', value) or ('err', the
     device's ValueError text)."""

@@ -437,7 +437,7 @@ def open_virtual(flash: str | None = None, source: bool = False, start: bool = T
     try:
         if not source:
             from ..deploy.install import deploy
-            with connect(vb.port, check=False) as b:
+            with connect(vb.port, check=False, import_image=False) as b:
                 deploy(b, include_main=False,
                        progress=(lambda m: progress("deploy: " + m)) if progress else None)
         if start:
