@@ -80,6 +80,7 @@ def run(pushes: int = 200, deploy: bool = True,
                                                         1e3 * statistics.median(lat)))
             res["soak_s"] = time.perf_counter() - t_all
             st = b.status()
+            res.update(_upload(b, display, say))
             # one texture as the bytes of its literal alone (what the scene
             # costs on the wire, without the code around it)
             from ..link.board import full_screen_texel
@@ -102,6 +103,40 @@ def run(pushes: int = 200, deploy: bool = True,
     return res
 
 
+def _upload(b: Any, display: dict[str, Any], say: Callable[[str], None],
+            repeats: int = 5) -> dict[str, Any]:
+    """A full-screen samples map (display positions of uint16, 19,200 on the
+    TPaD: texel.runtime.scene.MAX_SAMPLES) pushed as an upload, `repeats`
+    times: seconds and bytes per push, and the board's worst refresh over
+    them (the refresh keeps running in real time meanwhile)."""
+    import random
+    from ..link.protocol import UPLOAD_PIECE
+    n = min(display["positions"], 19200)
+    total = display["positions"] * display["dx_um"] / 1000.0
+    rnd = random.Random(7)
+    st = b.status()
+    worst0 = st["worst_us"]
+    times, sent = [], []
+    for k in range(repeats):
+        u16 = [rnd.randrange(65536) for _ in range(n)]
+        scene = {"regions": [{"start_mm": 0, "end_mm": round(total, 6),
+                              "texture": {"kind": "samples", "u16": u16}}]}
+        s0 = b.link.sent
+        t0 = time.perf_counter()
+        b.push(scene)
+        times.append(time.perf_counter() - t0)
+        sent.append(b.link.sent - s0)
+        if b.scene_source()["regions"][0]["texture"]["u16"] != u16:
+            raise RuntimeError("bench-link: the board plays another map than the one uploaded")
+    st = b.status()
+    say("upload %d values: median %.2f s" % (n, statistics.median(times)))
+    return {"upload_values": n, "upload_piece_values": UPLOAD_PIECE,
+            "upload_s_median": statistics.median(times), "upload_s_max": max(times),
+            "upload_bytes_sent": statistics.median(sent), "upload_repeats": repeats,
+            "upload_worst_refresh_us_before": worst0, "upload_worst_refresh_us": st["worst_us"],
+            "upload_overruns": st["overruns"]}
+
+
 def table(res: dict[str, Any]) -> str:
     lines = ["texelpad bench-link: the virtual board on a pty (MicroPython unix port, real time)"]
     if "deploy_cold_s" in res:
@@ -122,6 +157,12 @@ def table(res: dict[str, Any]) -> str:
         "soak        %d/%d pushes acknowledged with the scene sent; %d faults, %d overruns over "
         "%s refreshes" % (res["acked"], res["pushes"], res["faults"], res["overruns"],
                           format(res["refreshes"], ",")),
+        "upload      %s uint16 values (a full-screen samples map) in pieces of %s: median %.2f "
+        "s, max %.2f s, %s bytes sent per push; worst refresh %d us (before: %d us), %d "
+        "overruns" % (format(res["upload_values"], ","), format(res["upload_piece_values"], ","),
+                      res["upload_s_median"], res["upload_s_max"],
+                      format(int(res["upload_bytes_sent"]), ","), res["upload_worst_refresh_us"],
+                      res["upload_worst_refresh_us_before"], res["upload_overruns"]),
         "memory      free after each push: first tenth %s, last tenth %s, min %s bytes; trend "
         "%+.2f bytes/push" % (format(int(res["mem_free_first"]), ","),
                               format(int(res["mem_free_last"]), ","),
