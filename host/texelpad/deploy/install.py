@@ -51,9 +51,8 @@ def on_board(board: Any) -> Callable[[str], str]:
     """Image path ("/lib/texel/app.mpy") -> the path to use on this board.
     The unix port (the virtual board) has the host's filesystem: its "/" is
     its flash folder, the working directory, so paths go relative there."""
-    if board.firmware["platform"] in ("linux", "darwin", "win32"):
-        return lambda p: p.lstrip("/")
-    return lambda p: p
+    from ..link.board import on_board_path
+    return lambda p: on_board_path(board, p)
 
 
 def survey(board: Any, files: list[image.ImageFile]) -> tuple[dict, list[str], int | None]:

@@ -388,8 +388,8 @@ BOOT_FILE = "/texelpad.json"
 def on_board_path(board: Board, path: str) -> str:
     """A board path ("/texelpad.json") as this board names it: the unix port
     (the virtual board) has the host's filesystem, its "/" is its flash
-    folder, the working directory, so paths go relative there - the rule of
-    texelpad.deploy.install.on_board, which main.py follows too."""
+    folder, the working directory, so paths go relative there (deploy's
+    image paths too; the board's main.py follows the same rule)."""
     if board.firmware["platform"] in ("linux", "darwin", "win32"):
         return path.lstrip("/")
     return path
