@@ -317,3 +317,46 @@ def test_upload_on_cpython():
     ns: dict = {}
     exec(UPLOAD_SCRIPT.replace("print(json.dumps(", "RESULT = (("), ns)
     assert ns["RESULT"] == {"filled": 5000, "ok": True, "shared": True, "same": True, "back": True}
+
+
+def test_cli_ctrl_c_during_a_big_push_says_what_plays(port, tmp_path):
+    """SIGINT to `texelpad push --scene BIG.json` while it uploads: exit 130,
+    one line saying what plays, and the board really plays that."""
+    import json
+    import os
+    import signal
+    import subprocess
+    import sys
+    with texelpad.connect(port) as b:
+        b.start("virtual", realtime=True)
+        b.push(_scene({"kind": "constant", "level": 0.25}, "before"))
+    big = tmp_path / "big.json"
+    big.write_text(json.dumps(_scene({"kind": "samples", "u16": _noise(N)}, "big")))
+    exe = os.path.join(os.path.dirname(sys.executable), "texelpad")
+    outcomes = set()
+    for delay in (0.0, 0.01, 0.05):
+        p = subprocess.Popen([exe, "push", "--port", port, "--scene", str(big)],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        first = p.stderr.readline()         # the upload's progress has begun
+        assert "samples upload" in first, first
+        time.sleep(delay)
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=60)
+        err = first + err
+        assert "Traceback" not in err, err
+        with texelpad.connect(port) as b:
+            name = b.status()["scene"].get("name")
+        if p.returncode == 0:
+            outcomes.add("completed")
+            assert name == "big"
+        else:
+            assert p.returncode == 130, (p.returncode, err)
+            last = err.strip().splitlines()[-1]
+            if "nothing changed" in last:
+                assert name == "before", last
+            else:
+                assert "interrupted too late" in last and name == "big", last
+            outcomes.add(last)
+        with texelpad.connect(port) as b:
+            b.push(_scene({"kind": "constant", "level": 0.25}, "before"))
+    print("outcomes:", outcomes)

@@ -103,8 +103,9 @@ def _main(argv: list[str]) -> int:
     except CliError as e:
         _stderr("texelpad %s: error: %s" % (args.command, e))
         return e.code
-    except KeyboardInterrupt:
-        _stderr("texelpad %s: interrupted" % args.command)
+    except KeyboardInterrupt as e:
+        # link.transport.Interrupted says what the board does now
+        _stderr("texelpad %s: %s" % (args.command, str(e) or "interrupted"))
         return 130
 
 
