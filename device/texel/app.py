@@ -40,8 +40,10 @@ class _Runtime:
     pass
 
 
-def _make_hw(board, opts):
-    port = board["port"]
+def _backend(port):
+    """The hardware class of a port, imported (ImportError when this board's
+    image or firmware does not have it: deploy installs only the board's own
+    backend, and a backend imports its port's modules)."""
     if port == "rp2":
         from .hw.rp2 import Hw
     elif port == "stm32":
@@ -49,17 +51,53 @@ def _make_hw(board, opts):
     elif port == "circuitpython":
         from .hw.cpy import Hw
     elif port == "virtual":
-        from .hw.virtual import VirtualHw
-        return VirtualHw(board, **opts)
+        from .hw.virtual import VirtualHw as Hw
     else:
-        raise ValueError("board %r: unknown port %r" % (board["name"], port))
+        raise ImportError("no backend for port %r" % port)
+    return Hw
+
+
+def _fits(board):
+    """None when this board can run board file `board`, else why not: the
+    firmware's port (runtime.boards.fits), then the backend's import."""
+    why = _boards.fits(board)
+    if why is None:
+        try:
+            _backend(board["port"])
+        except ImportError as e:
+            why = ("board file %r needs the %s backend, which this board does not have (%s)"
+                   % (board["name"], board["port"], e))
+    return why
+
+
+def _make_hw(board, opts):
+    Hw = _backend(board["port"])
+    if board["port"] == "virtual":
+        return Hw(board, **opts)
     return Hw(board)
+
+
+def fitting():
+    """Names of the board files on this board that it can run."""
+    return _boards.fitting(_fits)
 
 
 def _reader(hw, i):
     if hasattr(hw, "adc_reader"):
         return hw.adc_reader(i)
     return lambda: hw.adc_read(i)
+
+
+def _preload():
+    """Import now every module a scene build may need. Imported lazily in the
+    middle of a build, their code lands above that scene's buffers, and when
+    the scene is replaced its freed buffers leave holes between modules: on
+    a Pico the largest free block fell to ~28 KB of ~118 KB free, and no
+    full-screen map (38.4 KB) fitted any more (measured on the emulated Pico,
+    docs/runtime.md "Memory")."""
+    from .gen import plan, engine_int, sine_table, reference   # noqa: F401 (engine_int: its viper fill)
+    from .runtime import upload                                # noqa: F401
+    gc.collect()
 
 
 def start(board_name, scene=None, realtime=False, fast=None, **hw_opts):
@@ -72,16 +110,21 @@ def start(board_name, scene=None, realtime=False, fast=None, **hw_opts):
     fast: the fused viper refresh (refresh_viper.py) - default on wherever
     the port has viper and the sensor is a linear ADC; on an RP2040 its IRQ
     then reads the ADC and writes the PWM compare register itself."""
-    board = _boards.load(board_name)
+    _preload()
+    playing = "; the display keeps playing" if _rt is not None else ""
+    try:
+        board = _boards.load(board_name)
+    except ValueError as e:
+        raise ValueError(str(e) + playing)
     mode = board["refresh"]["mode"]
     if mode == "core1_viper":
         raise ValueError("board %r: refresh.mode 'core1_viper' is not implemented yet; use "
-                         "'timer_irq' (a hard timer IRQ on core 0) or 'loop'" % board["name"])
-    why = _boards.fits(board)
+                         "'timer_irq' (a hard timer IRQ on core 0) or 'loop'%s"
+                         % (board["name"], playing))
+    why = _fits(board)
     if why is not None:
         raise ValueError("%s; board files that fit: %s%s" % (
-            why, ", ".join(_boards.fitting()) or "none",
-            "; the display keeps playing" if _rt is not None else ""))
+            why, ", ".join(fitting()) or "none", playing))
     # build the scene before touching the hardware: a bad scene changes nothing
     canonical = _scene.validate(DEFAULT_SCENE if scene is None else scene, board["display"])
     prev = None
@@ -170,6 +213,9 @@ def _start(board, canonical, realtime, fast, hw_opts):
         _install(canonical)
         rt.loop_mode = mode == "loop"
         if not rt.loop_mode:
+            # the rate counts from here: building the first scene (seconds on
+            # a Pico) is no time the refresh ran
+            rt.started_us = ticks()
             hw.start(callback, rt.hz)
             if realtime and hasattr(hw, "run_realtime"):
                 hw.run_realtime()
@@ -265,11 +311,13 @@ def scene_source(inline_max=None):
     regs = []
     for r in src["regions"]:
         tex = r["texture"]
-        if tex["kind"] == "samples" and (inline_max is not None and len(tex["u16"]) > inline_max
-                                         or not isinstance(tex["u16"], tuple)):
+        vals = tex.get("u16")
+        if tex["kind"] == "samples" and (inline_max is not None and len(vals) > inline_max
+                                         or not isinstance(vals, tuple)):
+            n = len(vals)
             tex = {"kind": "samples", "fit": tex["fit"],
-                   "u16": len(tex["u16"]) if inline_max is not None and len(tex["u16"]) > inline_max
-                   else tuple(tex["u16"])}
+                   "u16": n if inline_max is not None and n > inline_max
+                   else tuple([vals[i] for i in range(n)])}
             r = {"start_mm": r["start_mm"], "end_mm": r["end_mm"], "texture": tex}
         regs.append(r)
     out["regions"] = regs
@@ -295,9 +343,8 @@ def samples_b64(region, offset, count):
         raise ValueError("samples_b64: offset %r, count %r outside 0 .. %d (at most %d per piece)"
                          % (offset, count, n, UPLOAD_PIECE_MAX))
     end = min(n, offset + count)
-    if not isinstance(vals, tuple):     # an uploaded array('H'): its own bytes
-        from .runtime.upload import u16_bytes
-        return binascii.b2a_base64(u16_bytes(vals, offset, end)).strip().decode()
+    if not isinstance(vals, tuple):     # an upload (upload.Chunks): its own bytes
+        return binascii.b2a_base64(vals.bytes_of(offset, end)).strip().decode()
     b = bytearray(2 * (end - offset))
     for i in range(offset, end):
         v = vals[i]
@@ -316,7 +363,10 @@ def samples_b64(region, offset, count):
 # pushes the scene with take_upload(slot) in place of the values. Nothing
 # plays until that push, which validates the upload like any scene: an
 # interrupted upload changes nothing (the next upload_begin frees it).
-UPLOAD_PIECE_MAX = 2048         # values per piece: 4 KB of data, ~5.5 KB of base64
+# values per piece: 2 KB of data, ~2.7 KB of base64, a few small blocks on
+# the board's heap per piece (the code, the text, the bytes, one array) -
+# 2,048 failed on the emulated Pico with ~75 KB free but fragmented
+UPLOAD_PIECE_MAX = 1024
 _uploads = []
 
 

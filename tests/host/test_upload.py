@@ -96,8 +96,10 @@ def test_full_size_u16_upload_in_pieces_refresh_within_budget(board):
     got = board.link.eval("import texel.app as a\nsc = a._rt.refresh.scene\n"
                           "print(repr([sc.amp(p) for p in (0, 1, 9999, 19199)]))")
     assert got == [u16[0], u16[1], u16[9999], u16[19199]]
-    # the uploaded array plays as is: one 38.4 KB buffer, not two
-    assert st["scene"]["bytes"] == 2 * N + 32
+    # the upload plays as it arrived: 38.4 KB in 4 KB chunks, no second copy
+    assert st["scene"]["bytes"] == 2 * N + 32 and st["scene"]["regions"][0]["mode"] == "map"
+    assert board.link.eval("import texel.app as a\nprint(repr([len(c) for c in "
+                           "a._rt.refresh.scene.buffers()[0]]))") == [2048] * 9 + [768]
 
 
 def test_full_size_values_upload_and_stretch(board):
@@ -276,7 +278,7 @@ def test_cli_push_board_for_other_firmware_is_one_line(port, capsys):
 
 UPLOAD_SCRIPT = r"""
 import json
-from texel.runtime.upload import Upload, u16_bytes
+from texel.runtime.upload import Upload
 from texel.runtime import scene as S
 import binascii
 vals = [(i * 7919) & 0xFFFF for i in range(5000)]
@@ -292,8 +294,10 @@ c = S.validate({"regions": [{"start_mm": 0, "end_mm": 26.5, "texture": {"kind": 
 sc = S.build(c, D)
 same = c == S.validate(c, D)
 print(json.dumps({"filled": up.filled, "ok": [sc.amp(p) for p in range(5000)] == vals,
-                  "shared": sc.buffers()[0] is up.buf, "same": same,
-                  "back": bytes(u16_bytes(up.buf, 0, 5000)) == bytes(raw)}))
+                  "shared": sc.buffers()[0] is up.buf.chunks, "same": same,
+                  "chunks": [len(c) for c in up.buf.chunks],
+                  "back": up.buf.bytes_of(0, 5000) == bytes(raw)
+                          and up.buf.bytes_of(2047, 2049) == bytes(raw[4094:4098])}))
 """
 
 
@@ -310,13 +314,15 @@ def test_upload_on_device_interpreters(runtime):
         if exe is None:
             pytest.skip("%s not found (../shared/instruments)" % runtime)
     r = mpy.run_json(UPLOAD_SCRIPT, exe=exe)
-    assert r == {"filled": 5000, "ok": True, "shared": True, "same": True, "back": True}
+    assert r == {"filled": 5000, "ok": True, "shared": True, "same": True, "back": True,
+                 "chunks": [2048, 2048, 904]}
 
 
 def test_upload_on_cpython():
     ns: dict = {}
     exec(UPLOAD_SCRIPT.replace("print(json.dumps(", "RESULT = (("), ns)
-    assert ns["RESULT"] == {"filled": 5000, "ok": True, "shared": True, "same": True, "back": True}
+    assert ns["RESULT"] == {"filled": 5000, "ok": True, "shared": True, "same": True,
+                            "back": True, "chunks": [2048, 2048, 904]}
 
 
 def test_cli_ctrl_c_during_a_big_push_says_what_plays(port, tmp_path):

@@ -53,9 +53,32 @@ def raw_script(n, seed):
     return out
 
 
+def uploaded():
+    # scene.K_CHUNK: a map uploaded over part of the display (texel.app.upload_*),
+    # played from its 4 KB chunks; 7,001 values, 3 full chunks and a short one
+    from texel.runtime.upload import Upload
+    s0 = S.to_position(20.0, disp["dx_um"])
+    e0 = S.to_position(57.11, disp["dx_um"])
+    up = Upload(e0 - s0)
+    raw = bytearray()
+    x = 12345
+    for k in range(e0 - s0):
+        x = (x * 48271) %% 0x7FFFFFFF
+        raw.append(x & 0xFF)
+        raw.append((x >> 8) & 0xFF)
+    for o in range(0, e0 - s0, 1000):
+        up.write(o, bytes(raw[2 * o:2 * min(e0 - s0, o + 1000)]))
+    sc = S.build(S.validate({"regions": [
+        {"start_mm": 20.0, "end_mm": 57.11, "texture": {"kind": "samples", "u16": up}},
+        {"start_mm": 60, "end_mm": 70, "texture": {"kind": "constant", "level": 0.3}}]}, disp), disp)
+    assert S.K_CHUNK in [k for (_, _, k, _) in sc.spans()]
+    return sc
+
+
 scenes = [None,
           S.build(S.validate(%(scene_a)s, disp), disp),
-          S.build(S.validate(%(scene_b)s, disp), disp, idle_default=1234)]
+          S.build(S.validate(%(scene_b)s, disp), disp, idle_default=1234),
+          uploaded()]
 
 
 class Feed:
@@ -137,7 +160,7 @@ print(json.dumps(res))
 def test_viper_equals_python_refresh(cfg):
     code = EQUIV % {"cfg": cfg, "scene_a": SCENE_A, "scene_b": SCENE_B, "n": 6000, "seed": 11}
     res = mpy.run_json(code, timeout=300)
-    assert len(res) == 3
+    assert len(res) == 4
     for r in res:
         assert r["mism"] == 0, r["first"]
         assert r["count"] == [6000, 6000]
@@ -217,7 +240,7 @@ def test_irq_rp2_reads_adc_and_writes_cc_without_allocating():
 
 HEAP = COMMON + r"""
 import micropython
-seq = raw_script(5000, 9)
+seq = raw_script(7000, 9)
 rv, dv, cv = make("viper", seq)
 rv.swap(scenes[2])
 rv.tel_every = 2
@@ -237,6 +260,23 @@ def locked():
     return r
 
 
+def chunked():
+    # the uploaded map (scene.K_CHUNK) through the viper refresh and Scene.amp
+    rv.swap(scenes[3])
+    sc = scenes[3]
+    micropython.heap_lock()
+    try:
+        for k in range(2000):
+            rv.step()
+        for p in range(0, 19200, 7):
+            sc.amp(p)
+        r = "ok"
+    except MemoryError:
+        r = "MemoryError"
+    micropython.heap_unlock()
+    return r
+
+
 def control():
     micropython.heap_lock()
     try:
@@ -248,7 +288,7 @@ def control():
     return r
 
 
-print(json.dumps({"step": locked(), "control": control(), "n": rv.count}))
+print(json.dumps({"step": locked(), "chunked": chunked(), "control": control(), "n": rv.count}))
 """
 
 
@@ -256,4 +296,4 @@ def test_fast_step_allocates_nothing():
     code = HEAP % {"cfg": "{}", "scene_a": SCENE_A, "scene_b": SCENE_B}
     r = mpy.run_json(code, timeout=120)
     assert r["control"] == "MemoryError"
-    assert r["step"] == "ok" and r["n"] == 4000
+    assert r["step"] == "ok" and r["chunked"] == "ok" and r["n"] == 6000

@@ -1187,7 +1187,11 @@ import json, gc
 from texel.runtime import scene as S
 FULL = %(full)r
 gc.collect()
-old = S.build(split(), D)                      # the scene playing now
+try:
+    old = S.build(split(), D)                  # the scene playing now
+except ValueError as e:                        # the precondition, not the subject
+    print(json.dumps({"no_split": str(e)}))
+    raise SystemExit
 def digest(sc):
     acc = 0
     for p in range(0, 19200, 3):
@@ -1242,6 +1246,13 @@ def test_real_memory_error_under_micropython():
     rows = {}
     for kb in range(176, 273, 8):
         res = mpy.run_json(code, heapsize=f"{kb}k")
+        if "no_split" in res:
+            # the unix port compiles the package from source: on the smallest
+            # heaps the playing split screen itself may not build (a board
+            # loads .mpy); such a heap tests nothing here
+            assert kb <= 184 and res["no_split"].startswith("scene: out of memory"), (kb, res)
+            print("  %d: the split screen itself does not build from source here" % kb)
+            continue
         rows[kb] = res
         assert res["budget"] == ("scene: needs 38432 bytes (38400 of sample buffers and plans + 32 of "
                                  "region table), over the budget of 20000 bytes")

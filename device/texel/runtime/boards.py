@@ -281,12 +281,13 @@ def fits(board):
     return None
 
 
-def fitting(search=None):
-    """Names of the board files found that this firmware can run."""
+def fitting(check=None, search=None):
+    """Names of the board files found that this firmware can run (check: a
+    stricter fits(), e.g. texel.app's, which also imports the backend)."""
     out = []
     for n in names(search):
         try:
-            if fits(load(n, search)) is None:
+            if (check or fits)(load(n, search)) is None:
                 out.append(n)
         except ValueError:              # a broken file fits nothing
             pass

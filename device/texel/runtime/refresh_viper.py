@@ -188,6 +188,13 @@ def refresh(timer) -> int:
             amp = int(ptr16((int(w[(W_BUF0 + int(tab[i + 2])) * 2]) | ((int(w[(W_BUF0 + int(tab[i + 2])) * 2 + 1]) << 16) << 16)))[p - st])
         elif int(tab[i + 1]) == 0:
             amp = int(tab[i + 2])
+        elif int(tab[i + 1]) == 3:
+            # an uploaded map in chunks (scene.K_CHUNK): the buffer's word is
+            # the address of its chunk-address table (lo, hi pairs)
+            o = p - st
+            ct = ptr32(int(w[(W_BUF0 + int(tab[i + 2])) * 2]) | ((int(w[(W_BUF0 + int(tab[i + 2])) * 2 + 1]) << 16) << 16))
+            c = (o >> 11) * 2           # scene.CHUNK_BITS, CHUNK_MASK (checked below)
+            amp = int(ptr16(int(ct[c]) | ((int(ct[c + 1]) << 16) << 16))[o & 2047])
         else:
             # plan-backed texel region: engine_int's sample, as Scene.amp
             b = W_BUF0 + int(w[W_NBUF * 2]) + 4 * int(tab[i + 2])
@@ -331,8 +338,18 @@ class FastRefresh(Refresh):
         put(W_TEL_A, uctypes.addressof(self.tel_amp))
         for k in range(4):
             put(W_TIMER + k, self._regs[k])
+        chunked = []
         for k in range(len(bufs)):
-            put(W_BUF0 + k, uctypes.addressof(bufs[k]))
+            b = bufs[k]
+            if isinstance(b, tuple):    # scene.K_CHUNK: a table of its chunks' addresses
+                ct = array("I", [0] * (2 * len(b)))
+                for c in range(len(b)):
+                    a = uctypes.addressof(b[c])
+                    ct[2 * c] = a & 0xFFFFFFFF
+                    ct[2 * c + 1] = (a >> 16) >> 16
+                chunked.append(ct)
+                b = ct
+            put(W_BUF0 + k, uctypes.addressof(b))
         put(W_SINE, uctypes.addressof(sine_table.table()))
         put(W_NBUF, len(bufs))
         for k in range(len(plans)):
@@ -342,7 +359,7 @@ class FastRefresh(Refresh):
             put(b + 1, uctypes.addressof(d28))
             put(b + 2, ln)
             put(b + 3, g)
-        keep = (words, scene, tab)
+        keep = (words, scene, tab, chunked)
         # The previous generation stays referenced until the next swap: the
         # viper refresh holds raw addresses the GC cannot see, and on a port
         # with real threads (the unix port's realtime virtual board) a refresh
@@ -383,6 +400,9 @@ class FastRefresh(Refresh):
     pos = _state(S_POS1, 1)
 
 
+from .scene import CHUNK_BITS as _CB, CHUNK_MASK as _CM
+if _CB != 11 or _CM != 2047:
+    raise ImportError("refresh_viper: scene chunk size differs from the literals in refresh()")
 if TELEMETRY_SLOTS != _SLOTS:
     raise ImportError("refresh_viper: telemetry ring size differs from refresh.py")
 

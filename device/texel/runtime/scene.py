@@ -101,6 +101,10 @@ SENTINEL = 0x3FFFFFFF
 K_CONST = 0
 K_BUF = 1
 K_PLAN = 2              # texel region played from its integer plan, sample by sample
+K_CHUNK = 3             # an uploaded map in 4 KB chunks (runtime/upload.py): value
+                        # indexes the buffers, whose entry is a tuple of array('H')
+CHUNK_BITS = 11         # 2,048 values per chunk (upload.py and refresh_viper.py use these)
+CHUNK_MASK = 2047
 # A texel region is kept as its plan (t28, d28: 8 bytes per texel) and
 # evaluated at the finger's position, instead of rendered (2 bytes per
 # sample), when no engine is asked for and its texels are at most PLAN_MAX_L
@@ -339,7 +343,9 @@ def _samples(path, tex):
             raise ValueError("%s: the upload is incomplete (%d of %d values arrived)"
                              % (p, seq.filled, len(seq.buf)))
         seq = seq.buf
-    if not isinstance(seq, (list, tuple)) and not (has_u and isinstance(seq, array)):
+    if has_u and getattr(seq, "CHUNKS", False):     # upload.Chunks: uint16 by construction
+        return {"kind": "samples", "u16": seq, "fit": fit}
+    if not isinstance(seq, (list, tuple)):
         raise ValueError("%s: expected a list of %s, got %s"
                          % (p, "ints in [0, 65535]" if has_u else "numbers in [0.0, 1.0]", _got(seq)))
     m = len(seq)
@@ -351,10 +357,8 @@ def _samples(path, tex):
             x = seq[i]
             if isinstance(x, bool) or not isinstance(x, int) or x < 0 or x > U16_MAX:
                 _int("%s[%d]" % (p, i), x, 0, U16_MAX)
-        # a tuple is immutable: the canonical form may share it; an array
-        # comes from an Upload (or a canonical form holding one) and is kept:
-        # a tuple of 19,200 ints would cost twice its 38,400 bytes
-        vals = seq if type(seq) is tuple or isinstance(seq, array) else tuple(seq)
+        # a tuple is immutable: the canonical form may share it
+        vals = seq if type(seq) is tuple else tuple(seq)
     else:
         for i in range(m):
             x = seq[i]
@@ -572,13 +576,14 @@ def _make(c, spans, positions, dx_um, idle, engine):
             table[j + 2] = K_BUF
             table[j + 3] = len(bufs)
             if _plays_as_is(tex, e - s):
-                bufs.append(tex["u16"])         # an uploaded map, exactly region-long
+                table[j + 2] = K_CHUNK
+                bufs.append(tex["u16"].chunks)  # the upload itself, exactly region-long
             else:
                 bufs.append(_u16(e - s))        # exactly region-long
     # 2. render into them
     for k in range(count):
         j = STRIDE * k
-        if table[j + 2] != K_BUF:
+        if table[j + 2] != K_BUF:           # constants, plans and uploads as they are
             continue
         n = table[j + 1] - table[j]
         buf = bufs[table[j + 3]]
@@ -589,17 +594,18 @@ def _make(c, spans, positions, dx_um, idle, engine):
         elif kind == "reference":
             from .. import reference_u16
             reference_u16(tex["name"], n, buf)
-        elif buf is not tex["u16"]:
+        else:
             _fill_samples(tex["u16"], tex["fit"], n, buf)
     return Scene(table, tuple(bufs), idle, c, spans, positions, dx_um, tuple(plans))
 
 
 def _plays_as_is(tex, n):
-    """An uploaded samples map (an array) that tiles a region of exactly its
-    length is played from its own buffer: no second copy (38,400 bytes for a
-    full TPaD screen). Nothing ever writes to it after the upload."""
-    return (tex["kind"] == "samples" and tex["fit"] == "tile" and isinstance(tex["u16"], array)
-            and len(tex["u16"]) == n)
+    """An uploaded samples map (upload.Chunks) that tiles a region of exactly
+    its length is played from its own chunks: no second copy (38,400 bytes
+    for a full TPaD screen), and no block larger than 4 KB. Nothing ever
+    writes to it after the upload."""
+    return (tex["kind"] == "samples" and tex["fit"] == "tile"
+            and getattr(tex["u16"], "CHUNKS", False) and len(tex["u16"]) == n)
 
 
 def _plan_of(tex, n):
@@ -699,7 +705,11 @@ class Scene:
         self.table_bytes = len(table) * _ITEM
         self.buffer_bytes = 0
         for b in bufs:
-            self.buffer_bytes += 2 * len(b)
+            if isinstance(b, tuple):    # K_CHUNK
+                for c in b:
+                    self.buffer_bytes += 2 * len(c)
+            else:
+                self.buffer_bytes += 2 * len(b)
         for pl in plans:
             self.buffer_bytes += 4 * len(pl[0]) + 4 * len(pl[1])
         self.nbytes = self.buffer_bytes + self.table_bytes
@@ -722,6 +732,9 @@ class Scene:
             return self._bufs[t[i + 2]][pos - s]
         if kind == K_CONST:
             return t[i + 2]
+        if kind == K_CHUNK:
+            o = pos - s
+            return self._bufs[t[i + 2]][o >> CHUNK_BITS][o & CHUNK_MASK]
         # K_PLAN: engine_int's sample k (1-based) of texel j, computed directly:
         # phase (t28[j] + k*d28[j]) mod 2^28 with k*d in two 14-bit limbs
         # (k <= PLAN_MAX_L < 2^16: each product < 2^30, a small int), then
@@ -764,9 +777,9 @@ class Scene:
             tex = src[k]["texture"]
             d = {"kind": tex["kind"], "start": s, "end": e,
                  "start_mm": _mm(s, self.dx_um), "end_mm": _mm(e, self.dx_um),
-                 "bytes": (2 * (e - s) if t[j + 2] == K_BUF else
+                 "bytes": (2 * (e - s) if t[j + 2] in (K_BUF, K_CHUNK) else
                            8 * len(self._plans[t[j + 3]][0]) if t[j + 2] == K_PLAN else 0),
-                 "mode": ("map", "plan")[t[j + 2] - 1] if t[j + 2] else "constant"}
+                 "mode": ("constant", "map", "plan", "map")[t[j + 2]]}
             kind = tex["kind"]
             if kind == "reference":
                 d["name"] = tex["name"]

@@ -10,8 +10,7 @@
 # only an upload needs them: kept here, the unix port's 176 KB heap test
 # still builds the split screen (compat grown by them, it did not).
 from array import array
-from ..compat import u16_buffer
-from .scene import MAX_SAMPLES
+from .scene import MAX_SAMPLES, CHUNK_BITS, CHUNK_MASK
 
 
 def u16_put_bytes(buf, offset, data):
@@ -50,17 +49,77 @@ def u16_bytes(buf, start, end):
     return bytes(part)                  # MicroPython: an array's raw memory
 
 
+# Uploaded values are kept in chunks of CHUNK values (4 KB each), never in
+# one block: a Pico's heap playing a scene is fragmented - on the emulated
+# Pico the largest free block after a texel push was ~27 KB of ~116 KB free,
+# so one 38.4 KB array for a full screen found no room, while 4 KB blocks
+# always do. scene.amp reads chunk o >> CHUNK_BITS, value o & CHUNK_MASK
+# (scene.K_CHUNK; both refreshes, refresh.py and refresh_viper.py, read them).
+CHUNK = 1 << CHUNK_BITS             # 2,048 values
+
+
+class Chunks:
+    """n uint16 values in chunks (a tuple of array('H'), all CHUNK long but
+    the last): a read-only sequence for the scene code (len, [i]) and
+    .chunks for its hot path."""
+
+    CHUNKS = True               # what scene.validate/build look for (no literal has it)
+
+    def __init__(self, n):
+        from .scene import _u16
+        self.n = n
+        self.chunks = tuple(_u16(min(CHUNK, n - o)) for o in range(0, n, CHUNK))
+
+    def __len__(self):
+        return self.n
+
+    def __getitem__(self, i):
+        if i < 0:
+            i += self.n
+        if not 0 <= i < self.n:
+            raise IndexError("upload index out of range")
+        return self.chunks[i >> CHUNK_BITS][i & CHUNK_MASK]
+
+    def put(self, offset, data):
+        """Little-endian uint16 bytes for values offset..; returns how many."""
+        k = len(data) // 2
+        done = 0
+        while done < k:
+            o = offset + done
+            c = self.chunks[o >> CHUNK_BITS]
+            at = o & CHUNK_MASK
+            m = min(k - done, len(c) - at)
+            # a piece inside one chunk (the host's pieces are aligned) goes
+            # as it is: on a Pico every extra 2-4 KB block may not be there
+            u16_put_bytes(c, at, data if m == k else data[2 * done:2 * (done + m)])
+            done += m
+        return k
+
+    def bytes_of(self, start, end):
+        """Values start..end as little-endian bytes (the read side of put)."""
+        out = bytearray()
+        o = start
+        while o < end:
+            c = self.chunks[o >> CHUNK_BITS]
+            at = o & CHUNK_MASK
+            m = min(end - o, len(c) - at)
+            out.extend(u16_bytes(c, at, at + m))
+            o += m
+        return bytes(out)
+
+
 class Upload:
     """n uint16 samples arriving in pieces over the link (texel.app.upload_*):
-    a buffer filled in order, then handed to validate() as a samples
-    region's "u16"; validate refuses it until every value has arrived."""
+    chunks filled in order, then handed to validate() as a samples region's
+    "u16" (which becomes the Chunks); validate refuses it until every value
+    has arrived."""
 
     UPLOAD = True               # what scene.validate looks for (no literal has it)
 
     def __init__(self, n):
         if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_SAMPLES:
             raise ValueError("upload: %r values; allowed 1 .. %d" % (n, MAX_SAMPLES))
-        self.buf = u16_buffer(n)
+        self.buf = Chunks(n)
         self.filled = 0
 
     def write(self, offset, data):
@@ -72,5 +131,5 @@ class Upload:
         if len(data) & 1 or offset + len(data) // 2 > len(self.buf):
             raise ValueError("upload: %d bytes at value %d do not fit %d values"
                              % (len(data), offset, len(self.buf)))
-        self.filled += u16_put_bytes(self.buf, offset, data)
+        self.filled += self.buf.put(offset, data)
         return self.filled

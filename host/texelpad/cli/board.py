@@ -13,8 +13,8 @@ from typing import Any
 
 from ..link.transport import DeviceError, LinkError
 from .common import EXIT_FAIL, EXIT_OK, CliError, ProgressBar, _connect, _fail, _one_board, \
-    _port_arg, device_error, _stderr, _value_error, TEXEL_KEYS, add_texel_flags, not_running, positive_float, \
-    read_scene_file, render_params
+    _port_arg, device_error, _stderr, _value_error, TEXEL_KEYS, add_texel_flags, not_running, \
+    positive_float, read_scene_file, render_params
 
 
 def describe_scene(desc: dict[str, Any] | None) -> str:
@@ -142,11 +142,15 @@ def cmd_push(args: argparse.Namespace) -> int:
             st = b.status()
             if not st.get("running"):
                 if not args.board:
-                    raise not_running(b.port, "--board NAME starts it: --board pico, "
-                                      "--board virtual, ...")
+                    raise not_running(b.port, "--board NAME starts it; board files that fit "
+                                      "this board: %s" % (", ".join(b.fitting()) or "none"))
                 # realtime: a virtual board started from the host plays in real
                 # time (stepped, it would play nothing); other ports ignore it
                 st = b.start(args.board, realtime=True)
+            elif args.board and args.board != st.get("board"):
+                raise CliError("--board", "%s already runs board file %r, not %r; the scene "
+                               "was not sent (texelpad stop first to start another board file)"
+                               % (b.port, st.get("board"), args.board))
             sent0 = b.link.sent
             t0 = time.perf_counter()
             if kind == "texel":

@@ -98,6 +98,10 @@ class Board:
                 raise ValueError("start(): option %r is not a name" % (k,))
         return self._send("start", [board_name, scene], 1, opts, progress)
 
+    def fitting(self) -> list[str]:
+        """The board files on the board that its firmware and image can run."""
+        return self._app("fitting")
+
     def restart(self, board_name: str, scene: dict[str, Any] | None,
                 realtime: bool = False) -> dict[str, Any]:
         """Start the display again with a scene this board played (its own

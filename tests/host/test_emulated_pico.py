@@ -1,0 +1,426 @@
+"""The hardened link, deploy and commands on the emulated Raspberry Pi Pico
+(../shared/instruments/rp2emu: rp2040js running the real MicroPython v1.28
+firmware, its USB CDC port on a pty): what tests/host/test_upload.py,
+test_cli_scene.py and test_deploy_repair.py check on the virtual board, here
+on the rp2 port itself - .mpy compiled for armv6m, the viper refresh as a
+hard timer IRQ, the Pico's 240 KB heap, littlefs.
+
+One emulator for the module (tests/support/pico.py), deployed once; the
+tests run in file order and each puts the board in the state it needs.
+Nothing here asserts on a time: figures (refresh rate, worst refresh,
+memory, upload time) are printed (pytest -s shows them)."""
+from __future__ import annotations
+
+import json
+import random
+import re
+import time
+
+import pytest
+
+import texel.runtime.scene as scene_mod
+import texelpad
+from texelpad.cli import common
+from texelpad.link import protocol
+from texelpad.link.board import host_check
+from texelpad.link.transport import DeviceError, Interrupted
+
+from support.cli import run_cli
+from support.pico import emulated_pico, group_members, pico, processes_mentioning  # noqa: F401
+
+pytestmark = [pytest.mark.instruments, pytest.mark.slow]
+
+FULL = 101.76                     # mm: 19,200 positions of 5.3 um
+N = scene_mod.MAX_SAMPLES         # 19,200
+TEXEL = ("--pitch-db", "6", "--irregularity-db", "-9")
+# board files of other firmware, put on the Pico as a user's /boards/NAME.json
+# (the rp2 image ships only its own port's: pico, pico_bridge)
+OTHER_FIRMWARE = (("pyboard", "an STM32"), ("pico_cpy", "CircuitPython"))
+
+
+def _plain(v):
+    return json.loads(json.dumps(v))
+
+
+def _noise(n: int, seed: int = 1) -> list[int]:
+    rnd = random.Random(seed)
+    return [rnd.randrange(65536) for _ in range(n)]
+
+
+def _full(tex: dict, name: str | None = None) -> dict:
+    sc = {"regions": [{"start_mm": 0, "end_mm": FULL, "texture": tex}]}
+    if name:
+        sc["name"] = name
+    return sc
+
+
+@pytest.fixture
+def port(pico):
+    """The emulated Pico's port, the image deployed (by the first test, or
+    here when a test runs alone)."""
+    if not pico.notes.get("deployed"):
+        from texelpad.deploy.install import deploy
+        from texelpad.link.board import connect
+        with connect(pico.port, check=False, import_image=False) as b:
+            deploy(b)
+        pico.notes["deployed"] = True
+    return pico.port
+
+
+def _playing(port: str) -> dict:
+    """The board running 'pico' (started with its default scene if it was
+    not), its status."""
+    with texelpad.connect(port) as b:
+        st = b.status()
+        if not st.get("running"):
+            st = b.start("pico")
+        return st
+
+
+def _ticks_and_refreshes(b) -> tuple[int, int]:
+    """The board's own clock (emulated us) and its refresh count, read in one request."""
+    return b.link.eval("import time, texel.app as a\n"
+                       "print(repr((time.ticks_us(), a._rt.refresh.count)))")
+
+
+def _largest_free(b) -> int:
+    """The board's largest free heap block in bytes (micropython.mem_info's
+    "max free sz", in 16-byte blocks), after a collection."""
+    text = b.link.exec("import gc, micropython\ngc.collect()\nmicropython.mem_info()")
+    m = re.search(r"max free sz: (\d+)", text)
+    return 16 * int(m.group(1)) if m else -1
+
+
+def _say(capsys, text: str) -> None:
+    """A figure on the terminal (pytest -s), not in the output run_cli reads."""
+    with capsys.disabled():
+        print(text)
+
+
+def _figures(st: dict) -> str:
+    return ("refreshes %s, status rate_hz %s (of %s Hz), worst_us %s, overruns %s, faults %s, "
+            "mem_free %s" % (st["refreshes"], st["rate_hz"], st["refresh_hz"], st["worst_us"],
+                             st["overruns"], st["faults"], st["mem_free"]))
+
+
+# --- the emulator itself --------------------------------------------------------------
+
+def test_emulator_stops_leaving_no_process():
+    """The context manager stops the whole process group (run.sh's relay and
+    node) also when the body fails, and removes its temporary flash. Runs
+    before the module's emulator starts (fixtures start lazily)."""
+    seen = {}
+    with pytest.raises(RuntimeError, match="the body failed"):
+        with emulated_pico() as emu:
+            seen["pgid"], seen["dir"], seen["port"] = emu.pgid, emu.dir, emu.port
+            members = [cmd for _, state, cmd in group_members(emu.pgid) if state != "Z"]
+            assert any("pty_host.py" in c for c in members), members
+            assert any("node" in c and "ptyrunner.mjs" in c for c in members), members
+            raise RuntimeError("the body failed")
+    assert seen["port"].startswith("/dev/")
+    assert group_members(seen["pgid"]) == []            # not even a zombie
+    assert processes_mentioning(str(seen["dir"])) == []  # its flash file named by no process
+    assert not seen["dir"].exists()
+
+
+# --- a: deploy, then only what changed; push --board pico; status -------------------------
+
+def test_deploy_then_nothing_changed_then_push_and_status(capsys, pico):
+    """deploy to the fresh Pico writes every file, a second one none; push
+    --board pico starts it playing a texel texture; status says so."""
+    if pico.notes.get("deployed"):
+        pytest.skip("the module's Pico was deployed by a test before this one "
+                    "(this test needs it fresh: run the module in file order)")
+    port = pico.port
+    t0 = time.monotonic()
+    code, out, err = run_cli(capsys, "deploy", "--port", port)
+    t_deploy = time.monotonic() - t0
+    assert code == 0, err
+    m = re.search(r"deployed to %s: (\d+) of (\d+) files written \(([\d,]+) bytes\), 0 unchanged"
+                  % re.escape(port), out)
+    assert m, out
+    written, files = int(m.group(1)), int(m.group(2))
+    assert written == files > 0 and "Traceback" not in err
+    assert "rp2 image" in err and "/lib/texel/hw/rp2.mpy" in err and "hw/virtual" not in err
+    pico.notes["deployed"] = True
+    _say(capsys, "\ndeploy to the fresh emulated Pico: %d files, %s bytes, %.1f s wall"
+         % (files, m.group(3), t_deploy))
+    # the second deploy writes nothing
+    t0 = time.monotonic()
+    code, out, err = run_cli(capsys, "deploy", "--port", port)
+    assert code == 0, err
+    assert ("deployed to %s: 0 of %d files written (0 bytes), %d unchanged, 0 removed"
+            % (port, files, files)) in out, out
+    assert "next: texelpad demo --port %s --board pico" % port in out
+    _say(capsys, "second deploy: nothing written, %.1f s wall" % (time.monotonic() - t0))
+    # nothing plays yet: push without --board says so (exit 1), with --board starts it
+    code, out, err = run_cli(capsys, "push", "--port", port, *TEXEL)
+    assert code == 1 and "texelpad is not running on %s" % port in err, err
+    t0 = time.monotonic()
+    code, out, err = run_cli(capsys, "push", "--port", port, "--board", "pico", *TEXEL)
+    assert code == 0, err
+    assert out.startswith("now playing on %s (pico):" % port), out
+    assert "texel pitch 6.0 dB, irregularity -9.0 dB, seed 0" in out and "1 region," in out
+    _say(capsys, "push --board pico (start + push): %.1f s wall" % (time.monotonic() - t0))
+    code, out, err = run_cli(capsys, "status", "--port", port)
+    assert code == 0, err
+    first = out.splitlines()[0]
+    assert first.startswith("board pico (rp2), refresh viper-irq at 8333 Hz"), out
+    m = re.search(r"measured (\d+) Hz", first)
+    assert m and int(m.group(1)) > 0, first
+    assert "texel pitch 6.0 dB" in out and "WARNING" not in out
+    _say(capsys, "status: " + first)
+    with texelpad.connect(port) as b:
+        st = b.status()
+        assert st["running"] and st["board"] == "pico" and st["port"] == "rp2"
+        assert st["refresh"] == "viper-irq" and st["viper"]
+        (r,) = st["scene"]["regions"]
+        assert r["kind"] == "texel" and r["pitch_db"] == 6.0
+        # the refresh runs between requests: the count grows on the board's own clock
+        t1, n1 = _ticks_and_refreshes(b)
+        time.sleep(0.5)
+        t2, n2 = _ticks_and_refreshes(b)
+        assert n2 > n1
+        _say(capsys, "refresh rate on the board's clock between two requests: %.0f Hz "
+             "(%d refreshes in %.3f emulated s)" % ((n2 - n1) * 1e6 / (t2 - t1), n2 - n1,
+                                                    (t2 - t1) / 1e6))
+        _say(capsys, "status: " + _figures(b.status()))
+
+
+# --- b: the firmware check --------------------------------------------------------------
+
+def test_board_files_of_other_firmware_refused_display_keeps_playing(port):
+    """Board.start with a board file for other firmware: refused in the
+    board's words before anything stops, the display plays on. The rp2
+    image carries only the rp2 board files, so first without them on the
+    board (no such file), then with them as a user's /boards/NAME.json (the
+    firmware check, texel.runtime.boards.fits)."""
+    _playing(port)
+    with texelpad.connect(port) as b:
+        st0 = b.status()
+        for name, _ in OTHER_FIRMWARE:
+            with pytest.raises(DeviceError) as e:
+                b.start(name)
+            msg = str(e.value)
+            print("\nstart(%r), no such file on the board: %s" % (name, msg))
+            assert msg.startswith("board %r: no %s.json in " % (name, name)), msg
+            assert msg.endswith("(boards found: pico, pico_bridge); the display keeps playing"), msg
+        _put_board_files(b, [n for n, _ in OTHER_FIRMWARE])
+        try:
+            for name, chip in OTHER_FIRMWARE:
+                with pytest.raises(DeviceError) as e:
+                    b.start(name)
+                msg = str(e.value)
+                print("start(%r), its file on the board: %s" % (name, msg))
+                assert "\n" not in msg
+                assert msg.startswith("board file %r is for %s" % (name, chip)), msg
+                assert "but this board runs micropython on 'rp2' (an RP2040" in msg, msg
+                assert msg.endswith("board files that fit: pico, pico_bridge; "
+                                    "the display keeps playing"), msg
+        finally:
+            _remove_board_files(b, [n for n, _ in OTHER_FIRMWARE])
+        st = b.status()
+        assert st["running"] and st["board"] == "pico"
+        assert st["pushes"] == st0["pushes"] and st["scene"] == st0["scene"]
+        assert st["refreshes"] > st0["refreshes"] and st["faults"] == 0
+
+
+def test_virtual_board_file_on_a_pico_refused_before_anything_stops(port):
+    """A virtual board file fits any firmware (texel.runtime.boards.fits),
+    but the rp2 image has no texel.hw.virtual: with a user's
+    /boards/virtual.json on the Pico, start('virtual') is refused by
+    texel.app's check (it imports the backend first) - one line - and the
+    display plays on untouched (same pushes, same scene)."""
+    _playing(port)
+    with texelpad.connect(port) as b:
+        st0 = b.status()
+        _put_board_files(b, ["virtual"])
+        try:
+            with pytest.raises(DeviceError) as e:
+                b.start("virtual")
+            fit = b.fitting()
+        finally:
+            _remove_board_files(b, ["virtual"])
+        msg = str(e.value)
+        print("\nstart('virtual'), its file on the board: %s" % msg)
+        assert "\n" not in msg
+        assert msg.startswith("board file 'virtual' needs the virtual backend, which this board "
+                              "does not have"), msg
+        assert msg.endswith("board files that fit: pico, pico_bridge; the display keeps playing")
+        assert fit == ["pico", "pico_bridge"]
+        st = b.status()
+        assert st["running"] and st["board"] == "pico" and st["scene"] == st0["scene"]
+        assert st["pushes"] == st0["pushes"] and st["faults"] == 0
+
+
+def test_cli_push_board_that_is_not_the_running_one_is_refused(capsys, port):
+    """`push --board pyboard` while the Pico runs pico: refused in one line
+    (exit 2), nothing sent, the display plays on."""
+    _playing(port)
+    with texelpad.connect(port) as b:
+        st0 = b.status()
+    code, out, err = run_cli(capsys, "push", "--port", port, "--board", "pyboard",
+                             "--pitch-db", "3", "--irregularity-db", "-9")
+    assert code == 2 and err.count("\n") == 1, err
+    assert "already runs board file 'pico', not 'pyboard'" in err
+    with texelpad.connect(port) as b:
+        st = b.status()
+    assert st["pushes"] == st0["pushes"] and st["scene"] == st0["scene"]
+
+
+def test_cli_push_board_of_other_firmware_is_one_line_exit_2(capsys, port):
+    """`push --board pyboard` on a Pico (the board file on it as a user's):
+    one line, exit 2, nothing started; `push --board pico` then starts it.
+    (--board starts a board that does not play; on a playing one it is not
+    looked at - docs/host.md.)"""
+    _playing(port)
+    with texelpad.connect(port) as b:
+        _put_board_files(b, ["pyboard"])
+    try:
+        code, out, err = run_cli(capsys, "stop", "--port", port)
+        assert code == 0, err
+        code, out, err = run_cli(capsys, "push", "--port", port, "--board", "pyboard", *TEXEL)
+        _say(capsys, "\npush --board pyboard on the stopped Pico: exit %s: %s"
+             % (code, err.strip()))
+        assert code == 2 and err.count("\n") == 1 and "Traceback" not in err, err
+        assert "board file 'pyboard' is for an STM32" in err, err
+        assert "but this board runs micropython on 'rp2'" in err, err
+        assert "board files that fit: pico, pico_bridge" in err, err
+        # the virtual board file is not in the rp2 image
+        code, out, err = run_cli(capsys, "push", "--port", port, "--board", "virtual", *TEXEL)
+        _say(capsys, "push --board virtual on the stopped Pico: exit %s: %s"
+             % (code, err.strip()))
+        assert code == 2 and err.count("\n") == 1 and "Traceback" not in err, err
+        assert "board 'virtual': no virtual.json in " in err, err
+        assert "(boards found: pico, pico_bridge, pyboard)" in err, err      # pyboard: ours
+        with texelpad.connect(port) as b:
+            assert not b.status()["running"]
+        code, out, err = run_cli(capsys, "push", "--port", port, "--board", "pico", *TEXEL)
+        assert code == 0 and "now playing on %s (pico):" % port in out, err
+    finally:
+        with texelpad.connect(port) as b:
+            _remove_board_files(b, ["pyboard"])
+
+
+def _put_board_files(b, names: list[str]) -> None:
+    from texelpad.deploy.image import BOARDS_DIR
+    b.link.exec("import os\ntry:\n os.mkdir('/boards')\nexcept OSError:\n pass")
+    for n in names:
+        b.link.write_file("/boards/%s.json" % n, (BOARDS_DIR / ("%s.json" % n)).read_bytes())
+
+
+def _remove_board_files(b, names: list[str]) -> None:
+    b.link.exec(protocol.remove_files(["/boards/%s.json" % n for n in names]))
+
+
+# --- c: a full-size samples upload --------------------------------------------------------
+
+def test_full_size_upload_plays_and_reads_back(port):
+    """19,200 uint16 values (texel.runtime.scene.MAX_SAMPLES) cross as
+    base64 pieces (protocol.split_uploads, texel.app.upload_*) while the
+    timer IRQ plays the texel scene; the board plays them and reads them back
+    exactly."""
+    _playing(port)
+    u16 = _noise(N)
+    seen: list[tuple[float, int, int]] = []
+    with texelpad.connect(port) as b:
+        st0 = b.status()
+        print("\nbefore the upload: %s, largest free block %d bytes (the upload is kept in "
+              "4 KB chunks: texel.runtime.upload)" % (_figures(st0), _largest_free(b)))
+        t0 = time.monotonic()
+        st = b.push(_full({"kind": "samples", "u16": u16}, "noise"),
+                    progress=lambda done, total: seen.append((time.monotonic(), done, total)))
+        t_push = time.monotonic() - t0
+        assert st["scene"]["name"] == "noise" and st["scene"]["regions"][0]["values"] == N
+        assert st["pushes"] == st0["pushes"] + 1
+        assert seen[0][1:] == (0, 2 * N) and seen[-1][1:] == (2 * N, 2 * N)
+        assert [d for _, d, _ in seen] == sorted(d for _, d, _ in seen)
+        assert len(seen) == 1 + -(-N // protocol.UPLOAD_PIECE)
+        t1 = time.monotonic()
+        src = b.scene_source()
+        t_read = time.monotonic() - t1
+        assert src["regions"][0]["texture"]["u16"] == u16
+        st = b.status()
+        print("full-size upload (%d values, %d pieces): %.1f s wall for the data (%.1f s before "
+              "it: host check, upload_begin; %.1f s after it: the board's validate, build, swap), "
+              "%.1f s for the whole push; read back in %.1f s"
+              % (N, len(seen) - 1, seen[-1][0] - seen[0][0], seen[0][0] - t0,
+                 t0 + t_push - seen[-1][0], t_push, t_read))
+        print("after the upload: " + _figures(st))
+        assert st["running"] and st["faults"] == 0
+        assert st["scene"]["bytes"] == 2 * N + 32         # played from the upload's own buffer
+        # the hard timer IRQ times itself on the board's clock: no refresh overran its period
+        # while the pieces were compiled and written
+        assert st["overruns"] == 0, _figures(st)
+
+
+# --- d: Ctrl-C during the upload ------------------------------------------------------------
+
+def test_ctrl_c_during_the_upload_changes_nothing(port):
+    """Ctrl-C on the host (the progress callback raises KeyboardInterrupt a
+    third of the way): Interrupted, nothing changed, the staged pieces freed
+    on the board. 6,144 values (3 pieces): on the Pico in this state neither
+    19,200 nor 9,600 values can be staged (the heap has no two free blocks of
+    their size: see test_full_size_upload_plays_and_reads_back); the
+    interruption is what this test is about."""
+    n = 3 * protocol.UPLOAD_PIECE
+    _playing(port)
+    with texelpad.connect(port) as b:
+        # something small plays: a played upload would hold 38 KB of the Pico's heap
+        b.push(_full({"kind": "constant", "level": 0.25}, "quarter"))
+        before = b.scene_source()
+        pushes = b.status()["pushes"]
+        seen = []
+
+        def progress(done, total):
+            seen.append(done)
+            if done > total // 3:
+                raise KeyboardInterrupt
+        with pytest.raises(Interrupted, match="nothing changed, the board plays what it played"):
+            b.push(_full({"kind": "samples", "u16": _noise(n, 2)}), progress=progress)
+        assert 0 < seen[-1] < 2 * n
+        st = b.status()
+        print("\nafter Ctrl-C at %d of %d bytes: %s" % (seen[-1], 2 * n, _figures(st)))
+        assert st["running"] and st["pushes"] == pushes and b.scene_source() == before
+        assert b.link.eval("import texel.app as a\nprint(repr(len(a._uploads)))") == 0
+
+
+# --- e: stop, status; scene pull round trip --------------------------------------------------
+
+def test_stop_then_status_then_scene_pull_round_trip(capsys, port, tmp_path):
+    _playing(port)
+    code, out, err = run_cli(capsys, "stop", "--port", port)
+    assert code == 0, err
+    assert out.startswith("stopped %s (board pico): it played " % port), out
+    assert out.endswith("the carrier is off\n") and out.count("\n") == 1, out
+    code, out, err = run_cli(capsys, "status", "--port", port)
+    assert code == 0 and out.startswith("texelpad is not running"), out
+    code, out, err = run_cli(capsys, "stop", "--port", port)
+    assert code == 0 and out == "texelpad is not running on %s: the carrier is already off\n" % port
+    # start it with a shipped scene by name, pull it, compare with the shipped file
+    code, out, err = run_cli(capsys, "push", "--port", port, "--board", "pico",
+                             "--scene", "split-4sin")
+    assert code == 0, err
+    assert "reference 4sin" in out and "texel pitch 6.3 dB" in out, out
+    pulled = tmp_path / "pulled.json"
+    code, out, err = run_cli(capsys, "scene", "pull", str(pulled), "--port", port)
+    assert code == 0, err
+    assert out.count("\n") == 1 and str(pulled) in out and "2 regions" in out, out
+    doc = json.loads(pulled.read_text())
+    shipped = json.loads(common.shipped_scenes()["split-4sin"].read_text(encoding="utf-8"))
+    with texelpad.connect(port) as b:
+        display = b.status()["display"]
+        assert _plain(doc) == _plain(b.scene_source())
+    canonical = scene_mod.validate(host_check(shipped, display), display)
+    assert doc["name"] == shipped["name"] and doc["notes"] == shipped["notes"]
+    assert _plain(doc["regions"]) == _plain(canonical["regions"])
+    # the pulled file plays again as it was
+    code, out, err = run_cli(capsys, "push", "--port", port, "--constant", "0.1")
+    assert code == 0, err
+    code, out, err = run_cli(capsys, "push", "--port", port, "--scene", str(pulled))
+    assert code == 0, err
+    with texelpad.connect(port) as b:
+        assert _plain(b.scene_source()) == _plain(doc)
+        st = b.status()
+        _say(capsys, "\nafter the round trip: " + _figures(st))
+        assert st["running"] and st["faults"] == 0
