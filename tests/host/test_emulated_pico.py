@@ -424,3 +424,42 @@ def test_stop_then_status_then_scene_pull_round_trip(capsys, port, tmp_path):
         st = b.status()
         _say(capsys, "\nafter the round trip: " + _figures(st))
         assert st["running"] and st["faults"] == 0
+
+
+def test_texelpad_virtual_chip_rp2040_is_a_board_the_commands_find(capsys, tmp_path):
+    """`texelpad virtual --chip rp2040 --finger sweep`: the port first, the
+    image deployed, board file 'pico' playing; `ports` lists it as an
+    emulated RP2040 and `status`/`monitor` without --port find it; the swept
+    finger moves in the telemetry; SIGTERM leaves no process and no folder."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    exe = os.path.join(os.path.dirname(sys.executable), "texelpad")
+    env = dict(os.environ, TEXELPAD_RUNTIME_DIR=str(tmp_path / "run"))
+    p = subprocess.Popen([exe, "virtual", "--chip", "rp2040", "--finger", "sweep"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        port = p.stdout.readline().strip()
+        assert port.startswith("/dev/"), (port, p.stderr.read() if p.poll() is not None else "")
+        run = lambda *a: subprocess.run([exe, *a], capture_output=True, text=True,   # noqa: E731
+                                        env=env, timeout=300)
+        r = run("ports")
+        assert port in r.stdout and "emulated RP2040" in r.stdout, r.stdout
+        r = run("status", "--timeout", "30")
+        assert r.returncode == 0 and "board pico (rp2)" in r.stdout, r.stdout + r.stderr
+        print("\n" + r.stdout.splitlines()[0])
+        r = run("monitor", "--timeout", "30", "--seconds", "3", "--rate", "50", "--csv",
+                str(tmp_path / "m.csv"))
+        assert r.returncode == 0, r.stderr
+        rows = (tmp_path / "m.csv").read_text().splitlines()[1:]
+        positions = {int(row.split(",")[1]) for row in rows}
+        assert len(rows) > 10 and len(positions) > 5, rows[:5]   # the finger moves
+    finally:
+        p.send_signal(signal.SIGTERM)
+        out, err = p.communicate(timeout=120)
+    assert p.returncode == 0, err
+    flash = re.search(r"\(flash: (\S+)\)", err).group(1)
+    assert "texelpad-pico-" in flash and not os.path.exists(os.path.dirname(flash)), err
+    assert processes_mentioning(os.path.dirname(flash)) == []    # nothing of it runs
+    assert not list((tmp_path / "run").rglob("*.json"))         # unannounced

@@ -420,7 +420,9 @@ def cmd_ports(args: argparse.Namespace) -> int:
     for p in found:
         print("%-20s %-24s %s" % (p["port"], p["vendor"], p["description"]))
     for e in virtual:
-        print("%-20s %-24s %s" % (e["port"], "virtual", "texelpad virtual (pid %s, flash %s)"
-                                  % (e["pid"], e["flash"])))
+        chip = e.get("chip")
+        print("%-20s %-24s %s" % (e["port"], "emulated " + chip.upper() if chip else "virtual",
+                                  "texelpad virtual%s (pid %s, flash %s)"
+                                  % (" --chip " + chip if chip else "", e["pid"], e["flash"])))
     return EXIT_OK
 

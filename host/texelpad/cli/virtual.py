@@ -1,4 +1,6 @@
-"""`texelpad virtual`: a virtual board on a pty until Ctrl-C (or SIGTERM, SIGHUP)."""
+"""`texelpad virtual`: a virtual board on a pty until Ctrl-C (or SIGTERM, SIGHUP):
+the device image under the MicroPython unix port, or with --chip rp2040 the
+emulated Raspberry Pi Pico (link/emulated.py: the real firmware on rp2040js)."""
 from __future__ import annotations
 
 import argparse
@@ -16,8 +18,18 @@ def add_virtual(p: argparse.ArgumentParser) -> None:
                     "PORT resume ..., or any serial tool can talk to it; texelpad ports lists "
                     "it. A soft reset (Ctrl-D, mpremote's default) restarts the interpreter "
                     "on the same port, as on a board. Runs until Ctrl-C, SIGTERM or SIGHUP.")
-    p.add_argument("--flash", metavar="DIR",
-                   help="keep the board's filesystem in DIR (default: a temporary folder)")
+    p.add_argument("--chip", choices=("rp2040",),
+                   help="emulate a chip instead: rp2040 = a Raspberry Pi Pico running the real "
+                        "MicroPython firmware (../shared/instruments/rp2emu; needs node), "
+                        "texelpad's image deployed into its flash and board file 'pico' "
+                        "playing; its figures are the chip's (emulated time)")
+    p.add_argument("--finger", default="lifted", metavar="sweep|rest|lifted|JS",
+                   help="with --chip: the finger on the softpot (ADC0): sweep (end to end and "
+                        "back every 2 s), rest (mid-strip), lifted (default), or a JavaScript "
+                        "function (ch, t_seconds) => 0..4095")
+    p.add_argument("--flash", metavar="DIR|FILE",
+                   help="keep the board's filesystem in DIR (with --chip: in the flash image "
+                        "FILE) between runs (default: temporary)")
     p.add_argument("--source", action="store_true",
                    help="run the device code from this checkout instead of deploying the "
                         "compiled image into the flash")
@@ -29,19 +41,35 @@ def add_virtual(p: argparse.ArgumentParser) -> None:
 
 def cmd_virtual(args: argparse.Namespace) -> int:
     progress = lambda m: _stderr("virtual: " + m)       # noqa: E731
+    if args.finger != "lifted" and not args.chip:
+        raise CliError("--finger", "the unix-port virtual board's finger is scripted over the "
+                       "link (Board.finger); --finger is for --chip rp2040")
+    if args.chip and args.source:
+        raise CliError("--source", "the emulated %s runs the compiled image from its flash; "
+                       "--source is for the unix-port virtual board" % args.chip)
     vb = None
     # SIGTERM/SIGHUP end it as Ctrl-C does: the interpreter killed, the
     # temporary flash and the registry entry removed (also while deploying)
     with stop_on_signals():
         try:
             try:
-                vb = open_virtual(args.flash, args.source, not args.no_start, progress)
+                if args.chip:
+                    from ..link.emulated import open_emulated, why_not
+                    why = why_not()
+                    if why:
+                        raise CliError("--chip", why, EXIT_FAIL)
+                    vb = open_emulated(args.flash, not args.no_start, progress, args.finger)
+                else:
+                    vb = open_virtual(args.flash, args.source, not args.no_start, progress)
             except LinkError as e:
                 raise _fail(e) from None
+            except RuntimeError as e:       # the emulator did not come up
+                raise CliError("--chip", str(e), EXIT_FAIL) from None
             vb.announce()
             print(vb.port, flush=True)
-            _stderr("virtual: a virtual board is on %s (flash: %s); Ctrl-C stops it"
-                    % (vb.port, vb.flash))
+            _stderr("virtual: %s is on %s (flash: %s); Ctrl-C stops it"
+                    % ("an emulated %s" % args.chip.upper() if args.chip else "a virtual board",
+                       vb.port, vb.flash))
             t_end = None if args.seconds is None else time.monotonic() + args.seconds
             while vb.alive() and (t_end is None or time.monotonic() < t_end):
                 time.sleep(0.2)

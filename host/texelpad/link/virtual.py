@@ -289,22 +289,32 @@ class VirtualBoard:
     def announce(self) -> Path:
         """Write this board's registry entry (its pty, pid, flash); removed by
         stop(). `running_boards()` lists the entries of live processes."""
-        d = registry_dir()
-        d.mkdir(parents=True, exist_ok=True)
-        entry = {"port": self.port, "pid": os.getpid(), "started": _proc_start(os.getpid()),
-                 "flash": str(self.flash), "temporary": bool(self._tmp)}
-        f = d / ("%d.json" % os.getpid())
-        tmp = f.with_suffix(".tmp")
-        tmp.write_text(json.dumps(entry))
-        os.replace(tmp, f)
-        self._registry = f
-        return f
+        self._registry = announce(self.port, str(self.flash), bool(self._tmp))
+        return self._registry
 
     def unannounce(self) -> None:
         if self._registry is not None:
             with contextlib.suppress(OSError):
                 self._registry.unlink()
             self._registry = None
+
+
+def announce(port: str, flash: str, temporary: bool, chip: str | None = None) -> Path:
+    """Write a running board's registry entry (its pty, this process's pid,
+    its flash; chip: "rp2040" for the emulated Pico); the caller removes it
+    when the board stops. running_boards() lists the entries of live
+    processes."""
+    d = registry_dir()
+    d.mkdir(parents=True, exist_ok=True)
+    entry = {"port": port, "pid": os.getpid(), "started": _proc_start(os.getpid()),
+             "flash": flash, "temporary": temporary}
+    if chip:
+        entry["chip"] = chip
+    f = d / ("%d.json" % os.getpid())
+    tmp = f.with_suffix(".tmp")
+    tmp.write_text(json.dumps(entry))
+    os.replace(tmp, f)
+    return f
 
 
 def _read(fd: int) -> bytes | None:
