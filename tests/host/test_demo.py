@@ -25,6 +25,8 @@ def test_demo_on_the_virtual_board(tmp_path, capsys):
     assert r["pos_err_max"] <= 3
     assert r["push_bytes"] < 2000                # vs the lab's 76,800 per change
     assert "wrote %s" % png in out
+    assert "; the board played exactly the map (0 of %s samples differ)" % format(r["down"], ",") in out
+    assert "the board sensed the finger " in out and "counts" not in out
     assert "deploy: unix image" in err and "sweeping the simulated finger" in err    # progress shown
 
 

@@ -6,8 +6,11 @@
   texel.render_u16(..., engine="int") of 19,200 samples (plan-backed and
   map-backed regions); gaps play the idle amplitude;
 - the figures it returns: telemetry synthesised from the exact map gives a
-  max |played - map| of 0 counts, one corrupted sample gives exactly its
-  corruption; the sensed-vs-true finger error is the offset put in;
+  largest played-vs-map difference of 0 steps, one corrupted sample gives
+  exactly its corruption; the sensed-vs-true finger error is the offset put in;
+- the title says them in plain words (played_words, finger_words): "the
+  board played exactly the map (0 of 180 samples differ)", "... differed
+  from the map by at most 7 steps of 65,535 at 1 of 180 samples";
 - the PNG is a PNG of the figure's size;
 - empty telemetry, finger lifted throughout, a constant-only scene, one
   region with gaps, 16 regions of every kind: no crash, the figures they imply;
@@ -21,7 +24,7 @@ import numpy as np
 import pytest
 
 import texel
-from texelpad.analysis.figures import demo_figure, scene_map
+from texelpad.analysis.figures import demo_figure, finger_words, played_words, scene_map
 
 DISPLAY = {"positions": 19200, "dx_um": 5.3}
 TEXEL = {"pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7}
@@ -126,6 +129,46 @@ def test_one_corrupted_sample_is_measured(tmp_path):
     out = demo_figure(tmp_path / "bad.png", SPLIT, tel)
     assert out["amp_err_max"] == 7 and out["amp_mismatches"] == 1
     assert "pos_err_max" not in out                # no truth given
+
+
+def test_title_words_exact_and_differing():
+    assert played_words(0, 0, 180) == "the board played exactly the map (0 of 180 samples differ)"
+    assert played_words(0, 0, 1800) == "the board played exactly the map (0 of 1,800 samples differ)"
+    assert played_words(7, 1, 180) == ("the board's played friction differed from the map by at "
+                                       "most 7 steps of 65,535 at 1 of 180 samples")
+    assert played_words(1, 3, 1) == ("the board's played friction differed from the map by at "
+                                     "most 1 step of 65,535 at 3 of 1 sample")
+    assert played_words(None, 0, 0) is None                  # the finger never down
+    assert finger_words(4, 5.3) == ("the board sensed the finger at most 4 positions (21.2 \u00b5m) "
+                                     "from where it truly was")
+    assert finger_words(1, 5.3).startswith("the board sensed the finger at most 1 position (5.3 ")
+    assert finger_words(0, 5.3) == "the board sensed the finger exactly where it truly was"
+    assert finger_words(None, 5.3) is None
+
+
+def test_title_uses_the_words(tmp_path, monkeypatch):
+    """The figure's title carries the figures returned, in those words (no
+    "max |played - map| = N counts")."""
+    from matplotlib.figure import Figure
+    titles = []
+    real = Figure.suptitle
+
+    def keep(self, t, *a, **k):
+        titles.append(t)
+        return real(self, t, *a, **k)
+    monkeypatch.setattr(Figure, "suptitle", keep)
+    u16 = _u16(SPLIT)
+    tel = _sweep(u16)
+    tel[120, 2] = tel[120, 2] + 7 if tel[120, 2] < 60000 else tel[120, 2] - 7
+    truth = tel[:, :2].copy()
+    truth[truth[:, 1] >= 0, 1] += 4
+    demo_figure(tmp_path / "t.png", SPLIT, tel, truth=truth, title="split")
+    (title,) = titles
+    assert "200 telemetry samples, 180 with the finger down; the board's played friction " \
+           "differed from the map by at most 7 steps of 65,535 at 1 of 180 samples" in title
+    assert "the board sensed the finger at most 4 positions (21.2 \u00b5m) from where it truly was" \
+        in title
+    assert "counts" not in title and "|" not in title
 
 
 def _sixteen():

@@ -166,6 +166,40 @@ def _note(ax: Any, text: str) -> None:
             bbox=dict(boxstyle="round", fc="white", ec="0.7", alpha=0.9))
 
 
+def _n(k: int, word: str) -> str:
+    """"1 sample", "1,800 samples"."""
+    return "%s %s%s" % (format(k, ","), word, "" if k == 1 else "s")
+
+
+def played_words(amp_err_max: int | None, mismatches: int, down: int) -> str | None:
+    """What the board played against the map at the sensed finger, in words a
+    teacher reads (the demo figure's title, `texelpad demo`'s summary): "the
+    board played exactly the map (0 of 1,800 samples differ)", or "the
+    board's played friction differed from the map by at most 7 steps of
+    65,535 at 1 of 1,800 samples" - friction is played in 65,535 steps from
+    none to full, and the samples are those taken with the finger down.
+    None when the finger was never down (nothing to compare)."""
+    if amp_err_max is None:
+        return None
+    if amp_err_max == 0:
+        return "the board played exactly the map (0 of %s differ)" % _n(down, "sample")
+    return ("the board's played friction differed from the map by at most %s of 65,535 at "
+            "%s of %s" % (_n(amp_err_max, "step"), format(mismatches, ","), _n(down, "sample")))
+
+
+def finger_words(pos_err_max: int | None, dx_um: float) -> str | None:
+    """Where the board sensed the finger against where it truly was (the
+    virtual board's scripted finger), in words: "the board sensed the finger
+    at most 4 positions (21.2 \u00b5m) from where it truly was"; None without
+    the truth or any sample with the finger down in both."""
+    if pos_err_max is None:
+        return None
+    if pos_err_max == 0:
+        return "the board sensed the finger exactly where it truly was"
+    return ("the board sensed the finger at most %s (%.4g \u00b5m) from where it truly was"
+            % (_n(pos_err_max, "position"), pos_err_max * dx_um))
+
+
 def demo_figure(path: str | Path, scene: Any, telemetry: Any, *, display: dict | None = None,
                 title: str = "", truth: Any = None) -> dict:
     """One PNG for `texelpad demo`: what the scene should play against what the
@@ -242,13 +276,12 @@ def demo_figure(path: str | Path, scene: Any, telemetry: Any, *, display: dict |
     ax_time = fig.add_subplot(gs[3, :])
 
     summary = ["%d telemetry samples, %d with the finger down" % (out["samples"], out["down"])]
-    if out["amp_err_max"] is not None:
-        summary.append("max |played \u2212 map| = %d counts (%d sample%s differ%s)" % (
-            out["amp_err_max"], out["amp_mismatches"], "" if out["amp_mismatches"] == 1 else "s",
-            "s" if out["amp_mismatches"] == 1 else ""))
-    if out.get("pos_err_max") is not None:
-        summary.append("max |sensed \u2212 true| = %d positions (%.4g \u00b5m)" % (
-            out["pos_err_max"], out["pos_err_max"] * sc.dx_um))
+    played = played_words(out["amp_err_max"], out["amp_mismatches"], out["down"])
+    if played is not None:
+        summary.append(played)
+    finger = finger_words(out.get("pos_err_max"), sc.dx_um)
+    if finger is not None:
+        summary.append(finger)
     import textwrap
     fig.suptitle(textwrap.fill(title or "texelpad demo", 130) + "\n" + "; ".join(summary[:2])
                  + ("\n" + summary[2] if len(summary) > 2 else ""))

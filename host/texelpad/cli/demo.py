@@ -109,8 +109,8 @@ def run(port: str | None = None, out: str = "texelpad-demo.png", scene: dict | N
                                  % (st["board"], st["firmware"], st["refresh"],
                                     _scene_title(canonical)))
         report.update(figs)
-        report.update({"port": port, "board": st["board"], "samples": int(len(tel)),
-                       "lost": int(lost), "refreshes": st["refreshes"],
+        report.update({"port": port, "board": st["board"], "dx_um": display["dx_um"],
+                       "samples": int(len(tel)), "lost": int(lost), "refreshes": st["refreshes"],
                        "overruns": st["overruns"], "faults": st["faults"],
                        "scene_bytes": st["scene"]["bytes"], "out": str(out),
                        "total_s": time.perf_counter() - t_all})
@@ -180,11 +180,13 @@ def cmd_demo(args: argparse.Namespace) -> int:
     except OSError as e:                # the figure (its directory was checked: a full disk)
         raise CliError("--out", "cannot write %s: %s" % (args.out, e.strerror or e),
                        EXIT_FAIL) from None
-    print("played on %s (%s): %d telemetry samples (%d lost), %d with the finger down; "
-          "played amplitude vs the map at the sensed position: max error %s counts%s"
+    from ..analysis.figures import finger_words, played_words
+    words = [w for w in (played_words(rep.get("amp_err_max"), rep.get("amp_mismatches", 0),
+                                      rep.get("down", 0)),
+                         finger_words(rep.get("pos_err_max"), rep["dx_um"])) if w]
+    print("played on %s (%s): %d telemetry samples (%d lost), %d with the finger down%s"
           % (rep["port"], rep["board"], rep["samples"], rep["lost"], rep.get("down", 0),
-             rep.get("amp_err_max"), "" if rep.get("pos_err_max") is None else
-             "; sensed vs true finger: max %s positions" % rep["pos_err_max"]))
+             "".join("; " + w for w in words)))
     print("push %.1f ms, %d bytes on the wire (the original lab sent 76,800 bytes per change); "
           "scene holds %d bytes on the board; %d refreshes, %d overruns, %d faults"
           % (rep["push_ms"], rep["push_bytes"], rep["scene_bytes"], rep["refreshes"],

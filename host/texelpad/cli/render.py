@@ -89,7 +89,11 @@ def cmd_render(args: argparse.Namespace) -> int:
     try:
         kind = out.suffix.lower()
         if kind == ".npy":
-            np.save(out, fmap)
+            # through an open file: np.save(path) appends ".npy" to a name that
+            # does not end in it exactly (M.NPY became M.NPY.npy, and "wrote
+            # M.NPY" named a file that was not there - the fuzz job found it)
+            with open(out, "wb") as f:
+                np.save(f, fmap)
         elif kind == ".csv":
             k = np.arange(fmap.size)
             np.savetxt(out, np.column_stack([k, k * texel.DX_MM, fmap]),

@@ -235,6 +235,8 @@ def nearest_e12(value: float, direction: int = 0) -> float:
 PREFIXES = {"p": -12, "n": -9, "u": -6, "\u00b5": -6, "\u03bc": -6, "m": -3,
             "": 0, "k": 3, "K": 3, "M": 6}
 UNIT_NAMES = {"H": "henry", "F": "farad", "Hz": "hertz", "V": "volt"}
+# No quantity needs more characters ("1.0000000000000002e-300 uH" has 26).
+MAX_QUANTITY_CHARS = 100
 
 
 def parse_quantity(text: str, unit: str) -> float:
@@ -244,6 +246,11 @@ def parse_quantity(text: str, unit: str) -> float:
     s = text.strip()
     if not s:
         raise ValueError("empty value")
+    if len(s) > MAX_QUANTITY_CHARS:
+        # the prefix search below tries float() on every prefix, quadratic in
+        # the length: a 100,000-character argument took seconds (fuzz, docs/testing.md)
+        raise ValueError("%r... (%s characters) is too long for a value (e.g. 390u, 34 kHz)"
+                         % (s[:20], format(len(s), ",")))
     # split the number from its suffix; the number is the longest prefix
     # that float() accepts (handles 1e-6 and .5)
     num = None
