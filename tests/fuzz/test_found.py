@@ -33,3 +33,64 @@ def test_tank_refuses_a_100000_character_quantity_in_one_line(capsys):
     line = _one_line(err)
     assert "--inductance" in line and "(100,001 characters) is too long" in line
     assert len(line) < 300
+
+
+# --- the eight found in the link, protocol and command-line layers, fixed -------------------
+
+def _stub_link(answer: str):
+    from texelpad.link.transport import Link
+    link = Link.__new__(Link)
+    link.port, link.timeout, link.sent, link.received = "/dev/ttyFAKE", 10.0, 0, 0
+    link.exec = lambda code, timeout=None: answer
+    return link
+
+
+def test_answers_of_the_wrong_shape_are_link_errors():
+    import pytest
+    from texelpad.link.board import Board
+    from texelpad.link.transport import LinkError, NotTexelpad
+    for answer in ("{[]: 1}\r\n", "-" * 100_000 + "1", "('ok',)", "42"):
+        with pytest.raises(LinkError, match="unexpected answer"):
+            _stub_link(answer).call("texel.app", "status")
+    for hello in (42, ((), "micropython", (1, 28, 0), 6, "rp2"),
+                  (("x", "0.1"), "micropython", (1, 28, 0), 6, "rp2")):
+        with pytest.raises(NotTexelpad, match="handshake"):
+            Board(_stub_link(""), hello)
+    hello = ((1, "0.1.0"), "micropython", (1, 28, 0), 6, "rp2")
+    for status in ("5.0", "{'running': True}", "None",
+                   "{'running': True, 'display': {'positions': -1, 'dx_um': 5.3}}"):
+        b = Board(_stub_link("('ok', %s)" % status), hello)
+        with pytest.raises(LinkError, match="unexpected answer .* status"):
+            b.status()
+    for tel in ("7", "([], None)", "([(1, 2)], 0)"):
+        b = Board(_stub_link("('ok', %s)" % tel), hello)
+        with pytest.raises(LinkError, match="unexpected answer .* telemetry"):
+            b.telemetry()
+    b = Board(_stub_link("('ok', {})"), hello)
+    with pytest.raises(LinkError, match="unexpected answer .* scene_source"):
+        b.scene_source()
+
+
+def test_a_board_traceback_is_one_line_with_the_whole_text_kept():
+    from texelpad.link.transport import BoardError
+    e = BoardError("Traceback (most recent call last):\r\n  File \"<stdin>\", line 1\r\n"
+                   "MemoryError: memory allocation failed\r\n")
+    assert str(e) == "the board raised an error: MemoryError: memory allocation failed"
+    assert "line 1" in e.traceback
+
+
+def test_literal_paths_quote_and_cut_odd_keys():
+    import pytest
+    from texelpad.link.protocol import LiteralError, literal
+    with pytest.raises(LiteralError) as e:
+        literal({"regions": [], "a\nb": float("nan")})
+    assert str(e.value) == "value['a\\nb']: nan is not finite"
+    with pytest.raises(LiteralError) as e:
+        literal({"k" * 100_000: float("inf")})
+    assert len(str(e.value)) < 120 and "(100000 chars)" in str(e.value)
+
+
+def test_a_usage_error_echoing_a_line_break_stays_one_line(capsys):
+    code, so, err = run_cli(capsys, *RENDER, "a\nb")
+    assert code == 2
+    assert _one_line(err).endswith("unrecognized arguments: a\\nb (see: texelpad --help)")

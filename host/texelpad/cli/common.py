@@ -56,10 +56,13 @@ class _Parser(argparse.ArgumentParser):
         # a value echoed by argparse is cut: `--seed 999...` of 5,000 digits
         # ("invalid int value: '999...'") stays one short line
         message = _LONG_QUOTED.sub(lambda m: _show(m.group(1)), message)
+        # an argument as typed may hold a line break: the error stays one line
+        message = _CONTROL.sub(lambda m: repr(m.group())[1:-1], message)
         self.exit(EXIT_USAGE, "%s: error: %s (see: %s --help)\n" % (self.prog, message, self.prog))
 
 
 _LONG_QUOTED = re.compile(r"'([^'\n]{41,})'")
+_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
 
 
 # --- the texel parameter flags --------------------------------------------------------

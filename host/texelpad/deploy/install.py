@@ -76,10 +76,11 @@ def _mkdirs(board: Any, path: str) -> None:
 
 def _one_line(e: BaseException) -> str:
     """An error as one line: a board traceback as its last line."""
-    lines = [ln.strip() for ln in str(e).splitlines() if ln.strip()]
-    if len(lines) > 1 and lines[0].startswith("the board raised an error"):
-        return "the board raised " + lines[-1]
-    return " ".join(lines) or type(e).__name__
+    text = " ".join(ln.strip() for ln in str(e).splitlines() if ln.strip())
+    head = "the board raised an error: "        # transport.BoardError, one line already
+    if text.startswith(head):
+        return "the board raised " + text[len(head):]
+    return text or type(e).__name__
 
 
 def _errno_text(n: int) -> str:

@@ -42,6 +42,60 @@ def _version_tuple(v: str) -> tuple[int, ...]:
     return tuple(out)
 
 
+# --- answers: the board's words are checked for shape before they are used -----------
+# A board that answers with the right framing but the wrong shape (another
+# program, an image of another version, a fault) is a LinkError saying so,
+# never a TypeError/KeyError deep in a command.
+
+def _bad(port: str, what: str, value: Any) -> LinkError:
+    text = repr(value)
+    return LinkError("unexpected answer from %s to %s: %s" % (
+        port, what, text if len(text) <= 200 else text[:200] + "..."))
+
+
+def _is_int(v: Any) -> bool:
+    return type(v) is int
+
+
+def _is_num(v: Any) -> bool:
+    return type(v) in (int, float)
+
+
+# status() while running: each key and what its value must be
+_RUNNING = {"board": str, "port": str, "refresh": str, "refresh_hz": int, "refreshes": int,
+            "rate_hz": int, "worst_us": int, "overruns": int, "faults": int, "position": int,
+            "amplitude": int, "duty": int, "pwm_top": int, "pushes": int}
+
+
+def check_status(port: str, st: Any) -> dict[str, Any]:
+    """status() as the commands use it, or LinkError."""
+    ok = type(st) is dict and type(st.get("running")) is bool
+    if ok and st["running"]:
+        d = st.get("display")
+        ok = (all(type(st.get(k)) is t for k, t in _RUNNING.items())
+              and _is_num(st.get("carrier_hz")) and st["refresh_hz"] > 0
+              and type(d) is dict and _is_int(d.get("positions")) and d["positions"] > 0
+              and _is_num(d.get("dx_um")) and d["dx_um"] > 0
+              and (st.get("scene") is None or type(st.get("scene")) is dict))
+    if not ok:
+        raise _bad(port, "status()", st)
+    return st
+
+
+def _check_hello(port: str, hello: Any) -> tuple:
+    ok = type(hello) is tuple and len(hello) == 5
+    if ok:
+        ver, impl, version, mpy, platform = hello
+        ok = (type(ver) is tuple and len(ver) == 2 and type(impl) is str
+              and type(version) is tuple and all(_is_int(x) for x in version)
+              and (mpy is None or _is_int(mpy)) and type(platform) is str
+              and (ver[0] == "missing" or (_is_int(ver[0]) and type(ver[1]) is str)))
+    if not ok:
+        raise NotTexelpad("%s answers, but not as texelpad's handshake expects (%s)"
+                          % (port, str(_bad(port, "the handshake", hello)).split(": ", 1)[1]))
+    return hello
+
+
 def full_screen_texel(params: dict[str, Any], display: dict[str, Any]) -> dict[str, Any]:
     """A scene of one texel region over the whole display."""
     total = display["positions"] * display["dx_um"] / 1000.0
@@ -56,7 +110,7 @@ class Board:
     def __init__(self, link: Link, hello: tuple):
         self.link = link
         self.port = link.port
-        ver, impl, version, mpy, platform = hello
+        ver, impl, version, mpy, platform = _check_hello(link.port, hello)
         self.firmware = {"implementation": impl, "version": tuple(version), "mpy": mpy,
                          "platform": platform}
         self.image = None if ver[0] == "missing" else {"protocol": ver[0], "texel": ver[1]}
@@ -80,7 +134,7 @@ class Board:
     # --- the device entry points ---------------------------------------------
     def status(self) -> dict[str, Any]:
         """texel.app.status() on the board."""
-        return self._app("status")
+        return check_status(self.port, self._app("status"))
 
     def start(self, board_name: str, scene: dict[str, Any] | None = None,
               progress: Callable[[int, int], None] | None = None, **opts: Any) -> dict[str, Any]:
@@ -100,7 +154,10 @@ class Board:
 
     def fitting(self) -> list[str]:
         """The board files on the board that its firmware and image can run."""
-        return self._app("fitting")
+        names = self._app("fitting")
+        if type(names) is not list or not all(type(n) is str for n in names):
+            raise _bad(self.port, "fitting()", names)
+        return names
 
     def restart(self, board_name: str, scene: dict[str, Any] | None,
                 realtime: bool = False) -> dict[str, Any]:
@@ -134,21 +191,25 @@ class Board:
         scene = args[scene_at]
         try:
             if scene is None:
-                return self._app(func, *args, timeout=timeout, **(kwargs or {}))
+                return check_status(self.port, self._app(func, *args, timeout=timeout,
+                                                         **(kwargs or {})))
             scene, uploads = protocol.split_uploads(scene)
             if not uploads:
                 args = list(args)
                 args[scene_at] = scene
-                return self._app(func, *args, timeout=timeout, **(kwargs or {}))
+                return check_status(self.port, self._app(func, *args, timeout=timeout,
+                                                         **(kwargs or {})))
             self._upload([u for _, u in uploads], progress)
             args = list(args)
             args[scene_at] = scene
-            kind, value = self.link.eval(protocol.staged_call(
+            ans = self.link.eval(protocol.staged_call(
                 protocol.APP, func, args, scene_at, {i: k for k, (i, _) in enumerate(uploads)},
                 kwargs), timeout)
-            if kind == "err":
-                raise DeviceError(value)
-            return value
+            if not (type(ans) is tuple and len(ans) == 2 and ans[0] in ("ok", "err")):
+                raise _bad(self.port, func + "()", ans)
+            if ans[0] == "err":
+                raise DeviceError(str(ans[1]))
+            return check_status(self.port, ans[1])
         except KeyboardInterrupt:
             raise self._interrupted(func, before) from None
 
@@ -225,14 +286,24 @@ class Board:
         src = self._app("scene_source", protocol.INLINE_SAMPLES_MAX)
         if src is None:
             return None
+        if not (type(src) is dict and type(src.get("regions")) is list
+                and all(type(r) is dict and type(r.get("texture")) is dict
+                        and type(r["texture"].get("kind")) is str for r in src["regions"])):
+            raise _bad(self.port, "scene_source()", src)
         for i, r in enumerate(src["regions"]):
             tex = r["texture"]
             if tex["kind"] == "samples" and isinstance(tex["u16"], int):
                 n = tex["u16"]
                 vals = array("H")
                 while len(vals) < n:
-                    vals.frombytes(base64.b64decode(self._app(
-                        "samples_b64", i, len(vals), protocol.UPLOAD_PIECE)))
+                    piece = self._app("samples_b64", i, len(vals), protocol.UPLOAD_PIECE)
+                    try:
+                        data = base64.b64decode(piece, validate=True)
+                    except (TypeError, ValueError):
+                        raise _bad(self.port, "samples_b64()", piece) from None
+                    if not data or len(data) & 1:
+                        raise _bad(self.port, "samples_b64()", piece)
+                    vals.frombytes(data)
                 if sys.byteorder == "big":
                     vals.byteswap()
                 tex["u16"] = vals.tolist()
@@ -242,10 +313,18 @@ class Board:
 
     # --- telemetry --------------------------------------------------------------
     def stream(self, rate_hz: int = 125) -> int:
-        return self._app("stream", int(rate_hz))
+        every = self._app("stream", int(rate_hz))
+        if not _is_int(every) or every < 0:
+            raise _bad(self.port, "stream()", every)
+        return every
 
     def telemetry(self) -> tuple[list[tuple[int, int, int]], int]:
-        samples, lost = self._app("telemetry")
+        ans = self._app("telemetry")
+        if not (type(ans) in (tuple, list) and len(ans) == 2 and type(ans[0]) is list
+                and _is_int(ans[1]) and all(type(x) in (tuple, list) and len(x) == 3
+                                            and all(_is_int(v) for v in x) for x in ans[0])):
+            raise _bad(self.port, "telemetry()", ans)
+        samples, lost = ans
         return [tuple(s) for s in samples], lost
 
     def monitor(self, seconds: float | None = None, rate_hz: int = 125,
@@ -309,10 +388,18 @@ class Board:
         literal(params)
         texel.validate(params)                      # the board's own check, here first
         code = protocol.render_u16(params, engine)
-        kind, value = self.link.eval(code, timeout=max(self.link.timeout, 60))
-        if kind == "err":
-            raise DeviceError(value)
-        return np.frombuffer(base64.b64decode(value), dtype="<u2").copy()
+        ans = self.link.eval(code, timeout=max(self.link.timeout, 60))
+        if not (type(ans) is tuple and len(ans) == 2 and ans[0] in ("ok", "err")):
+            raise _bad(self.port, "render_u16()", ans)
+        if ans[0] == "err":
+            raise DeviceError(str(ans[1]))
+        try:
+            data = base64.b64decode(ans[1], validate=True)
+        except (TypeError, ValueError):
+            raise _bad(self.port, "render_u16()", ans) from None
+        if len(data) & 1:
+            raise _bad(self.port, "render_u16()", ans)
+        return np.frombuffer(data, dtype="<u2").copy()
 
 
 def host_check(scene: Any, display: dict[str, Any] | None = None) -> Any:
@@ -407,10 +494,16 @@ def board_display(board: Board, name: str) -> dict[str, Any]:
     name = protocol.plain(name)
     if not isinstance(name, str):
         raise ValueError("board name: %s is not a string" % type(name).__name__)
-    kind, value = board.link.eval(protocol.board_display(name))
-    if kind == "err":
-        raise DeviceError(value)
-    return value
+    ans = board.link.eval(protocol.board_display(name))
+    if not (type(ans) is tuple and len(ans) == 2 and ans[0] in ("ok", "err")):
+        raise _bad(board.port, "the board file's display", ans)
+    if ans[0] == "err":
+        raise DeviceError(str(ans[1]))
+    d = ans[1]
+    if not (type(d) is dict and _is_int(d.get("positions")) and d["positions"] > 0
+            and _is_num(d.get("dx_um")) and d["dx_um"] > 0):
+        raise _bad(board.port, "the board file's display", ans)
+    return d
 
 
 def boot_config(board_name: str, scene: Any, display: dict[str, Any]) -> dict[str, Any]:
@@ -448,6 +541,8 @@ def clear_boot(board: Board) -> bool:
     """Remove BOOT_FILE (and a leftover "<file>.new"); False when there was none."""
     path = on_board_path(board, BOOT_FILE)
     found = board.link.eval(protocol.kinds([path, path + ".new"]))
+    if type(found) is not dict:
+        raise _bad(board.port, "which files are there", found)
     if any(found.values()):
         board.link.exec(protocol.remove_files([path, path + ".new"]))
     return found.get(path) is not None

@@ -110,7 +110,7 @@ def _plain(v: Any, path: str, seen: set[int], depth: int, np: Any) -> Any:
                         k = str(k)
                     else:
                         raise LiteralError("%s: key %s is not a string" % (where, _show_key(k)))
-                out[k] = _plain(x, "%s.%s" % (path, k) if path else k, seen, depth + 1, np)
+                out[k] = _plain(x, _join(path, k), seen, depth + 1, np)
         else:
             items = [_plain(x, "%s[%d]" % (where, i), seen, depth + 1, np)
                      for i, x in enumerate(v)]
@@ -119,6 +119,16 @@ def _plain(v: Any, path: str, seen: set[int], depth: int, np: Any) -> Any:
         return out
     raise LiteralError("%s: %s values cannot be sent to the board (plain numbers, strings, "
                        "lists and dicts only)" % (where, t.__name__))
+
+
+def _join(path: str, key: str) -> str:
+    """path.key as the board names it; a key that is not a short name is
+    quoted and cut as the board's own validation shows it (a line break or
+    100,000 characters in a key must not make the message)."""
+    if key.isascii() and key.isidentifier() and len(key) <= 40:
+        return "%s.%s" % (path, key) if path else key
+    from texel.runtime.scene import _qstr
+    return "%s[%s]" % (path or "value", _qstr(key))
 
 
 def _show_key(k: Any) -> str:

@@ -22,8 +22,10 @@ printing of what the port sent.
 from __future__ import annotations
 
 import ast
+import io
+import struct
 import time
-from contextlib import contextmanager
+from contextlib import contextmanager, redirect_stdout
 from typing import Any, Iterator
 
 # mpremote is pinned (pyproject): its SerialTransport is the raw-REPL /
@@ -66,6 +68,21 @@ class LinkTimeout(LinkError):
 
 class Interrupted(KeyboardInterrupt):
     """Ctrl-C during a request; the text says what the board does now."""
+
+
+class BoardError(LinkError):
+    """The board raised an exception running host code (not a refusal):
+    one line (the exception); .traceback has the board's whole text."""
+
+    def __init__(self, text: str):
+        lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
+        super().__init__("the board raised an error: %s" % (_cut(lines[-1]) if lines
+                                                             else "(no text)"))
+        self.traceback = text
+
+
+def _cut(text: str, n: int = 300) -> str:
+    return text if len(text) <= n else text[:n] + "... (%d characters)" % len(text)
 
 
 class DeviceError(LinkError, ValueError):
@@ -252,8 +269,14 @@ class _Transport(SerialTransport):
         (default: the link's) plus the time to send the command at
         MIN_BYTES_PER_S (a 512 KB scene over a 115,200-baud UART)."""
         t = self.op_timeout if timeout is None else timeout
-        with self.deadline(t + len(command) / MIN_BYTES_PER_S, t):
-            return super().exec_raw(command, timeout=t, data_consumer=data_consumer)
+        # mpremote print()s what it read when a board falls out of the raw
+        # REPL; that would land in the host's own output (--json): dropped
+        with self.deadline(t + len(command) / MIN_BYTES_PER_S, t), redirect_stdout(io.StringIO()):
+            try:
+                return super().exec_raw(command, timeout=t, data_consumer=data_consumer)
+            except struct.error:
+                # raw paste's 2-byte window size cut off (mpremote unpacks it unchecked)
+                raise TransportError("the board's raw-paste answer was cut off") from None
 
 
 # --- the link -----------------------------------------------------------------
@@ -338,7 +361,7 @@ class Link:
                               % (self.port, e)) from None
         self.received += len(out) + len(err)
         if err:
-            raise LinkError("the board raised an error:\n%s" % err.decode("utf-8", "replace").strip())
+            raise BoardError(err.decode("utf-8", "replace"))
         return out.decode("utf-8", "replace")
 
     def eval(self, code: str, timeout: float | None = None) -> Any:
@@ -347,17 +370,23 @@ class Link:
         last = out.splitlines()[-1] if out else ""
         try:
             return ast.literal_eval(last)
-        except (ValueError, SyntaxError):
+        except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
+            # TypeError: '{[]: 1}' parses but cannot be built; the others: a
+            # line of 100,000 nested operators
             raise LinkError("unexpected answer from %s: %r" % (self.port, out[-200:])) from None
 
     def call(self, module: str, func: str, *args: Any, timeout: float | None = None,
              **kwargs: Any) -> Any:
         """`module.func(*args, **kwargs)` on the board, arguments as literals; a
         device ValueError becomes DeviceError with the device's text."""
-        kind, value = self.eval(protocol.call(module, func, args, kwargs), timeout)
-        if kind == "err":
-            raise DeviceError(value)
-        return value
+        ans = self.eval(protocol.call(module, func, args, kwargs), timeout)
+        if not (type(ans) is tuple and len(ans) == 2 and ans[0] in ("ok", "err")
+                and (ans[0] == "ok" or type(ans[1]) is str)):
+            raise LinkError("unexpected answer from %s to %s.%s(): %s"
+                            % (self.port, module, func, _cut(repr(ans), 200)))
+        if ans[0] == "err":
+            raise DeviceError(ans[1])
+        return ans[1]
 
     def write_file(self, path: str, data: bytes, chunk: int = 2048, progress=None) -> None:
         """Write `data` to `path` on the board with mpremote's fs_writefile, in
@@ -375,6 +404,9 @@ class Link:
         except TransportError as e:
             raise LinkTimeout("%s stopped answering while writing %s (%s)"
                               % (self.port, path, e)) from None
+        except UnicodeDecodeError:          # mpremote decodes the board's error text strictly
+            raise LinkError("the board raised an error while writing %s (its text is not "
+                            "UTF-8)" % path) from None
         except (serial.SerialException, OSError) as e:
             raise LinkError("%s: writing %s failed (%s)" % (self.port, path, e)) from None
         # what fs_writefile sent: open, one "w(<bytes literal>)" per chunk, close
