@@ -18,6 +18,8 @@ import statistics
 import time
 from typing import Any, Callable
 
+from ..link.transport import DeviceError
+
 LAB_BYTES_PER_CHANGE = 2 * 19200 * 2       # two int16 maps of 19,200 samples
 
 
@@ -37,29 +39,57 @@ def slope_per_push(ys: list[float]) -> float:
     return sum((i - mx) * (y - my) for i, y in enumerate(ys)) / sxx
 
 
+def _board(chip: str | None, deploy: bool) -> Any:
+    """The board to measure: the unix-port virtual board, or the emulated chip
+    (link/emulated.py), started."""
+    if chip:
+        from ..link.emulated import EmulatedPico
+        emu = EmulatedPico()
+        try:
+            emu.start()
+        except BaseException:
+            emu.stop()
+            raise
+        return emu
+    from ..link.virtual import VirtualBoard
+    vb = VirtualBoard(image=None if deploy else "source")
+    vb.start()
+    return vb
+
+
 def run(pushes: int = 200, deploy: bool = True,
-        progress: Callable[[str], None] | None = None) -> dict[str, Any]:
+        progress: Callable[[str], None] | None = None, chip: str | None = None) -> dict[str, Any]:
+    """chip "rp2040": on the emulated Pico (its figures: the host's wall time
+    for the link, the chip's own clock for what the board reports)."""
     from ..link.board import connect
-    from ..link.virtual import VirtualBoard, stop_on_signals
+    from ..link.virtual import stop_on_signals
     say = progress or (lambda m: None)
-    res: dict[str, Any] = {"pushes": pushes}
+    res: dict[str, Any] = {"pushes": pushes, "chip": chip}
+    timeout = 60.0 if chip else 10.0        # the emulator runs ~3x slower than a chip
+    if chip:
+        deploy = True                       # its flash starts empty
     # SIGTERM/SIGHUP unwind like Ctrl-C: the board's interpreter and its
     # temporary flash go with it
-    with stop_on_signals(), VirtualBoard(image=None if deploy else "source") as vb:
+    with stop_on_signals(), _board(chip, deploy) as vb:
         if deploy:
             from ..deploy.install import deploy as do_deploy
             for label in ("cold", "warm"):
-                with connect(vb.port, check=False, import_image=False) as b:
+                with connect(vb.port, check=False, import_image=False, timeout=timeout) as b:
                     t0 = time.perf_counter()
                     rep = do_deploy(b)
                     res["deploy_%s_s" % label] = time.perf_counter() - t0
                     res["deploy_%s" % label] = rep
                 say("deploy %s: %.2f s, %d files written, %d bytes"
                     % (label, res["deploy_%s_s" % label], rep["written"], rep["bytes_written"]))
-        with connect(vb.port) as b:
-            b.start("virtual", None, realtime=True)
+        with connect(vb.port, timeout=timeout) as b:
+            if chip:
+                t0 = time.perf_counter()
+                b.start("pico")
+                res["start_s"] = time.perf_counter() - t0
+            else:
+                b.start("virtual", None, realtime=True)
             display = b.status()["display"]
-            lat, sent, recv, mem, acked = [], [], [], [], 0
+            lat, sent, recv, mem, acked, build = [], [], [], [], 0, []
             t_all = time.perf_counter()
             for i in range(pushes):
                 params = {"pitch_db": round(-5.0 + 20.0 * (i % 97) / 97, 3),
@@ -75,12 +105,19 @@ def run(pushes: int = 200, deploy: bool = True,
                         and reg[0]["pitch_db"] == params["pitch_db"] and st["faults"] == 0):
                     acked += 1
                 mem.append(st["mem_free"])
+                if st.get("last_push"):             # the board's own clock
+                    build.append(st["last_push"]["build_us"] + st["last_push"]["swap_us"])
                 if progress and (i + 1) % max(1, pushes // 10) == 0:
                     say("push %d/%d: median %.1f ms" % (i + 1, pushes,
                                                         1e3 * statistics.median(lat)))
             res["soak_s"] = time.perf_counter() - t_all
             st = b.status()
-            res.update(_upload(b, display, say))
+            try:
+                res.update(_upload(b, display, say))
+            except DeviceError as e:        # a measured outcome too: say it, do not crash
+                res["upload_error"] = str(e)
+                res["mem_free_at_upload"] = b.status()["mem_free"]
+                say("upload refused: %s" % e)
             # one texture as the bytes of its literal alone (what the scene
             # costs on the wire, without the code around it)
             from ..link.board import full_screen_texel
@@ -99,6 +136,9 @@ def run(pushes: int = 200, deploy: bool = True,
         "lab_bytes_per_change": LAB_BYTES_PER_CHANGE,
         "mem_free_first": statistics.median(mem[:n]), "mem_free_last": statistics.median(mem[-n:]),
         "mem_free_min": min(mem), "mem_free_slope_per_push": slope_per_push(mem),
+        "board_push_ms_median": statistics.median(build) / 1e3 if build else None,
+        "board_push_ms_max": max(build) / 1e3 if build else None,
+        "worst_refresh_us": st["worst_us"], "rate_hz": st["rate_hz"],
     })
     return res
 
@@ -137,8 +177,15 @@ def _upload(b: Any, display: dict[str, Any], say: Callable[[str], None],
             "upload_overruns": st["overruns"]}
 
 
+def _ms(v: float | None) -> str:
+    return "-" if v is None else "%.1f" % v
+
+
 def table(res: dict[str, Any]) -> str:
-    lines = ["texelpad bench-link: the virtual board on a pty (MicroPython unix port, real time)"]
+    lines = ["texelpad bench-link: %s" % (
+        "the emulated %s on a pty (rp2040js, MicroPython firmware; wall time on this host, "
+        "board figures in the chip's own time)" % res["chip"].upper() if res.get("chip") else
+        "the virtual board on a pty (MicroPython unix port, real time)")]
     if "deploy_cold_s" in res:
         for label in ("cold", "warm"):
             rep = res["deploy_%s" % label]
@@ -154,11 +201,16 @@ def table(res: dict[str, Any]) -> str:
         % (res["bytes_sent_per_push"], res["bytes_received_per_push"],
            res["scene_literal_bytes"], format(res["lab_bytes_per_change"], ","),
            res["lab_bytes_per_change"] / max(1, res["bytes_sent_per_push"])),
+        "board       a full-screen texel push on the board itself (validate, plan, swap): "
+        "median %s ms, max %s ms (its own clock)" % (
+            _ms(res.get("board_push_ms_median")), _ms(res.get("board_push_ms_max"))),
         "soak        %d/%d pushes acknowledged with the scene sent; %d faults, %d overruns over "
-        "%s refreshes" % (res["acked"], res["pushes"], res["faults"], res["overruns"],
-                          format(res["refreshes"], ",")),
-        "upload      %s uint16 values (a full-screen samples map) in pieces of %s: median %.2f "
-        "s, max %.2f s, %s bytes sent per push; worst refresh %d us (before: %d us), %d "
+        "%s refreshes; worst refresh %s us, rate %s Hz"
+        % (res["acked"], res["pushes"], res["faults"], res["overruns"],
+           format(res["refreshes"], ","), res.get("worst_refresh_us"), res.get("rate_hz")),
+        ("upload      refused by the board: %s" % res["upload_error"]) if "upload_error" in res
+        else "upload      %s uint16 values (a full-screen samples map) in pieces of %s: median "
+        "%.2f s, max %.2f s, %s bytes sent per push; worst refresh %d us (before: %d us), %d "
         "overruns" % (format(res["upload_values"], ","), format(res["upload_piece_values"], ","),
                       res["upload_s_median"], res["upload_s_max"],
                       format(int(res["upload_bytes_sent"]), ","), res["upload_worst_refresh_us"],

@@ -101,21 +101,35 @@ def add_bench_link(p: argparse.ArgumentParser) -> None:
                     "timing each from the host call to the board's confirmation, counting the "
                     "bytes both ways, checking every acknowledgement and the board's free "
                     "memory after each push.")
-    p.add_argument("--pushes", type=int, default=200, metavar="N", help="pushes (default 200)")
+    p.add_argument("--pushes", type=int, metavar="N",
+                   help="pushes (default 200; 20 with --chip)")
+    p.add_argument("--chip", choices=("rp2040",),
+                   help="on the emulated Pico instead (texelpad virtual --chip rp2040; needs "
+                        "../shared/instruments and node): the chip's own figures")
     p.add_argument("--json", metavar="PATH", help="also write every figure here")
     p.set_defaults(func=cmd_bench_link)
 
 
 def cmd_bench_link(args: argparse.Namespace) -> int:
     from ..bench import link as link_bench
+    if args.pushes is None:
+        args.pushes = 20 if args.chip else 200
     if args.pushes < 1:
         raise CliError("--pushes", "must be >= 1, got %d" % args.pushes)
     if args.json:
         check_output("--json", args.json, (".json",))
+    if args.chip:
+        from ..link.emulated import why_not
+        why = why_not()
+        if why:
+            raise CliError("--chip", why, EXIT_FAIL)
     try:
-        res = link_bench.run(args.pushes, progress=lambda m: _stderr("bench-link: " + m))
+        res = link_bench.run(args.pushes, progress=lambda m: _stderr("bench-link: " + m),
+                             chip=args.chip)
     except LinkError as e:
         raise _fail(e) from None
+    except RuntimeError as e:           # the emulator did not come up
+        raise CliError("--chip", str(e), EXIT_FAIL) from None
     print(link_bench.table(res))
     if args.json:
         write_output("--json", args.json,

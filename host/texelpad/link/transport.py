@@ -344,6 +344,25 @@ class Link:
             raise LinkTimeout("%s does not answer (%s); the board may have reset or been "
                               "unplugged" % (self.port, _why(e))) from None
 
+    def soft_reset(self, timeout: float | None = None) -> None:
+        """Soft-reset the board from the raw REPL (Ctrl-D at its prompt): a
+        fresh interpreter and heap, files kept; main.py does not run from the
+        raw REPL, so nothing starts playing. Only deploy uses it, after the
+        display was stopped for the writes (a playing display is never
+        reset). Back in the raw REPL afterwards."""
+        if self.t is None:
+            raise LinkError("the link to %s is closed" % self.port)
+        t = self.timeout if timeout is None else timeout
+        try:
+            with self.t.deadline(t):
+                self.t.serial.write(b"\x04")
+                self.t.read_until(1, b"soft reboot\r\n", timeout=t)
+                # then boot.py may print; the banner ends it (its ">" is left for exec)
+                self.t.read_until(1, _Transport.RAW_PROMPT, timeout=t)
+        except (TransportError, serial.SerialException, OSError) as e:
+            raise LinkTimeout("%s did not come back from a soft reset (%s)"
+                              % (self.port, _why(e))) from None
+
     def exec(self, code: str, timeout: float | None = None) -> str:
         """Run host-written code on the board; return what it printed.
         A device exception raises LinkError with the device's traceback."""
