@@ -384,7 +384,8 @@ def upload_begin(sizes):
     except MemoryError:
         gc.collect()
         raise ValueError("not enough memory on the board to receive %d sample values (%d bytes "
-                         "free); the current scene keeps playing"
+                         "free) beside the scene playing, which keeps playing; to make room, "
+                         "play a small scene first (texelpad push --constant 0)"
                          % (sum(sizes), compat.heap_free() or 0))
     _uploads = ups
     return len(ups)

@@ -40,21 +40,14 @@ def slope_per_push(ys: list[float]) -> float:
 
 
 def _board(chip: str | None, deploy: bool) -> Any:
-    """The board to measure: the unix-port virtual board, or the emulated chip
-    (link/emulated.py), started."""
+    """The board to measure, not started yet: the unix-port virtual board
+    (its `with` starts it) or the emulated chip (link/emulated.py; started
+    by run())."""
     if chip:
         from ..link.emulated import EmulatedPico
-        emu = EmulatedPico()
-        try:
-            emu.start()
-        except BaseException:
-            emu.stop()
-            raise
-        return emu
+        return EmulatedPico()
     from ..link.virtual import VirtualBoard
-    vb = VirtualBoard(image=None if deploy else "source")
-    vb.start()
-    return vb
+    return VirtualBoard(image=None if deploy else "source")
 
 
 def run(pushes: int = 200, deploy: bool = True,
@@ -71,6 +64,8 @@ def run(pushes: int = 200, deploy: bool = True,
     # SIGTERM/SIGHUP unwind like Ctrl-C: the board's interpreter and its
     # temporary flash go with it
     with stop_on_signals(), _board(chip, deploy) as vb:
+        if chip:
+            vb.start()                      # boots the firmware, waits for its port
         if deploy:
             from ..deploy.install import deploy as do_deploy
             for label in ("cold", "warm"):
@@ -163,7 +158,10 @@ def _upload(b: Any, display: dict[str, Any], say: Callable[[str], None],
                               "texture": {"kind": "samples", "u16": u16}}]}
         s0 = b.link.sent
         t0 = time.perf_counter()
-        b.push(scene)
+        try:
+            b.push(scene)
+        except DeviceError as e:
+            raise DeviceError("upload %d of %d: %s" % (k + 1, repeats, e)) from None
         times.append(time.perf_counter() - t0)
         sent.append(b.link.sent - s0)
         if b.scene_source()["regions"][0]["texture"]["u16"] != u16:
