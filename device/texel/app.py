@@ -88,18 +88,6 @@ def _reader(hw, i):
     return lambda: hw.adc_read(i)
 
 
-def _preload():
-    """Import now every module a scene build may need. Imported lazily in the
-    middle of a build, their code lands above that scene's buffers, and when
-    the scene is replaced its freed buffers leave holes between modules: on
-    a Pico the largest free block fell to ~28 KB of ~118 KB free, and no
-    full-screen map (38.4 KB) fitted any more (measured on the emulated Pico,
-    docs/runtime.md "Memory")."""
-    from .gen import plan, engine_int, sine_table, reference   # noqa: F401 (engine_int: its viper fill)
-    from .runtime import upload                                # noqa: F401
-    gc.collect()
-
-
 def start(board_name, scene=None, realtime=False, fast=None, **hw_opts):
     """Start the display on board `board_name` (a file in boards/) playing
     `scene` (default: the study's split screen). Stops a running display
@@ -110,7 +98,6 @@ def start(board_name, scene=None, realtime=False, fast=None, **hw_opts):
     fast: the fused viper refresh (refresh_viper.py) - default on wherever
     the port has viper and the sensor is a linear ADC; on an RP2040 its IRQ
     then reads the ADC and writes the PWM compare register itself."""
-    _preload()
     playing = "; the display keeps playing" if _rt is not None else ""
     try:
         board = _boards.load(board_name)
@@ -192,6 +179,7 @@ def _start(board, canonical, realtime, fast, hw_opts):
         if fast:
             rt.refresh = FastRefresh(rt.sensor, rt.law, hw.set_duty, reads[0], ticks, diff,
                                      rt.period_us, idle, getattr(hw, "cost_ticks", None))
+            rt.refresh.threaded = realtime and hasattr(hw, "run_realtime")
             regs = hw.direct_registers() if hasattr(hw, "direct_registers") else None
             if regs is not None:
                 rt.refresh.use_rp2_registers(regs[0], regs[1], int(s["pins"][0]) - 26)
@@ -363,10 +351,11 @@ def samples_b64(region, offset, count):
 # pushes the scene with take_upload(slot) in place of the values. Nothing
 # plays until that push, which validates the upload like any scene: an
 # interrupted upload changes nothing (the next upload_begin frees it).
-# values per piece: 2 KB of data, ~2.7 KB of base64, a few small blocks on
-# the board's heap per piece (the code, the text, the bytes, one array) -
-# 2,048 failed on the emulated Pico with ~75 KB free but fragmented
-UPLOAD_PIECE_MAX = 1024
+# values per piece: 1 KB of data, ~1.4 KB of base64 - a few small blocks on
+# the board's heap per piece (the code, the text, the bytes, one array).
+# Measured on the emulated Pico: 2,048 failed with ~75 KB free but
+# fragmented, and 1,024 (a 2.7 KB text) during a second full-screen upload.
+UPLOAD_PIECE_MAX = 512
 _uploads = []
 
 
@@ -400,11 +389,18 @@ def upload_write(slot, offset, b64):
     if not isinstance(b64, str) or len(b64) > 4 * UPLOAD_PIECE_MAX // 3 * 2 + 8:
         raise ValueError("upload_write: a piece is base64 text of at most %d values"
                          % UPLOAD_PIECE_MAX)
+    full = ("not enough memory on the board for the next piece of the upload; the current "
+            "scene keeps playing")
     try:
         data = binascii.a2b_base64(b64)
     except ValueError:
         raise ValueError("upload_write: the piece is not base64")
-    return _uploads[slot].write(offset, data)
+    except MemoryError:
+        raise ValueError(full)
+    try:
+        return _uploads[slot].write(offset, data)
+    except MemoryError:
+        raise ValueError(full)
 
 
 def take_upload(slot):

@@ -96,10 +96,10 @@ def test_full_size_u16_upload_in_pieces_refresh_within_budget(board):
     got = board.link.eval("import texel.app as a\nsc = a._rt.refresh.scene\n"
                           "print(repr([sc.amp(p) for p in (0, 1, 9999, 19199)]))")
     assert got == [u16[0], u16[1], u16[9999], u16[19199]]
-    # the upload plays as it arrived: 38.4 KB in 4 KB chunks, no second copy
+    # the upload plays as it arrived: 38.4 KB in 1 KB chunks, no second copy
     assert st["scene"]["bytes"] == 2 * N + 32 and st["scene"]["regions"][0]["mode"] == "map"
     assert board.link.eval("import texel.app as a\nprint(repr([len(c) for c in "
-                           "a._rt.refresh.scene.buffers()[0]]))") == [2048] * 9 + [768]
+                           "a._rt.refresh.scene.buffers()[0]]))") == [512] * 37 + [256]
 
 
 def test_full_size_values_upload_and_stretch(board):
@@ -315,14 +315,14 @@ def test_upload_on_device_interpreters(runtime):
             pytest.skip("%s not found (../shared/instruments)" % runtime)
     r = mpy.run_json(UPLOAD_SCRIPT, exe=exe)
     assert r == {"filled": 5000, "ok": True, "shared": True, "same": True, "back": True,
-                 "chunks": [2048, 2048, 904]}
+                 "chunks": [512] * 9 + [392]}
 
 
 def test_upload_on_cpython():
     ns: dict = {}
     exec(UPLOAD_SCRIPT.replace("print(json.dumps(", "RESULT = (("), ns)
     assert ns["RESULT"] == {"filled": 5000, "ok": True, "shared": True, "same": True,
-                            "back": True, "chunks": [2048, 2048, 904]}
+                            "back": True, "chunks": [512] * 9 + [392]}
 
 
 def test_cli_ctrl_c_during_a_big_push_says_what_plays(port, tmp_path):

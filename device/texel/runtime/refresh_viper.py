@@ -193,8 +193,8 @@ def refresh(timer) -> int:
             # the address of its chunk-address table (lo, hi pairs)
             o = p - st
             ct = ptr32(int(w[(W_BUF0 + int(tab[i + 2])) * 2]) | ((int(w[(W_BUF0 + int(tab[i + 2])) * 2 + 1]) << 16) << 16))
-            c = (o >> 11) * 2           # scene.CHUNK_BITS, CHUNK_MASK (checked below)
-            amp = int(ptr16(int(ct[c]) | ((int(ct[c + 1]) << 16) << 16))[o & 2047])
+            c = (o >> 9) * 2            # scene.CHUNK_BITS, CHUNK_MASK (checked below)
+            amp = int(ptr16(int(ct[c]) | ((int(ct[c + 1]) << 16) << 16))[o & 511])
         else:
             # plan-backed texel region: engine_int's sample, as Scene.amp
             b = W_BUF0 + int(w[W_NBUF * 2]) + 4 * int(tab[i + 2])
@@ -271,6 +271,9 @@ class FastRefresh(Refresh):
         self._S = array("i", bytes(4 * S_SIZE))
         self._keep = None
         self._prev = None
+        # True when the refresh may run in another thread (the unix port's
+        # real-time virtual board): the previous scene is kept one swap longer
+        self.threaded = False
         Refresh.__init__(self, sensor, law, set_duty, ticks_us, ticks_diff, period_us,
                          idle_amp, cost_ticks)
         S = self._S
@@ -366,6 +369,12 @@ class FastRefresh(Refresh):
         # may still be reading the old scene just after this store.
         self._prev = self._keep
         self._keep = keep               # referenced before the IRQ can see them
+        if not self.threaded:
+            # a hard IRQ (rp2, stm32) runs to its end before this code goes on:
+            # once _W is stored no refresh can still read the old scene, whose
+            # buffers go now (on a Pico, keeping a full-screen upload one swap
+            # longer left no room for the next: measured on the emulated Pico)
+            self._prev = None
         _W = words                      # the swap: one store
         return self._prev
 
@@ -401,7 +410,7 @@ class FastRefresh(Refresh):
 
 
 from .scene import CHUNK_BITS as _CB, CHUNK_MASK as _CM
-if _CB != 11 or _CM != 2047:
+if _CB != 9 or _CM != 511:
     raise ImportError("refresh_viper: scene chunk size differs from the literals in refresh()")
 if TELEMETRY_SLOTS != _SLOTS:
     raise ImportError("refresh_viper: telemetry ring size differs from refresh.py")

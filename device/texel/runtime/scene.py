@@ -101,10 +101,10 @@ SENTINEL = 0x3FFFFFFF
 K_CONST = 0
 K_BUF = 1
 K_PLAN = 2              # texel region played from its integer plan, sample by sample
-K_CHUNK = 3             # an uploaded map in 4 KB chunks (runtime/upload.py): value
+K_CHUNK = 3             # an uploaded map in 1 KB chunks (runtime/upload.py): value
                         # indexes the buffers, whose entry is a tuple of array('H')
-CHUNK_BITS = 11         # 2,048 values per chunk (upload.py and refresh_viper.py use these)
-CHUNK_MASK = 2047
+CHUNK_BITS = 9          # 512 values (1 KB) per chunk (upload.py and refresh_viper.py use these)
+CHUNK_MASK = 511
 # A texel region is kept as its plan (t28, d28: 8 bytes per texel) and
 # evaluated at the finger's position, instead of rendered (2 bytes per
 # sample), when no engine is asked for and its texels are at most PLAN_MAX_L
@@ -602,7 +602,7 @@ def _make(c, spans, positions, dx_um, idle, engine):
 def _plays_as_is(tex, n):
     """An uploaded samples map (upload.Chunks) that tiles a region of exactly
     its length is played from its own chunks: no second copy (38,400 bytes
-    for a full TPaD screen), and no block larger than 4 KB. Nothing ever
+    for a full TPaD screen), and no block larger than 1 KB. Nothing ever
     writes to it after the upload."""
     return (tex["kind"] == "samples" and tex["fit"] == "tile"
             and getattr(tex["u16"], "CHUNKS", False) and len(tex["u16"]) == n)

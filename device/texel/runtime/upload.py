@@ -49,13 +49,15 @@ def u16_bytes(buf, start, end):
     return bytes(part)                  # MicroPython: an array's raw memory
 
 
-# Uploaded values are kept in chunks of CHUNK values (4 KB each), never in
-# one block: a Pico's heap playing a scene is fragmented - on the emulated
-# Pico the largest free block after a texel push was ~27 KB of ~116 KB free,
-# so one 38.4 KB array for a full screen found no room, while 4 KB blocks
-# always do. scene.amp reads chunk o >> CHUNK_BITS, value o & CHUNK_MASK
-# (scene.K_CHUNK; both refreshes, refresh.py and refresh_viper.py, read them).
-CHUNK = 1 << CHUNK_BITS             # 2,048 values
+# Uploaded values are kept in chunks of CHUNK values (1 KB each), never in
+# one block: a Pico's heap playing a scene is fragmented. Measured on the
+# emulated Pico: with a scene playing the largest free block was ~22-35 KB
+# of ~115 KB free, so one 38.4 KB array for a full screen found no room;
+# with a first full-screen upload playing, 80 KB were free in holes mostly
+# under 4 KB, so 4 KB chunks for a second one failed and 1 KB chunks fit.
+# scene.amp reads chunk o >> CHUNK_BITS, value o & CHUNK_MASK (scene.K_CHUNK;
+# both refreshes, refresh.py and refresh_viper.py, read them).
+CHUNK = 1 << CHUNK_BITS             # 512 values
 
 
 class Chunks:

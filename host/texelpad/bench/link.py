@@ -18,7 +18,7 @@ import statistics
 import time
 from typing import Any, Callable
 
-from ..link.transport import DeviceError
+from ..link.transport import LinkError
 
 LAB_BYTES_PER_CHANGE = 2 * 19200 * 2       # two int16 maps of 19,200 samples
 
@@ -109,7 +109,7 @@ def run(pushes: int = 200, deploy: bool = True,
             st = b.status()
             try:
                 res.update(_upload(b, display, say))
-            except DeviceError as e:        # a measured outcome too: say it, do not crash
+            except LinkError as e:          # a measured outcome too: say it, do not crash
                 res["upload_error"] = str(e)
                 res["mem_free_at_upload"] = b.status()["mem_free"]
                 say("upload refused: %s" % e)
@@ -160,8 +160,8 @@ def _upload(b: Any, display: dict[str, Any], say: Callable[[str], None],
         t0 = time.perf_counter()
         try:
             b.push(scene)
-        except DeviceError as e:
-            raise DeviceError("upload %d of %d: %s" % (k + 1, repeats, e)) from None
+        except LinkError as e:
+            raise LinkError("upload %d of %d: %s" % (k + 1, repeats, e)) from None
         times.append(time.perf_counter() - t0)
         sent.append(b.link.sent - s0)
         if b.scene_source()["regions"][0]["texture"]["u16"] != u16:
