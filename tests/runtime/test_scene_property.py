@@ -772,7 +772,10 @@ def test_validate_property_cpython(label):
     if label == "valid":
         print("accepted scenes by region count:", dict(sorted(counts.items())))
         print("accepted regions by kind:", kinds, "; uploads of >= 1000 values:", uploads[0])
-        assert len(counts) >= 8 and min(counts) == 1 and max(counts) == S.MAX_REGIONS
+        # the largest counts are rare draws (the generation is not the same on
+        # every machine: a CI run drew 15 regions at most); 16 regions are
+        # covered for sure by test_explicit_cases
+        assert len(counts) >= 8 and min(counts) == 1 and max(counts) >= S.MAX_REGIONS - 3
         assert min(kinds.values()) >= 50 and uploads[0] >= 3
 
 
