@@ -88,6 +88,35 @@ def _reader(hw, i):
     return lambda: hw.adc_read(i)
 
 
+def _checked_board(board_name):
+    """Board file `board_name` loaded and checked as start() needs it (it
+    exists and is valid, its refresh mode is built, it fits this firmware):
+    the board dict, or ValueError saying what fits. Touches nothing that
+    plays."""
+    playing = "; the display keeps playing" if _rt is not None else ""
+    try:
+        board = _boards.load(board_name)
+    except ValueError as e:
+        raise ValueError(str(e) + playing)
+    if board["refresh"]["mode"] == "core1_viper":
+        raise ValueError("board %r: refresh.mode 'core1_viper' is not implemented yet; use "
+                         "'timer_irq' (a hard timer IRQ on core 0) or 'loop'%s"
+                         % (board["name"], playing))
+    why = _fits(board)
+    if why is not None:
+        raise ValueError("%s; board files that fit: %s%s" % (
+            why, ", ".join(fitting()) or "none", playing))
+    return board
+
+
+def board_display(board_name):
+    """The display of board file `board_name` if start() would take it
+    ({"positions", "dx_um"}), else ValueError in start()'s words: what a
+    power-up scene is checked against."""
+    d = _checked_board(board_name)["display"]
+    return {"positions": d["positions"], "dx_um": d["dx_um"]}
+
+
 def start(board_name, scene=None, realtime=False, fast=None, **hw_opts):
     """Start the display on board `board_name` (a file in boards/) playing
     `scene` (default: the study's split screen). Stops a running display
@@ -98,20 +127,7 @@ def start(board_name, scene=None, realtime=False, fast=None, **hw_opts):
     fast: the fused viper refresh (refresh_viper.py) - default on wherever
     the port has viper and the sensor is a linear ADC; on an RP2040 its IRQ
     then reads the ADC and writes the PWM compare register itself."""
-    playing = "; the display keeps playing" if _rt is not None else ""
-    try:
-        board = _boards.load(board_name)
-    except ValueError as e:
-        raise ValueError(str(e) + playing)
-    mode = board["refresh"]["mode"]
-    if mode == "core1_viper":
-        raise ValueError("board %r: refresh.mode 'core1_viper' is not implemented yet; use "
-                         "'timer_irq' (a hard timer IRQ on core 0) or 'loop'%s"
-                         % (board["name"], playing))
-    why = _fits(board)
-    if why is not None:
-        raise ValueError("%s; board files that fit: %s%s" % (
-            why, ", ".join(fitting()) or "none", playing))
+    board = _checked_board(board_name)
     # build the scene before touching the hardware: a bad scene changes nothing
     canonical = _scene.validate(DEFAULT_SCENE if scene is None else scene, board["display"])
     prev = None
@@ -299,14 +315,18 @@ def scene_source(inline_max=None):
     regs = []
     for r in src["regions"]:
         tex = r["texture"]
-        vals = tex.get("u16")
-        if tex["kind"] == "samples" and (inline_max is not None and len(vals) > inline_max
-                                         or not isinstance(vals, tuple)):
+        if tex["kind"] == "samples":
+            vals = tex["u16"]
             n = len(vals)
-            tex = {"kind": "samples", "fit": tex["fit"],
-                   "u16": n if inline_max is not None and n > inline_max
-                   else tuple([vals[i] for i in range(n)])}
-            r = {"start_mm": r["start_mm"], "end_mm": r["end_mm"], "texture": tex}
+            if inline_max is not None and n > inline_max:
+                u16 = n                 # its count: the host reads it with samples_b64
+            elif isinstance(vals, tuple):
+                u16 = vals
+            else:                       # an upload's chunks, inline
+                u16 = tuple([vals[i] for i in range(n)])
+            if u16 is not vals:
+                r = {"start_mm": r["start_mm"], "end_mm": r["end_mm"],
+                     "texture": {"kind": "samples", "fit": tex["fit"], "u16": u16}}
         regs.append(r)
     out["regions"] = regs
     return out

@@ -35,7 +35,7 @@
 # textures with every default filled in (no length_samples); samples as
 # {"kind": "samples", "u16": tuple of ints, "fit": ...} ("values" become
 # round(v * 65535), half up; a tuple is kept as it is, a list is copied once;
-# an Upload becomes its array('H'), which an array('H') stays);
+# an Upload becomes its upload.Chunks, which stay as they are);
 # "idle_amplitude", "name" and "notes" only when the scene gave them.
 #
 # Positions: start_mm/end_mm are converted to display indices by rounding to

@@ -28,6 +28,7 @@ from typing import Any, Callable
 
 from . import image
 from ..link import protocol
+from ..link.board import UNIX_PLATFORMS, on_board_path
 from ..link.transport import LinkError, LinkTimeout
 
 # Filesystems allocate whole blocks: count each file as its size rounded up to
@@ -47,15 +48,10 @@ def _blocks(n: int) -> int:
     return (n + BLOCK - 1) // BLOCK * BLOCK + BLOCK
 
 
-# The unix port's sys.platform: the virtual board (a host process, no heap to spare)
-UNIX_PLATFORMS = ("linux", "darwin", "win32")
-
-
 def on_board(board: Any) -> Callable[[str], str]:
     """Image path ("/lib/texel/app.mpy") -> the path to use on this board.
     The unix port (the virtual board) has the host's filesystem: its "/" is
     its flash folder, the working directory, so paths go relative there."""
-    from ..link.board import on_board_path
     return lambda p: on_board_path(board, p)
 
 
@@ -258,7 +254,7 @@ def deploy(board: Any, source: bool = False, include_main: bool = True, dry_run:
         if bad:
             raise LinkError("%d files did not arrive intact (%s)" % (len(bad), ", ".join(bad[:3])))
         board.link.exec(protocol.PURGE)
-        if board.firmware["platform"] not in UNIX_PLATFORMS:
+        if board.firmware["platform"] not in UNIX_PLATFORMS:     # not the virtual board
             # A clean heap for the new image: deploying leaves a board's heap
             # fragmented (interned paths, the hashing), and on the emulated
             # Pico the next start then failed with 137 KB free and no 19 KB

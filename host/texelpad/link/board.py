@@ -27,8 +27,9 @@ import texel.runtime.scene
 from .. import __version__
 from . import protocol
 from .protocol import PROTOCOL, literal
-from .transport import DeviceError, ImageTooOld, Interrupted, Link, LinkError, NoBoard, \
-    NotTexelpad, NoUlab, ports
+from .transport import ImageTooOld, Interrupted, Link, LinkError, NoBoard, NotTexelpad, NoUlab, \
+    answer, ports
+from .transport import unexpected as _bad
 
 HOST_IMAGE_VERSION = texel.__version__
 
@@ -46,12 +47,6 @@ def _version_tuple(v: str) -> tuple[int, ...]:
 # A board that answers with the right framing but the wrong shape (another
 # program, an image of another version, a fault) is a LinkError saying so,
 # never a TypeError/KeyError deep in a command.
-
-def _bad(port: str, what: str, value: Any) -> LinkError:
-    text = repr(value)
-    return LinkError("unexpected answer from %s to %s: %s" % (
-        port, what, text if len(text) <= 200 else text[:200] + "..."))
-
 
 def _is_int(v: Any) -> bool:
     return type(v) is int
@@ -98,10 +93,7 @@ def _check_hello(port: str, hello: Any) -> tuple:
 
 def full_screen_texel(params: dict[str, Any], display: dict[str, Any]) -> dict[str, Any]:
     """A scene of one texel region over the whole display."""
-    total = display["positions"] * display["dx_um"] / 1000.0
-    tex = dict(params)
-    tex["kind"] = "texel"
-    return {"regions": [{"start_mm": 0, "end_mm": round(total, 6), "texture": tex}]}
+    return full_screen(dict(params, kind="texel"), display)
 
 
 class Board:
@@ -194,27 +186,21 @@ class Board:
                 return check_status(self.port, self._app(func, *args, timeout=timeout,
                                                          **(kwargs or {})))
             scene, uploads = protocol.split_uploads(scene)
+            args = list(args)
+            args[scene_at] = scene
             if not uploads:
-                args = list(args)
-                args[scene_at] = scene
                 return check_status(self.port, self._app(func, *args, timeout=timeout,
                                                          **(kwargs or {})))
             self._upload([u for _, u in uploads], progress)
-            args = list(args)
-            args[scene_at] = scene
             ans = self.link.eval(protocol.staged_call(
                 protocol.APP, func, args, scene_at, {i: k for k, (i, _) in enumerate(uploads)},
                 kwargs), timeout)
-            if not (type(ans) is tuple and len(ans) == 2 and ans[0] in ("ok", "err")):
-                raise _bad(self.port, func + "()", ans)
-            if ans[0] == "err":
-                raise DeviceError(str(ans[1]))
-            return check_status(self.port, ans[1])
+            return check_status(self.port, answer(self.port, ans, func + "()"))
         except KeyboardInterrupt:
             raise self._interrupted(func, before) from None
 
     def _upload(self, values: list[list[int]],
-                progress: Callable[[int, int], None] | None) -> list[int]:
+                progress: Callable[[int, int], None] | None) -> None:
         """Stage each list of uint16 values on the board (texel.app.upload_*),
         in pieces of protocol.UPLOAD_PIECE values; progress(bytes done, total)."""
         import base64
@@ -233,7 +219,6 @@ class Board:
                 done += 2 * len(part)
                 if progress:
                     progress(done, total)
-        return list(range(len(values)))
 
     def _interrupted(self, func: str, before: dict[str, Any] | None) -> Interrupted:
         """After Ctrl-C on the host: stop the board's half-done request
@@ -272,7 +257,6 @@ class Board:
             raise ValueError("texel parameters: expected a dict, got %s" % type(params).__name__)
         st = self._running_status()
         return self._push(full_screen_texel(params, st["display"]), st)
-
 
     def stop(self) -> None:
         """Carrier to its safe off state."""
@@ -388,17 +372,14 @@ class Board:
         literal(params)
         texel.validate(params)                      # the board's own check, here first
         code = protocol.render_u16(params, engine)
-        ans = self.link.eval(code, timeout=max(self.link.timeout, 60))
-        if not (type(ans) is tuple and len(ans) == 2 and ans[0] in ("ok", "err")):
-            raise _bad(self.port, "render_u16()", ans)
-        if ans[0] == "err":
-            raise DeviceError(str(ans[1]))
+        text = answer(self.port, self.link.eval(code, timeout=max(self.link.timeout, 60)),
+                      "render_u16()")
         try:
-            data = base64.b64decode(ans[1], validate=True)
+            data = base64.b64decode(text, validate=True)
         except (TypeError, ValueError):
-            raise _bad(self.port, "render_u16()", ans) from None
+            raise _bad(self.port, "render_u16()", text) from None
         if len(data) & 1:
-            raise _bad(self.port, "render_u16()", ans)
+            raise _bad(self.port, "render_u16()", text)
         return np.frombuffer(data, dtype="<u2").copy()
 
 
@@ -474,6 +455,9 @@ def full_screen(texture: dict[str, Any], display: dict[str, Any]) -> dict[str, A
 # from this file at power-up when it is there; `texelpad deploy` leaves it
 # alone (it is not an image file).
 BOOT_FILE = "/texelpad.json"
+# The unix port's sys.platform values: the virtual board, a host process
+# whose "/" is its flash folder (texel/main.py follows the same rule)
+UNIX_PLATFORMS = ("linux", "darwin", "win32")
 
 
 def on_board_path(board: Board, path: str) -> str:
@@ -481,7 +465,7 @@ def on_board_path(board: Board, path: str) -> str:
     (the virtual board) has the host's filesystem, its "/" is its flash
     folder, the working directory, so paths go relative there (deploy's
     image paths too; the board's main.py follows the same rule)."""
-    if board.firmware["platform"] in ("linux", "darwin", "win32"):
+    if board.firmware["platform"] in UNIX_PLATFORMS:
         return path.lstrip("/")
     return path
 
@@ -494,15 +478,10 @@ def board_display(board: Board, name: str) -> dict[str, Any]:
     name = protocol.plain(name)
     if not isinstance(name, str):
         raise ValueError("board name: %s is not a string" % type(name).__name__)
-    ans = board.link.eval(protocol.board_display(name))
-    if not (type(ans) is tuple and len(ans) == 2 and ans[0] in ("ok", "err")):
-        raise _bad(board.port, "the board file's display", ans)
-    if ans[0] == "err":
-        raise DeviceError(str(ans[1]))
-    d = ans[1]
+    d = board._app("board_display", name)
     if not (type(d) is dict and _is_int(d.get("positions")) and d["positions"] > 0
             and _is_num(d.get("dx_um")) and d["dx_um"] > 0):
-        raise _bad(board.port, "the board file's display", ans)
+        raise _bad(board.port, "board_display()", d)
     return d
 
 
@@ -540,9 +519,11 @@ def write_boot(board: Board, config: dict[str, Any]) -> int:
 def clear_boot(board: Board) -> bool:
     """Remove BOOT_FILE (and a leftover "<file>.new"); False when there was none."""
     path = on_board_path(board, BOOT_FILE)
-    found = board.link.eval(protocol.kinds([path, path + ".new"]))
-    if type(found) is not dict:
-        raise _bad(board.port, "which files are there", found)
+    # protocol.preflight only looking (probe=False, no folders): what is there
+    ans = board.link.eval(protocol.preflight([path, path + ".new"], [], "/", probe=False))
+    if not (type(ans) is tuple and len(ans) == 2 and type(ans[0]) is dict):
+        raise _bad(board.port, "which files are there", ans)
+    found = ans[0]
     if any(found.values()):
         board.link.exec(protocol.remove_files([path, path + ".new"]))
     return found.get(path) is not None

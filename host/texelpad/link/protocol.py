@@ -396,31 +396,3 @@ def preflight(paths: Sequence[str], dirs: Sequence[str], root: str, probe: bool 
     relative). probe=False only looks (a dry run writes nothing)."""
     return _PREFLIGHT_CODE % {"paths": literal(list(paths)), "dirs": literal(list(dirs)),
                               "root": literal(root), "probe": literal(bool(probe))}
-
-
-# --- the power-up scene (/texelpad.json, read by the board's /main.py) -----------------
-
-_KINDS_CODE = """import os
-def _k(p):
- try:
-  return 'd' if os.stat(p)[0] & 0x4000 else 'f'
- except OSError:
-  return None
-print(repr({p: _k(p) for p in %s}))
-_k = None
-"""
-
-
-def kinds(paths: Sequence[str]) -> str:
-    """What is at each path: {path: 'f' file, 'd' folder, None nothing}."""
-    return _KINDS_CODE % literal(list(paths))
-
-
-def board_display(name: str) -> str:
-    """Board file `name` loaded as texel.app.start loads it (a user's
-    /boards/NAME.json first) and checked to fit this firmware, without
-    touching what plays: ('ok', its display) or ('err', why not)."""
-    return ("import texel.runtime.boards as _b\ntry:\n _d = _b.load(%s)\n _w = _b.fits(_d)\n"
-            " _r = ('err', _w) if _w else ('ok', {'positions': _d['display']['positions'], "
-            "'dx_um': _d['display']['dx_um']})\nexcept ValueError as _e:\n _r = ('err', str(_e))\n"
-            "print(repr(_r))\n_b = _d = _w = _r = None" % literal(name))

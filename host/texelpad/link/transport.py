@@ -85,6 +85,24 @@ def _cut(text: str, n: int = 300) -> str:
     return text if len(text) <= n else text[:n] + "... (%d characters)" % len(text)
 
 
+def unexpected(port: str, what: str, value: Any) -> LinkError:
+    """A well-framed answer of the wrong shape: another program, an image of
+    another version or a fault, never a TypeError deep in a command."""
+    return LinkError("unexpected answer from %s to %s: %s" % (port, what, _cut(repr(value), 200)))
+
+
+def answer(port: str, ans: Any, what: str) -> Any:
+    """The value of a request's ('ok', value) / ('err', the device's
+    ValueError text) answer (protocol.call and its kin): DeviceError for a
+    refusal, LinkError for any other shape."""
+    if not (type(ans) is tuple and len(ans) == 2 and ans[0] in ("ok", "err")
+            and (ans[0] == "ok" or type(ans[1]) is str)):
+        raise unexpected(port, what, ans)
+    if ans[0] == "err":
+        raise DeviceError(ans[1])
+    return ans[1]
+
+
 class DeviceError(LinkError, ValueError):
     """The device refused the request; the text is the device's own."""
 
@@ -398,14 +416,8 @@ class Link:
              **kwargs: Any) -> Any:
         """`module.func(*args, **kwargs)` on the board, arguments as literals; a
         device ValueError becomes DeviceError with the device's text."""
-        ans = self.eval(protocol.call(module, func, args, kwargs), timeout)
-        if not (type(ans) is tuple and len(ans) == 2 and ans[0] in ("ok", "err")
-                and (ans[0] == "ok" or type(ans[1]) is str)):
-            raise LinkError("unexpected answer from %s to %s.%s(): %s"
-                            % (self.port, module, func, _cut(repr(ans), 200)))
-        if ans[0] == "err":
-            raise DeviceError(ans[1])
-        return ans[1]
+        return answer(self.port, self.eval(protocol.call(module, func, args, kwargs), timeout),
+                      "%s.%s()" % (module, func))
 
     def write_file(self, path: str, data: bytes, chunk: int = 2048, progress=None) -> None:
         """Write `data` to `path` on the board with mpremote's fs_writefile, in
