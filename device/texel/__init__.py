@@ -6,7 +6,7 @@
 #   texel.make_plan(params, draws=None)             -> per-texel pitches/phases
 #   texel.engines()                                 -> engines usable here
 #   texel.reference(name, length_samples)           -> reference textures
-from .gen.params import validate, FORMAT_VERSION, DX_MM, NYQUIST_CPMM
+from .gen.params import validate, FORMAT_VERSION, FORMAT_LATEST, DX_MM, NYQUIST_CPMM
 from .gen.plan import Plan
 from . import compat
 
@@ -54,8 +54,18 @@ def _engine(engine):
 
 def make_plan(params, draws=None):
     """Validate params and compute the per-texel plan (pitches f in cycles/mm,
-    start phases phi in rad, fraction above Nyquist)."""
-    return Plan(validate(params), draws)
+    start phases phi in rad, fixed-point t28/d28, fraction above Nyquist):
+    format 1 (gen/plan.py, the lab's float plan) or, for "v": 2, format 2
+    (gen/plan_int.py, integer, the same bits on every runtime). draws replays
+    the lab's logged float draws: format 1 only."""
+    p = validate(params)
+    if p["v"] == 2:
+        if draws is not None:
+            raise ValueError("draws: replaying logged draws is format 1's (v=1); "
+                             "format 2 draws from its seed")
+        from .gen.plan_int import PlanInt
+        return PlanInt(p)
+    return Plan(p, draws)
 
 
 def render(params, draws=None, engine=None):

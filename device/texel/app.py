@@ -229,21 +229,22 @@ def _start(board, canonical, realtime, fast, hw_opts):
         raise
 
 
-def _install(canonical):
+def _install(canonical, validate_us=0, checked=None):
     rt = _rt
     disp = rt.board["display"]
     # real time, also on the virtual board (whose ticks are stepped)
     clock = getattr(rt.hw, "cost_ticks", rt.ticks)
     t0 = clock()
-    sc = _scene.build(canonical, disp, idle_default=rt.board["carrier"].get("idle_amplitude", 0))
+    sc = _scene.build(canonical, disp, idle_default=rt.board["carrier"].get("idle_amplitude", 0),
+                      checked=checked)
     t1 = clock()
     old = rt.refresh.swap(sc)
     t2 = clock()
     old = None
     gc.collect()
     rt.pushes += 1
-    rt.last_push = {"build_us": rt.diff(t1, t0), "swap_us": rt.diff(t2, t1),
-                    "scene_bytes": sc.nbytes}
+    rt.last_push = {"validate_us": validate_us, "build_us": rt.diff(t1, t0),
+                    "swap_us": rt.diff(t2, t1), "scene_bytes": sc.nbytes}
     return sc
 
 
@@ -252,9 +253,11 @@ def push(scene):
     swap in between two refreshes. Any error raises ValueError and the
     current scene keeps playing untouched."""
     rt = _running()
-    canonical = _scene.validate(scene, rt.board["display"])
+    clock = getattr(rt.hw, "cost_ticks", rt.ticks)
+    t0 = clock()
+    checked = _scene.check(scene, rt.board["display"])
     try:
-        _install(canonical)
+        _install(checked[0], rt.diff(clock(), t0), checked)
     except MemoryError:
         gc.collect()
         raise ValueError("scene does not fit in memory (%d bytes free); the current scene keeps playing"

@@ -51,7 +51,8 @@ def test_ints_accepted_for_floats_and_converted():
     ("pitch_db", "__import__('os')", "expected a number"),
     ("pitch_db", [6.3], "expected a number"),
     ("pitch_db", None, "None is not allowed"),
-    ("v", 2, "out of range [1, 1]"),
+    ("v", 3, "out of range [1, 2]"),
+    ("v", 0, "out of range [1, 2]"),
     ("band_limit_cpmm", 100.0, "out of range"),
     ("band_limit_cpmm", 0.0, "out of range"),
 ])

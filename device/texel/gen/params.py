@@ -3,7 +3,8 @@
 # the REPL entry points); it never mutates its input and returns a new dict
 # with every default filled in, or raises ValueError naming key, value, range.
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 1     # what a parameter set without "v" means (saved files keep their texture)
+FORMAT_LATEST = 2      # texture format 2: the integer plan (gen/plan_int.py)
 
 # Geometry of the TPaD display (docs/background.md §1): 5.3 um per map sample.
 DX_MM = 0.0053
@@ -34,8 +35,10 @@ SPEC = {
     "quant_db": ("f", 0.0, 0.0, QUANT_DB_MAX),
     "seed": ("i", 0, 0, SEED_MAX),
     "gain": ("f", 1.0, 0.0, 1.0),
-    # Format version of the parameter set; only 1 exists.
-    "v": ("i", FORMAT_VERSION, FORMAT_VERSION, FORMAT_VERSION),
+    # Texture format: 1 = the lab's float plan (gen/plan.py, reproduces the
+    # original to 1e-9 in float64, each runtime's own float elsewhere),
+    # 2 = the integer plan (gen/plan_int.py, bit-identical on every runtime).
+    "v": ("i", FORMAT_VERSION, 1, FORMAT_LATEST),
     # Explicit band limit (our addition): None = faithful (no clamping, drawn
     # pitches above Nyquist alias as in the original); a number in cycles/mm
     # clamps every drawn pitch to at most that value.
@@ -129,6 +132,11 @@ def validate(params):
             raise ValueError("missing required key %r (a number in %s)" % (key, _fmt_range(lo, hi)))
         else:
             out[key] = default
+    if out["v"] == 2:
+        # format 2's grid (gen/grid.py: imported only here, so format 1 on a
+        # Pico-sized heap carries none of it)
+        from .grid import to_grid
+        to_grid(out)
     return out
 
 

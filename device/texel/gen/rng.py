@@ -23,8 +23,8 @@
 import math
 
 _M16 = 0xFFFF
-_SEED_CONSTS = ((0x9E37, 0x79B9), (0x243F, 0x6A88), (0xB7E1, 0x5162))
-_WARMUP = 16
+SEED_CONSTS = ((0x9E37, 0x79B9), (0x243F, 0x6A88), (0xB7E1, 0x5162))
+WARMUP = 16
 _TWO32 = 4294967296.0
 
 
@@ -38,10 +38,10 @@ class Rng:
         # seed >> 16 is safe even when seed is a bigint on MicroPython.
         self.a_hi = (seed >> 16) & _M16
         self.a_lo = seed & _M16
-        self.b_hi, self.b_lo = _SEED_CONSTS[0]
-        self.c_hi, self.c_lo = _SEED_CONSTS[1]
-        self.d_hi, self.d_lo = _SEED_CONSTS[2]
-        for _ in range(_WARMUP):
+        self.b_hi, self.b_lo = SEED_CONSTS[0]
+        self.c_hi, self.c_lo = SEED_CONSTS[1]
+        self.d_hi, self.d_lo = SEED_CONSTS[2]
+        for _ in range(WARMUP):
             self.next_hi_lo()
 
     def next_hi_lo(self):

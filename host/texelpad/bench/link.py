@@ -107,6 +107,7 @@ def run(pushes: int = 200, deploy: bool = True,
                                                         1e3 * statistics.median(lat)))
             res["soak_s"] = time.perf_counter() - t_all
             st = b.status()
+            res.update(_formats(b, display, say))
             try:
                 res.update(_upload(b, display, say))
             except LinkError as e:          # a measured outcome too: say it, do not crash
@@ -175,6 +176,59 @@ def _upload(b: Any, display: dict[str, Any], say: Callable[[str], None],
             "upload_overruns": st["overruns"]}
 
 
+# Push to playing, by texture format: what the board spends between the
+# request's arrival and the swap (status()["last_push"]: validate, build, swap
+# on its own clock) plus compiling the request's literal (timed on the board
+# with eval() of the same text: the raw REPL compiles it before the call).
+PUSH_GOALS_MS = {"texel": 20.0, "regions16": 50.0}      # issue 10, on an RP2040
+
+
+def regions16(display: dict[str, Any], v: int, seed: int) -> dict[str, Any]:
+    """16 equal texel regions over the display, each its own texture."""
+    total = display["positions"] * display["dx_um"] / 1000.0
+    w = total / 16
+    regs = []
+    for k in range(16):
+        regs.append({"start_mm": round(k * w, 6), "end_mm": round((k + 1) * w, 6),
+                     "texture": {"kind": "texel", "pitch_db": round(-5.0 + 1.5 * k, 3),
+                                 "irregularity_db": -12.9, "seed": seed * 16 + k, "v": v}})
+    return {"regions": regs}
+
+
+def _formats(b: Any, display: dict[str, Any], say: Callable[[str], None],
+             repeats: int = 5) -> dict[str, Any]:
+    from ..link.board import full_screen_texel
+    from ..link.protocol import literal
+    out: dict[str, Any] = {}
+    for what in ("texel", "regions16"):
+        for v in (1, 2):
+            rows = []
+            for k in range(repeats):
+                if what == "texel":
+                    scene = full_screen_texel({"pitch_db": round(6.3 + 0.1 * k, 3),
+                                               "irregularity_db": -12.9, "seed": 100 + k,
+                                               "v": v}, display)
+                else:
+                    scene = regions16(display, v, 100 + k)
+                st = b.push(scene)
+                lp = st["last_push"]
+                rows.append((lp.get("validate_us", 0), lp["build_us"], lp["swap_us"]))
+            lit = literal(scene)
+            parse_us = b.link.eval("import time\n_t = time.ticks_us()\n_s = eval(%r)\n"
+                                   "print(time.ticks_diff(time.ticks_us(), _t))\ndel _s" % lit)
+            tot = [sum(r) / 1000.0 for r in rows]
+            key = "%s_v%d" % (what, v)
+            out[key] = {"validate_ms": statistics.median(r[0] for r in rows) / 1000.0,
+                        "build_ms": statistics.median(r[1] for r in rows) / 1000.0,
+                        "swap_ms": statistics.median(r[2] for r in rows) / 1000.0,
+                        "parse_ms": None if parse_us is None else parse_us / 1000.0,
+                        "board_ms_median": statistics.median(tot), "board_ms_max": max(tot),
+                        "literal_bytes": len(lit), "repeats": repeats}
+            say("%s format %d: %.1f ms on the board (median of %d)"
+                % (what, v, statistics.median(tot), repeats))
+    return {"formats": out}
+
+
 def _ms(v: float | None) -> str:
     return "-" if v is None else "%.1f" % v
 
@@ -202,6 +256,21 @@ def table(res: dict[str, Any]) -> str:
         "board       a full-screen texel push on the board itself (validate, plan, swap): "
         "median %s ms, max %s ms (its own clock)" % (
             _ms(res.get("board_push_ms_median")), _ms(res.get("board_push_ms_max"))),
+    ]
+    for key, f in sorted(res.get("formats", {}).items()):
+        what, v = key.rsplit("_v", 1)
+        goal = PUSH_GOALS_MS.get(what)
+        tot = f["board_ms_median"] + (f["parse_ms"] or 0.0)
+        lines.append(
+            "to playing  %-27s %7.1f ms = parse %.1f + validate %.1f + build %.1f + swap %.1f "
+            "(median of %d, max %.1f; literal %d bytes)%s" % (
+                ("full-screen texel" if what == "texel" else "16 texel regions")
+                + ", format %s" % v, tot, f["parse_ms"] or 0.0, f["validate_ms"], f["build_ms"],
+                f["swap_ms"], f["repeats"], f["board_ms_max"] + (f["parse_ms"] or 0.0),
+                f["literal_bytes"],
+                "" if goal is None or not res.get("chip") else
+                "  goal <= %.0f ms: %s" % (goal, "met" if tot <= goal else "NOT met")))
+    lines += [
         "soak        %d/%d pushes acknowledged with the scene sent; %d faults, %d overruns over "
         "%s refreshes; worst refresh %s us, rate %s Hz"
         % (res["acked"], res["pushes"], res["faults"], res["overruns"],
