@@ -7,7 +7,6 @@
 # way. Kept out of params.py: format 1 never loads it.
 GRID_KEYS = ("pitch_db", "irregularity_db", "quant_db", "band_limit_cpmm")
 GRID_TIE = 0.01
-QUANT_MIN = 0.001           # params.QUANT_DB_MIN: a grid that is on stays on
 
 
 def on_grid(key, value):
@@ -29,7 +28,6 @@ def to_grid(p):
     """Put a validated format-2 parameter dict on the grid, in place."""
     for key in GRID_KEYS:
         if p[key] is not None:
-            g = on_grid(key, p[key])
-            if key == "quant_db" and p[key] > 0.0 and g == 0.0:
-                g = QUANT_MIN
-            p[key] = g
+            # (quant_db is 0 or >= 0.001: params refuses finer, so a
+            # quantization that is on stays on)
+            p[key] = on_grid(key, p[key])

@@ -66,8 +66,8 @@ _CONTROL = re.compile(r"[\x00-\x1f\x7f]")
 
 
 # --- the texel parameter flags --------------------------------------------------------
-# One flag per key of texel.gen.params.SPEC (but "v", the format version, which
-# is always 1): --pitch-db for pitch_db, typed and ranged by the spec; the
+# One flag per key of texel.gen.params.SPEC (the format version "v" is
+# --format): --pitch-db for pitch_db, typed and ranged by the spec; the
 # meaning of each key is the only thing written here.
 TEXEL_MEANING = {
     "pitch_db": ("DB", "central pitch, 10*log10(P / 1 cycle/mm)"),
@@ -85,6 +85,11 @@ TEXEL_KEYS = tuple(k for k in TEXEL_SPEC_KEYS if k != "v")
 # texel parameter key -> its flag (error messages name the flag, not the key)
 PARAM_FLAGS = {k: "--" + k.replace("_", "-") for k in TEXEL_KEYS}
 PARAM_FLAGS["engine"] = "--engine"
+PARAM_FLAGS["v"] = "--format"
+FORMAT_HELP = ("texture format: 1 = the lab's float plan (default; reproduces the original), "
+               "2 = the integer plan, the same texture bit for bit on every board and ~25x "
+               "faster to start on an RP2040 (pitch, irregularity and quantization on a "
+               "0.001 dB grid); docs/generator.md")
 
 
 def _range_text(key: str) -> str:
@@ -107,6 +112,7 @@ def add_texel_flags(group: Any, keys: tuple[str, ...] = TEXEL_KEYS,
         group.add_argument(PARAM_FLAGS[key], dest=key, type=int if kind == "i" else float,
                            metavar=metavar, required=key in required,
                            help="%s; %s" % (meaning, _range_text(key)))
+    group.add_argument("--format", dest="v", type=int, choices=(1, 2), help=FORMAT_HELP)
 
 
 def _show(text: str, n: int = 40) -> str:
@@ -118,7 +124,7 @@ def _show(text: str, n: int = 40) -> str:
 def render_params(args: argparse.Namespace) -> dict[str, Any]:
     """The texel parameter dict from the flags that were given."""
     params: dict[str, Any] = {}
-    for key in TEXEL_KEYS:
+    for key in TEXEL_KEYS + ("v",):
         v = getattr(args, key, None)
         if v is not None:
             params[key] = v
