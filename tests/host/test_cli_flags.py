@@ -34,6 +34,9 @@ def test_every_spec_key_but_the_version_has_a_flag():
 ])
 def test_flags_follow_the_spec(command, keys):
     flags = _texel_flags(_parser_for(command))
+    # the format version is --format (1 or 2), not a ranged number flag
+    fmt = flags.pop("v")
+    assert fmt.option_strings == ["--format"] and fmt.choices == (1, 2) and fmt.default is None
     assert set(flags) == keys
     for key, action in flags.items():
         kind, default, lo, hi = SPEC[key]
@@ -74,3 +77,15 @@ def test_the_table_lists_every_command_module_once():
         p = _parser_for(name)
         assert callable(p.get_default("func")), name
         assert summary and p.description, name
+
+
+def test_format_flag_makes_a_format2_texture(tmp_path, capsys):
+    out = tmp_path / "m.npy"
+    assert cli.main(["render", "--pitch-db", "13", "--irregularity-db", "-10", "--seed", "3",
+                     "--format", "2", "--engine", "int", "--out", str(out)]) == 0
+    import numpy as np
+    import texel
+    want = texel.render({"pitch_db": 13, "irregularity_db": -10, "seed": 3, "v": 2}, engine="int")
+    assert np.array_equal(np.load(out), np.asarray(want))
+    rc = cli.main(["render", "--pitch-db", "13.0005", "--irregularity-db", "-10", "--format", "2"])
+    assert rc == 2 and "--pitch-db: 13.0005 is half-way" in capsys.readouterr().err

@@ -39,7 +39,8 @@ PKG = ROOT / "device" / "texel"
 MODULES = sorted(p for p in PKG.rglob("*.py")
                  if "__pycache__" not in p.parts and p != PKG / "main.py")
 BOARD_JSONS = sorted((PKG / "boards.d").glob("*.json"))
-NATIVE = {"texel/gen/engine_int_viper.py", "texel/runtime/refresh_viper.py"}
+NATIVE = {"texel/gen/engine_int_viper.py", "texel/gen/plan_int_viper.py",
+          "texel/runtime/refresh_viper.py"}
 # each target's port: its image carries that hardware backend and those boards only
 PORT = {"rp2": "rp2", "pyboard": "stm32", "unix": "virtual", "circuitpython": "circuitpython"}
 BACKEND = {"rp2": "rp2", "stm32": "stm32", "virtual": "virtual", "circuitpython": "cpy"}
@@ -256,6 +257,7 @@ def test_no_native_emitter_leaves_viper_out_and_main_optional(cache):
     remotes = {f.remote for f in files}
     assert "/main.py" not in remotes
     assert "/lib/texel/gen/engine_int_viper.mpy" not in remotes
+    assert "/lib/texel/gen/plan_int_viper.mpy" not in remotes
     assert "/lib/texel/app.mpy" in remotes
     assert all(f.data[2] >> 2 == 0 for f in files if f.remote.endswith(".mpy"))
 

@@ -31,6 +31,7 @@ VIPER_FILES = mpy.viper_files()
 # try/except by a module that has a pure-Python fallback. A new one must be
 # added here on purpose (and guarded the same way).
 NATIVE_ONLY = {DEVICE / "texel" / "gen" / "engine_int_viper.py",
+               DEVICE / "texel" / "gen" / "plan_int_viper.py",
                DEVICE / "texel" / "runtime" / "refresh_viper.py"}
 
 # mpy header byte 2 holds the native architecture in its upper 6 bits
@@ -50,6 +51,8 @@ def test_device_tree_and_native_files():
     assert VIPER_FILES <= NATIVE_ONLY, f"viper code outside the guarded modules: {VIPER_FILES - NATIVE_ONLY}"
     src = (DEVICE / "texel" / "gen" / "engine_int.py").read_text()
     assert "from .engine_int_viper import fill" in src and "except (ImportError, SyntaxError" in src
+    src = (DEVICE / "texel" / "gen" / "plan_int.py").read_text()
+    assert "from .plan_int_viper import texels" in src and "except (ImportError, SyntaxError" in src
     app = (DEVICE / "texel" / "app.py").read_text()
     assert "from .runtime.refresh_viper import FastRefresh, irq_rp2" in app
     assert "except (ImportError, SyntaxError)" in app

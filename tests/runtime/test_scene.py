@@ -1269,24 +1269,26 @@ def test_real_memory_error_under_micropython():
     assert sum(1 for r in rows.values() if r["oom"].startswith("scene: out of memory")) >= 3
 
 
-def test_full_texel_fits_beside_split_screen():
+def test_full_texel_fits_beside_split_screen(tmp_path):
     """A full-screen texel plays from its plan (384 texels x 8 bytes), so a
     new one builds beside the playing split screen even on a Pico-sized
     heap, where a second 38.4 KB map often finds no room."""
-    # gc.collect() after the import: the unix port compiles the modules from
-    # source, and that garbage (absent on a board, which loads .mpy) decides
-    # by chance whether a 19 KB block is left on a 176 KB heap
+    # From the compiled image, as a board loads it: compiling the modules
+    # from source leaves garbage that decides by chance (any line added to a
+    # module moved it) whether a 19 KB block is left on a 176 KB heap.
+    from texelpad.deploy import image
+    tree = tmp_path / "image"
+    image.write_tree(image.build_image(image.TARGETS["unix"], include_main=False), tree)
     code = HELPERS + r"""
 import json, gc
 from texel.runtime import scene as S
-gc.collect()
 old = S.build(S.validate(split(), D), D)
 gc.collect()
 new = S.build(S.validate(%(full)r, D), D)
 print(json.dumps({"nbytes": new.nbytes, "plans": len(new.plans()), "free": gc.mem_free()}))
 """ % {"full": FULL_TEXEL}
     for kb in (176, 180, 200):
-        res = mpy.run_json(code, heapsize=f"{kb}k")
+        res = mpy.run_json(code, heapsize=f"{kb}k", path=tree / "lib")
         assert res["nbytes"] == 8 * 384 + 32 and res["plans"] == 1, (kb, res)
 
 

@@ -805,6 +805,7 @@ class Scene:
                 d["pitch_db"] = tex["pitch_db"]
                 d["irregularity_db"] = tex["irregularity_db"]
                 d["seed"] = tex["seed"]
+                d["v"] = tex["v"]
             elif kind == "constant":
                 d["amplitude"] = t[j + 3]
             else:

@@ -107,13 +107,13 @@ def run(pushes: int = 200, deploy: bool = True,
                                                         1e3 * statistics.median(lat)))
             res["soak_s"] = time.perf_counter() - t_all
             st = b.status()
-            res.update(_formats(b, display, say))
             try:
                 res.update(_upload(b, display, say))
             except LinkError as e:          # a measured outcome too: say it, do not crash
                 res["upload_error"] = str(e)
                 res["mem_free_at_upload"] = b.status()["mem_free"]
                 say("upload refused: %s" % e)
+            res.update(_formats(b, display, say))
             # one texture as the bytes of its literal alone (what the scene
             # costs on the wire, without the code around it)
             from ..link.board import full_screen_texel
