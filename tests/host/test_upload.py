@@ -366,3 +366,29 @@ def test_cli_ctrl_c_during_a_big_push_says_what_plays(port, tmp_path):
         with texelpad.connect(port) as b:
             b.push(_scene({"kind": "constant", "level": 0.25}, "before"))
     print("outcomes:", outcomes)
+
+
+def test_a_scene_crosses_as_json_data_and_comes_back_exactly(board):
+    """The scene is JSON text in a str literal, parsed by the board's json
+    module (protocol.scene_text): no dict literal for its compiler. Names
+    beyond the BMP and quotes survive (UTF-8 as is: MicroPython's json does
+    not join \\u surrogate pairs); the scene source reads back the same."""
+    name = "Kl\u00e4nge \U0001F3B9 \"quoted\" 'x' \\ end"
+    sc = _scene({"kind": "texel", "pitch_db": 12.3456, "irregularity_db": -7.0, "seed": 5,
+                 "v": 2, "band_limit_cpmm": None}, name=name)
+    codes = []
+    exec0 = board.link.exec
+
+    def exec_(code, timeout=None):
+        codes.append(code)
+        return exec0(code, timeout)
+    board.link.exec = exec_
+    try:
+        st = board.push(sc)
+    finally:
+        board.link.exec = exec0
+    push = [c for c in codes if "_m.push(" in c]
+    assert len(push) == 1 and "_j.loads(" in push[0] and "{'regions'" not in push[0]
+    assert st["scene"]["name"] == name
+    tex = board.scene_source()["regions"][0]["texture"]
+    assert tex["pitch_db"] == 12.346 and tex["v"] == 2 and tex["band_limit_cpmm"] is None

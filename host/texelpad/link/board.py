@@ -188,10 +188,8 @@ class Board:
             scene, uploads = protocol.split_uploads(scene)
             args = list(args)
             args[scene_at] = scene
-            if not uploads:
-                return check_status(self.port, self._app(func, *args, timeout=timeout,
-                                                         **(kwargs or {})))
-            self._upload([u for _, u in uploads], progress)
+            if uploads:
+                self._upload([u for _, u in uploads], progress)
             ans = self.link.eval(protocol.staged_call(
                 protocol.APP, func, args, scene_at, {i: k for k, (i, _) in enumerate(uploads)},
                 kwargs), timeout)
