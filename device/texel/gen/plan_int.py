@@ -261,6 +261,9 @@ def _ints(n):
     return array("i", bytes(4 * n))
 
 
+_ONE = _ints(1)             # where the loop's unkept outputs point (never written)
+
+
 _texels = texels_py
 _advance = advance_py
 VIPER = False
@@ -320,7 +323,7 @@ class PlanInt:
         both = memoryview(_ints(2 * count))
         self.t28 = both[:count]
         self.d28 = both[count:]
-        one = _ints(1)
+        one = _ONE
         self.y = _ints(count) if keep_y else None      # log2 pitch, Q24 octaves
         self.z = _ints(count) if keep_z else None      # the draws, Q24
         self.t28[0] = phase_fraction_u28(hi, lo)

@@ -114,11 +114,11 @@ def run(pushes: int = 200, deploy: bool = True,
                 res["mem_free_at_upload"] = b.status()["mem_free"]
                 say("upload refused: %s" % e)
             res.update(_formats(b, display, say))
-            # one texture as the bytes of its literal alone (what the scene
+            # one texture as the bytes of its JSON text alone (what the scene
             # costs on the wire, without the code around it)
             from ..link.board import full_screen_texel
-            from ..link.protocol import literal
-            one = literal(full_screen_texel({"pitch_db": 6.3, "irregularity_db": -12.9,
+            from ..link.protocol import scene_text
+            one = scene_text(full_screen_texel({"pitch_db": 6.3, "irregularity_db": -12.9,
                                              "seed": 7}, display))
     n = max(1, len(mem) // 10)
     res.update({
@@ -178,8 +178,8 @@ def _upload(b: Any, display: dict[str, Any], say: Callable[[str], None],
 
 # Push to playing, by texture format: what the board spends between the
 # request's arrival and the swap (status()["last_push"]: validate, build, swap
-# on its own clock) plus compiling the request's literal (timed on the board
-# with eval() of the same text: the raw REPL compiles it before the call).
+# on its own clock) plus parsing the scene's JSON text (timed on the board
+# with json.loads of the same text, as the request does before the call).
 PUSH_GOALS_MS = {"texel": 20.0, "regions16": 50.0}      # issue 10, on an RP2040
 
 
@@ -198,7 +198,7 @@ def regions16(display: dict[str, Any], v: int, seed: int) -> dict[str, Any]:
 def _formats(b: Any, display: dict[str, Any], say: Callable[[str], None],
              repeats: int = 5) -> dict[str, Any]:
     from ..link.board import full_screen_texel
-    from ..link.protocol import literal
+    from ..link.protocol import scene_text
     out: dict[str, Any] = {}
     for what in ("texel", "regions16"):
         for v in (1, 2):
@@ -213,9 +213,10 @@ def _formats(b: Any, display: dict[str, Any], say: Callable[[str], None],
                 st = b.push(scene)
                 lp = st["last_push"]
                 rows.append((lp.get("validate_us", 0), lp["build_us"], lp["swap_us"]))
-            lit = literal(scene)
-            parse_us = b.link.eval("import time\n_t = time.ticks_us()\n_s = eval(%r)\n"
-                                   "print(time.ticks_diff(time.ticks_us(), _t))\ndel _s" % lit)
+            lit = scene_text(scene)
+            parse_us = b.link.eval("import time, json\n_x = %r\n_t = time.ticks_us()\n"
+                                   "_s = json.loads(_x)\n"
+                                   "print(time.ticks_diff(time.ticks_us(), _t))\ndel _s, _x" % lit)
             tot = [sum(r) / 1000.0 for r in rows]
             key = "%s_v%d" % (what, v)
             out[key] = {"validate_ms": statistics.median(r[0] for r in rows) / 1000.0,
@@ -248,8 +249,8 @@ def table(res: dict[str, Any]) -> str:
         "push        median %.1f ms, p95 %.1f ms, max %.1f ms over %d pushes (host call -> board "
         "confirms the new scene)" % (res["push_ms_median"], res["push_ms_p95"],
                                      res["push_ms_max"], res["pushes"]),
-        "wire        %d bytes sent, %d received per push (code + literal + status); the scene "
-        "literal alone %d bytes; the original lab: %s bytes per change (%.0fx more than we send)"
+        "wire        %d bytes sent, %d received per push (code + scene + status); the scene's "
+        "JSON alone %d bytes; the original lab: %s bytes per change (%.0fx more than we send)"
         % (res["bytes_sent_per_push"], res["bytes_received_per_push"],
            res["scene_literal_bytes"], format(res["lab_bytes_per_change"], ","),
            res["lab_bytes_per_change"] / max(1, res["bytes_sent_per_push"])),
@@ -263,7 +264,7 @@ def table(res: dict[str, Any]) -> str:
         tot = f["board_ms_median"] + (f["parse_ms"] or 0.0)
         lines.append(
             "to playing  %-27s %7.1f ms = parse %.1f + validate %.1f + build %.1f + swap %.1f "
-            "(median of %d, max %.1f; literal %d bytes)%s" % (
+            "(median of %d, max %.1f; JSON %d bytes)%s" % (
                 ("full-screen texel" if what == "texel" else "16 texel regions")
                 + ", format %s" % v, tot, f["parse_ms"] or 0.0, f["validate_ms"], f["build_ms"],
                 f["swap_ms"], f["repeats"], f["board_ms_max"] + (f["parse_ms"] or 0.0),
