@@ -19,9 +19,10 @@ against it to within one unit (a rounding tie could differ between libm and
 scipy versions, never by more).
 """
 import math
-import re
 import struct
 from pathlib import Path
+
+from gen_sine_table import write_raw
 
 PATH = Path(__file__).resolve().parents[1] / "device" / "texel" / "gen" / "plan_int_tables.py"
 NORM_PER_OCTAVE = 32
@@ -51,20 +52,9 @@ def values():
     return exp_hi() + exp_mid() + norm()
 
 
-def literal():
-    v = values()
-    raw = struct.pack("<%di" % len(v), *v)
-    lines = []
-    for i in range(0, len(raw), 32):
-        lines.append("    b'" + "".join("\\x%02x" % b for b in raw[i:i + 32]) + "'")
-    return "_RAW = (\n" + "\n".join(lines) + "\n)\n"
-
-
 def main():
-    src = PATH.read_text()
-    new = re.sub(r"_RAW = \(\n.*?\)\n", lambda m: literal(), src, flags=re.S)
-    PATH.write_text(new)
-    print("wrote", PATH)
+    v = values()
+    write_raw(PATH, struct.pack("<%di" % len(v), *v))
 
 
 if __name__ == "__main__":

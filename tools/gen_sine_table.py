@@ -19,19 +19,23 @@ def values():
     return [int((math.sin(2 * math.pi * i / SIZE) + 1.0) * 32767.5 + 0.5) for i in range(SIZE + 1)]
 
 
-def literal():
-    raw = struct.pack("<%dH" % (SIZE + 1), *values())
+def literal(raw):
+    """bytes as the `_RAW = (b'...' ...)` literal of a device table module."""
     lines = []
     for i in range(0, len(raw), 32):
         lines.append("    b'" + "".join("\\x%02x" % b for b in raw[i:i + 32]) + "'")
     return "_RAW = (\n" + "\n".join(lines) + "\n)\n"
 
 
+def write_raw(path, raw):
+    """Replace the _RAW literal in the module at path with raw."""
+    src = path.read_text()
+    path.write_text(re.sub(r"_RAW = \(\n.*?\)\n", lambda m: literal(raw), src, flags=re.S))
+    print("wrote", path)
+
+
 def main():
-    src = PATH.read_text()
-    new = re.sub(r"_RAW = \(\n.*?\)\n", lambda m: literal(), src, flags=re.S)
-    PATH.write_text(new)
-    print("wrote", PATH)
+    write_raw(PATH, struct.pack("<%dH" % (SIZE + 1), *values()))
 
 
 if __name__ == "__main__":

@@ -66,6 +66,20 @@ def _detect_viper():
         return False
 HAS_VIPER = _detect_viper()
 
+
+def native(module, name):
+    """Function `name` of the viper module `module` ("texel.gen.engine_int_viper"),
+    or None where the port has no native emitter or the module does not load.
+    Viper code lives in modules of its own: a file holding it does not even
+    compile on a port without a native emitter (CircuitPython, mpy-cross
+    without -march), and a board's image leaves such modules out."""
+    if not HAS_VIPER:
+        return None
+    try:
+        return getattr(__import__(module, None, None, (name,)), name)
+    except (ImportError, SyntaxError, MemoryError, AttributeError):
+        return None
+
 # Microsecond ticks: time.ticks_us/ticks_diff where the port has them
 # (MicroPython); elsewhere the same arithmetic over MicroPython's 2^30 tick
 # period, from perf_counter_ns (CPython) or monotonic_ns (CircuitPython, which

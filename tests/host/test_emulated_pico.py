@@ -463,3 +463,61 @@ def test_texelpad_virtual_chip_rp2040_is_a_board_the_commands_find(capsys, tmp_p
     assert "texelpad-pico-" in flash and not os.path.exists(os.path.dirname(flash)), err
     assert processes_mentioning(os.path.dirname(flash)) == []    # nothing of it runs
     assert not list((tmp_path / "run").rglob("*.json"))         # unannounced
+
+
+# --- texture format 2 on the chip ------------------------------------------------------
+
+FORMAT2 = {"pitch_db": 19.0, "irregularity_db": -13.0, "seed": 11, "v": 2}
+_DIGEST = r"""
+import texel
+from texel.gen.plan_int import PlanInt, VIPER
+def _dig(arrs):
+    s = 0
+    for a in arrs:
+        for v in a:
+            s = (s * 31 + (v & 0xFFFFFF)) & 0xFFFFFF
+    return s
+_res = []
+for _p in %r:
+    _pl = PlanInt(texel.validate(_p))
+    _res.append(_dig((_pl.t28, _pl.d28, _pl.y)))
+print(repr((VIPER, _res)))
+"""
+
+
+def _dig(arrs) -> int:
+    s = 0
+    for a in arrs:
+        for v in a:
+            s = (s * 31 + (int(v) & 0xFFFFFF)) & 0xFFFFFF
+    return s
+
+
+def test_format2_plan_bit_for_bit_on_the_chip_and_a_refused_push_changes_nothing(capsys, port):
+    """The integer plan computed by the RP2040's viper (armv6m) is CPython's,
+    bit for bit; a format-2 scene plays, a refused push leaves it playing and
+    the counters run on."""
+    import texel
+    from texel.gen.plan_int import PlanInt
+    cases = [dict(FORMAT2, length_samples=19200),
+             {"pitch_db": -20.0, "irregularity_db": 5.0, "texel_samples": 3, "seed": 4294967295,
+              "quant_db": 0.5, "length_samples": 3000, "v": 2},
+             {"pitch_db": 19.747, "irregularity_db": 0.0, "texel_samples": 7, "seed": 0,
+              "band_limit_cpmm": 50.0, "length_samples": 9600, "v": 2}]
+    want = [_dig((p.t28, p.d28, p.y)) for p in (PlanInt(texel.validate(c)) for c in cases)]
+    _playing(port)
+    with texelpad.connect(port, timeout=60) as b:
+        viper, got = b.link.eval(_DIGEST % (cases,), timeout=120)
+        assert viper is True and got == want
+        st = b.push_texel(FORMAT2)
+        assert st["scene"]["regions"][0]["v"] == 2 and st["faults"] == 0
+        lp = st["last_push"]
+        _say(capsys, "\nformat-2 full-screen push on the chip: validate %.1f + build %.1f + swap "
+             "%.1f ms (its own clock)" % (lp["validate_us"] / 1e3, lp["build_us"] / 1e3,
+                                          lp["swap_us"] / 1e3))
+        n0 = st["refreshes"]
+        with pytest.raises(ValueError, match="pitch_db: 99"):        # refused before it is sent
+            b.push_texel(dict(FORMAT2, pitch_db=99))
+        st2 = b.status()
+        assert st2["scene"]["regions"][0]["seed"] == 11 and st2["pushes"] == st["pushes"]
+        assert st2["refreshes"] > n0 and st2["overruns"] == st["overruns"]

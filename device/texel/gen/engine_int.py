@@ -16,7 +16,7 @@
 # rounded (<= 0.5 unit per sample, so <= k/2 units after k samples), the start
 # phase t carries <= 0.5 unit per texel boundary; the table adds 2.4e-6 and
 # Q16/Q14 rounding <= 1.5 LSB of 65535 -> see tests/gen/test_precision.py.
-from ..compat import HAS_VIPER, check_u16_out
+from ..compat import check_u16_out, native
 from . import sine_table
 
 NAME = "int"
@@ -36,16 +36,8 @@ def _fill_py(out, a, b, t, d, tab, g):
     return t
 
 
-_fill = _fill_py
-VIPER = False
-if HAS_VIPER:
-    # Separate module: a file holding viper code does not even compile on a
-    # port without a native emitter (CircuitPython, mpy-cross without -march).
-    try:
-        from .engine_int_viper import fill as _fill
-        VIPER = True
-    except (ImportError, SyntaxError, MemoryError):
-        pass
+_fill = native("texel.gen.engine_int_viper", "fill") or _fill_py
+VIPER = _fill is not _fill_py
 
 
 def gain_q14(gain):

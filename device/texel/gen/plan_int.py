@@ -37,9 +37,9 @@
 # (plan_int_viper.py), with identical results: nothing exceeds 31 bits.
 from array import array
 from . import params as _params
-from .rng import Rng, phase_fraction_u28, WARMUP, SEED_CONSTS
+from .rng import phase_fraction_u28, WARMUP, SEED_CONSTS
 from .plan_int_tables import table, EXP_HI, EXP_MID, NORM
-from ..compat import HAS_VIPER
+from ..compat import native
 
 FORMAT = 2
 MASK28 = 0x0FFFFFFF
@@ -171,15 +171,17 @@ def mulmod28(L, d):
 
 def texels_py(st, count, L, mu, sigma, q, dcap, tab, t28, d28, ys, zs, keep):
     """The per-texel loop (plan_int_viper.texels is the same, compiled).
-    st: the generator's state as 8 16-bit halves (a, b, c, d; high first),
-    read (not advanced); t28[0] holds the start phase. Fills t28/d28, ys if
-    keep & 2, zs if keep & 1; returns the number of texels above Nyquist."""
+    st: seeded() - the generator's state before its warm-up as 8 16-bit
+    halves (a, b, c, d; high first) and 2 more: the loop draws the warm-up,
+    then the start phase's draw (kept in st[8], st[9]; gen/rng.py's order),
+    then one per texel. Fills t28/d28, ys if keep & 2, zs if keep & 1;
+    returns the number of texels above Nyquist."""
     above = 0
-    t = t28[0]
+    t = 0
     tf = 0                      # the start phase's 1/256 units
     a_hi = st[0]; a_lo = st[1]; b_hi = st[2]; b_lo = st[3]
     c_hi = st[4]; c_lo = st[5]; d_hi = st[6]; d_lo = st[7]
-    for i in range(count):
+    for i in range(-WARMUP - 1, count):
         # xoshiro128++ in 16-bit halves: gen/rng.py Rng.next_hi_lo, inlined
         lo = a_lo + d_lo
         hi = (a_hi + d_hi + (lo >> 16)) & 0xFFFF
@@ -199,6 +201,12 @@ def texels_py(st, count, L, mu, sigma, q, dcap, tab, t28, d28, ys, zs, keep):
         hi = d_hi
         d_hi = ((hi << 11) | (d_lo >> 5)) & 0xFFFF
         d_lo = ((d_lo << 11) | (hi >> 5)) & 0xFFFF
+        if i < 0:
+            if i == -1:                 # the start phase's draw
+                st[8] = x_hi
+                st[9] = x_lo
+                t = phase_fraction_u28(x_hi, x_lo)
+            continue
         z = norm_q24(x_hi, x_lo, tab)
         if keep & 1:
             zs[i] = z
@@ -237,21 +245,9 @@ def texels_py(st, count, L, mu, sigma, q, dcap, tab, t28, d28, ys, zs, keep):
     return above
 
 
-def advance_py(st, n):
-    """n outputs of the generator from the state st (8 16-bit halves, gen/rng.py's
-    a, b, c, d), advanced in place; the last output goes to st[8], st[9]."""
-    r = Rng(0)                  # (its own warm-up is overwritten)
-    r.a_hi = st[0]; r.a_lo = st[1]; r.b_hi = st[2]; r.b_lo = st[3]
-    r.c_hi = st[4]; r.c_lo = st[5]; r.d_hi = st[6]; r.d_lo = st[7]
-    for _ in range(n):
-        st[8], st[9] = r.next_hi_lo()
-    st[0] = r.a_hi; st[1] = r.a_lo; st[2] = r.b_hi; st[3] = r.b_lo
-    st[4] = r.c_hi; st[5] = r.c_lo; st[6] = r.d_hi; st[7] = r.d_lo
-
-
 def seeded(seed):
     """The generator's state for a seed before its warm-up (gen/rng.py), plus
-    two halves for the last output: array('H') of 10."""
+    two halves for the start phase's draw: array('H') of 10."""
     c = SEED_CONSTS
     return array("H", ((seed >> 16) & 0xFFFF, seed & 0xFFFF, c[0][0], c[0][1],
                        c[1][0], c[1][1], c[2][0], c[2][1], 0, 0))
@@ -264,17 +260,8 @@ def _ints(n):
 _ONE = _ints(1)             # where the loop's unkept outputs point (never written)
 
 
-_texels = texels_py
-_advance = advance_py
-VIPER = False
-if HAS_VIPER:
-    # Separate module: a file holding viper code does not even compile on a
-    # port without a native emitter (CircuitPython, mpy-cross without -march).
-    try:
-        from .plan_int_viper import texels as _texels, advance as _advance
-        VIPER = True
-    except (ImportError, SyntaxError, MemoryError):
-        pass
+_texels = native("texel.gen.plan_int_viper", "texels") or texels_py
+VIPER = _texels is not texels_py
 
 
 def grid_mdb(value):
@@ -313,11 +300,6 @@ class PlanInt:
         # on MicroPython, once per texture
         self.dcap = (self.cap_mc * 53 * (1 << 28) + 5000000) // 10000000 if cap is not None else 0
         st = seeded(p["seed"])
-        # the warm-up, then the start phase's draw (gen/rng.py's draw order)
-        (advance_py if engine == "py" else _advance)(st, WARMUP + 1)
-        hi = st[8]
-        lo = st[9]
-        self.x0 = (hi, lo)
         # t28 and d28 as the two halves of one array: on a Pico every large
         # allocation scans the heap (~1.4 ms each for 1.5 KB), so one, not two
         both = memoryview(_ints(2 * count))
@@ -326,12 +308,12 @@ class PlanInt:
         one = _ONE
         self.y = _ints(count) if keep_y else None      # log2 pitch, Q24 octaves
         self.z = _ints(count) if keep_z else None      # the draws, Q24
-        self.t28[0] = phase_fraction_u28(hi, lo)
         fill = texels_py if engine == "py" else _texels
         self.above_nyquist = fill(st, count, L, self.mu, self.sigma, self.q, self.dcap,
                                   tab, self.t28, self.d28, self.y if keep_y else one,
                                   self.z if keep_z else one,
                                   (1 if keep_z else 0) | (2 if keep_y else 0))
+        self.x0 = (st[8], st[9])        # the start phase's draw
         self._f = None
         self._phi = None
 

@@ -1,6 +1,7 @@
 # Format 2's per-texel loop compiled by viper: plan_int.texels_py, statement
-# for statement (the generator, the inverse normal, sigma*z, the clamp and
-# quantization, 2^x and the phase step), in machine words. Every value stays
+# for statement (the generator's warm-up and start phase, then per texel the
+# generator, the inverse normal, sigma*z, the clamp and quantization, 2^x and
+# the phase step), in machine words. Every value stays
 # below 2^31 in magnitude (plan_int.py states the bounds), so 32-bit (rp2,
 # stm32) and 64-bit (unix) words give the same results as Python's ints;
 # tests/gen/test_plan_int.py compares the two on every interpreter.
@@ -12,7 +13,7 @@ import micropython
 def texels(st: ptr16, count: int, L: int, mu: int, sigma: int, q: int, dcap: int,
            tab: ptr32, t28: ptr32, d28: ptr32, ys: ptr32, zs: ptr32, keep: int) -> int:
     above = 0
-    t = int(t28[0])
+    t = 0
     tf = 0
     a_hi = int(st[0]); a_lo = int(st[1]); b_hi = int(st[2]); b_lo = int(st[3])
     c_hi = int(st[4]); c_lo = int(st[5]); d_hi = int(st[6]); d_lo = int(st[7])
@@ -20,7 +21,7 @@ def texels(st: ptr16, count: int, L: int, mu: int, sigma: int, q: int, dcap: int
     s0 = sigma & 0x3FFF
     ll = L & 0x3FFF
     lh = L >> 14
-    i = 0
+    i = -17                             # the warm-up (16) and the start phase's draw
     while i < count:
         # xoshiro128++ in 16-bit halves (gen/rng.py)
         lo = a_lo + d_lo
@@ -46,6 +47,13 @@ def texels(st: ptr16, count: int, L: int, mu: int, sigma: int, q: int, dcap: int
         hi = d_hi
         d_hi = ((hi << 11) | (d_lo >> 5)) & 0xFFFF
         d_lo = ((d_lo << 11) | (hi >> 5)) & 0xFFFF
+        if i < 0:
+            if i == -1:                 # the start phase (rng.phase_fraction_u28)
+                st[8] = x_hi
+                st[9] = x_lo
+                t = (((x_hi << 12) | (x_lo >> 4)) + ((x_lo >> 3) & 1)) & 0x0FFFFFFF
+            i += 1
+            continue
         # inverse normal (plan_int.norm_q24)
         if x_hi >= 0x8000:
             x_hi = 0xFFFF - x_hi
@@ -159,39 +167,3 @@ def texels(st: ptr16, count: int, L: int, mu: int, sigma: int, q: int, dcap: int
         i += 1
     return above
 
-
-@micropython.viper
-def advance(st: ptr16, n: int):
-    """n outputs of the generator (plan_int.advance_py); the last in st[8:10]."""
-    a_hi = int(st[0]); a_lo = int(st[1]); b_hi = int(st[2]); b_lo = int(st[3])
-    c_hi = int(st[4]); c_lo = int(st[5]); d_hi = int(st[6]); d_lo = int(st[7])
-    x_hi = 0
-    x_lo = 0
-    while n > 0:
-        lo = a_lo + d_lo
-        hi = (a_hi + d_hi + (lo >> 16)) & 0xFFFF
-        lo = lo & 0xFFFF
-        r_hi = ((hi << 7) | (lo >> 9)) & 0xFFFF
-        r_lo = ((lo << 7) | (hi >> 9)) & 0xFFFF
-        lo = r_lo + a_lo
-        x_hi = (r_hi + a_hi + (lo >> 16)) & 0xFFFF
-        x_lo = lo & 0xFFFF
-        u_hi = ((b_hi << 9) | (b_lo >> 7)) & 0xFFFF
-        u_lo = (b_lo << 9) & 0xFFFF
-        c_hi = c_hi ^ a_hi
-        c_lo = c_lo ^ a_lo
-        d_hi = d_hi ^ b_hi
-        d_lo = d_lo ^ b_lo
-        b_hi = b_hi ^ c_hi
-        b_lo = b_lo ^ c_lo
-        a_hi = a_hi ^ d_hi
-        a_lo = a_lo ^ d_lo
-        c_hi = c_hi ^ u_hi
-        c_lo = c_lo ^ u_lo
-        hi = d_hi
-        d_hi = ((hi << 11) | (d_lo >> 5)) & 0xFFFF
-        d_lo = ((d_lo << 11) | (hi >> 5)) & 0xFFFF
-        n -= 1
-    st[0] = a_hi; st[1] = a_lo; st[2] = b_hi; st[3] = b_lo
-    st[4] = c_hi; st[5] = c_lo; st[6] = d_hi; st[7] = d_lo
-    st[8] = x_hi; st[9] = x_lo

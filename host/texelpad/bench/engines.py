@@ -53,7 +53,9 @@ TIMING_CASE = "study"            # full screen, 384 texels of 50 samples
 MP_RUNTIMES = (toolchain.UNIX_PORT,) + toolchain.INSTRUMENTS
 RUNTIMES = ("cpython",) + MP_RUNTIMES
 # the readable names of the table (and of each row's runtime_name in the JSON)
-RUNTIME_NAMES = {"cpython": "CPython", "micropython": "MicroPython unix",
+CHIP = "rp2040"                 # the emulated Pico (texelpad bench --chip rp2040)
+CHIP_SAMPLES = 9600
+RUNTIME_NAMES = {"cpython": "CPython", "micropython": "MicroPython unix", CHIP: "RP2040 (emulated)",
                  "micropython-ulab-f32": "MicroPython ulab f32",
                  "micropython-ulab-f64": "MicroPython ulab f64",
                  "circuitpython": "CircuitPython"}
@@ -280,6 +282,9 @@ def _mp_event(ev: dict[str, Any], run_: MpRun, case_names: list[str], ref: Refer
             rt, ev.get("impl"), ".".join(str(x) for x in ev["version"][:3]),
             float_name(ev.get("float_bits")), "viper" if ev.get("viper") else "no viper",
             ev.get("ulab") or "absent", ", ".join(ev["variants"])))
+    elif kind == "plan":
+        run_.info.setdefault("plan_ms", {})[str(ev["v"])] = statistics.median(ev["plan_us"]) / 1e3
+        progress("%s plan, format %d: %.2f ms" % (rt, ev["v"], statistics.median(ev["plan_us"]) / 1e3))
     elif kind == "timing":
         v = ev["variant"]
         plan_ms = [x / 1e3 for x in ev["plan_us"]]
@@ -344,6 +349,60 @@ def bench_micropython(runtime: str, exe: str, case_names: list[str], repeat: int
     return run_
 
 
+def bench_chip(repeat: int, ref: Reference, progress: Progress) -> MpRun:
+    """mpbench.py on the emulated Pico (link/emulated.py: the real MicroPython
+    firmware, the chip's own clock): the image deployed, the script written to
+    its flash and run there; timings only (no maps: cases are measured on the
+    interpreters, whose float32 build is the board's float)."""
+    from ..link.emulated import why_not
+    from ..link.virtual import stop_on_signals
+    why = why_not()
+    if why:
+        raise BenchError(why)
+    run_ = MpRun(CHIP)
+    # half a screen: a Pico with the image imported has no free 38.4 KB block
+    # for a full uint16 map (measured: MemoryError allocating 38,400 bytes)
+    job = {"timing": dict(HARD_CASES[TIMING_CASE][0], length_samples=CHIP_SAMPLES), "cases": [],
+           "repeat": repeat, "outdir": None, "calibrate": 3,
+           "formats": HARD_CASES[TIMING_CASE][0]}       # a plan fits: the full screen
+    with stop_on_signals():             # SIGTERM/SIGHUP: the emulator goes with us
+        out = _run_on_chip(job, progress)
+    for line in out.splitlines():
+        line = line.strip()
+        if line.startswith("{"):
+            _mp_event(json.loads(line), run_, [], ref, progress)
+    for row in run_.rows.values():
+        summarise(row)
+        row.notes.append("timed on %s samples (half a screen: a full map's 38.4 KB block does "
+                         "not fit on a Pico beside the imported image); errors are measured on "
+                         "the interpreters (the float32 build is the board's float)"
+                         % format(CHIP_SAMPLES, ","))
+    return run_
+
+
+def _run_on_chip(job: dict[str, Any], progress: Progress) -> str:
+    """mpbench.main(job) on a freshly deployed emulated Pico: its output."""
+    from ..deploy.install import deploy
+    from ..link.board import connect
+    from ..link.emulated import EmulatedPico
+    from ..link.transport import LinkError
+    emu = EmulatedPico()
+    try:
+        progress("%s: starting the emulated Pico and deploying the image" % CHIP)
+        emu.start()
+        with connect(emu.port, check=False, import_image=False, timeout=120) as b:
+            deploy(b)
+        with connect(emu.port, timeout=120) as b:
+            b.link.write_file("/mpbench.py", (DEVICE_SCRIPTS / "mpbench.py").read_bytes())
+            b.link.write_file("/bench_job.json", json.dumps(job).encode())
+            progress("%s: mpbench.py running on the chip (a few wall minutes)" % CHIP)
+            return b.link.exec("import mpbench\nmpbench.main('/bench_job.json')", timeout=3600)
+    except (OSError, LinkError) as e:
+        raise BenchError("the emulated Pico: %s" % e) from None
+    finally:
+        emu.stop()
+
+
 def float_name(bits: int | None) -> str:
     """A float format by its mantissa bits (texel.compat.FLOAT_BITS)."""
     return {53: "float64", 24: "float32", 22: "30-bit float (22-bit mantissa)"}.get(
@@ -404,8 +463,25 @@ def _loadavg() -> list[float] | None:
 
 # --- the whole bench ----------------------------------------------------------
 
+def plan_ms_cpython(repeat: int) -> dict[str, float]:
+    """The timing case's plan on CPython in each texture format (median ms)."""
+    out = {}
+    for v in (1, 2):
+        p = dict(HARD_CASES[TIMING_CASE][0], v=v)
+        texel.make_plan(p)
+        ts = []
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            texel.make_plan(p)
+            ts.append((time.perf_counter() - t0) * 1e3)
+        out[str(v)] = statistics.median(ts)
+    return out
+
+
 def run(case_names: list[str] | None = None, runtimes: Iterable[str] = RUNTIMES,
-        repeat: int = 11, progress: Progress | None = None) -> BenchResult:
+        repeat: int = 11, progress: Progress | None = None,
+        chip: str | None = None) -> BenchResult:
+    """chip "rp2040": also on the emulated Pico (bench_chip), timings only."""
     progress = progress or (lambda msg: None)
     t_start = time.monotonic()
     started = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
@@ -426,6 +502,7 @@ def run(case_names: list[str] | None = None, runtimes: Iterable[str] = RUNTIMES,
         r, s = bench_cpython(repeat, ref, progress)
         rows += r
         skipped += s
+        machine["cpython_plan_ms"] = plan_ms_cpython(repeat)
     viper: dict[str, bool] = {"cpython": False}
     for rt in MP_RUNTIMES:
         if rt not in runtimes:
@@ -455,7 +532,7 @@ def run(case_names: list[str] | None = None, runtimes: Iterable[str] = RUNTIMES,
             "float_bits": info.get("float_bits"), "float": float_name(info.get("float_bits")),
             "viper": info.get("viper"), "ulab": info.get("ulab"),
             "variants": info.get("variants"), "heap": MP_HEAP,
-            "calibration_us": info.get("calibration")}
+            "calibration_us": info.get("calibration"), "plan_ms": info.get("plan_ms")}
         if info and not info.get("viper"):
             skipped.append({"runtime": rt, "variant": "int (viper)",
                             "reason": "no native emitter: the int row is the engine's "
@@ -463,6 +540,25 @@ def run(case_names: list[str] | None = None, runtimes: Iterable[str] = RUNTIMES,
         if info and "ulab" not in info.get("variants", []):
             skipped.append({"runtime": rt, "variant": "ulab",
                             "reason": "this %s build has no ulab" % RUNTIME_NAMES[rt]})
+    if chip:
+        try:
+            mp = bench_chip(min(repeat, 3), ref, progress)
+        except BenchError as e:
+            failed.append({"runtime": CHIP, "reason": str(e)})
+        else:
+            rows += list(mp.rows.values())
+            failed += mp.errors
+            viper[CHIP] = bool(mp.info.get("viper"))
+            info = mp.info
+            machine[CHIP] = {
+                "name": RUNTIME_NAMES[CHIP], "exe": "rp2emu (../shared/instruments)",
+                "impl": info.get("impl"),
+                "version": ".".join(str(x) for x in info.get("version", []) if x != ""),
+                "build": info.get("build"), "machine": info.get("machine"),
+                "float_bits": info.get("float_bits"), "float": float_name(info.get("float_bits")),
+                "viper": info.get("viper"), "ulab": info.get("ulab"),
+                "variants": info.get("variants"), "heap": "the chip's own",
+                "calibration_us": info.get("calibration"), "plan_ms": info.get("plan_ms")}
     costs, costs_note = model.costs_rp2040(calibration)
     timing_params = HARD_CASES[TIMING_CASE][0]
     for row in rows:
@@ -523,7 +619,7 @@ def table(res: BenchResult) -> str:
                res.machine.get("cpu"), res.machine.get("cpu_count"),
                "/".join("%.2f" % x for x in load) if load else "?", res.machine.get("python"),
                res.machine.get("numpy"))]
-    for rt in MP_RUNTIMES:
+    for rt in MP_RUNTIMES + (CHIP,):
         m = res.machine.get(rt)
         if m:
             out.append("%s: %s %s, %s, %s, %s" % (
@@ -554,6 +650,23 @@ def table(res: BenchResult) -> str:
                "render_u16, MicroPython/CircuitPython = bytes allocated with gc off (heap "
                "churn; object sizes of the unix build: 64-bit, CircuitPython's i386 build "
                "32-bit).")
+    plans = [("CPython", res.machine.get("cpython_plan_ms"))] + [
+        (res.machine[rt]["name"], res.machine[rt].get("plan_ms"))
+        for rt in MP_RUNTIMES + (CHIP,) if res.machine.get(rt)]
+    plans = ["%s %s / %s" % (n, _fmt(p.get("1"), ".2f"), _fmt(p.get("2"), ".2f"))
+             for n, p in plans if p]
+    if plans:
+        out.append("plan of the %s map by texture format, format 1 (float plan) / format 2 "
+                   "(integer plan, gen/plan_int.py), median ms: %s." % (TIMING_CASE,
+                                                                       "; ".join(plans)))
+    chip = [r for r in res.rows if r.runtime == CHIP and r.est_rp2040]
+    if chip:
+        out.append("op-count model against the emulated chip (estimate / measured ms, plan + "
+                   "synthesis): " + "; ".join(
+                       "%s %.0f / %.0f (%+.0f %%)" % (r.label, r.est_rp2040["total_ms"],
+                                                      r.total_ms, 100.0 * (r.est_rp2040[
+                                                          "total_ms"] / r.total_ms - 1))
+                       for r in chip) + ".")
     c = res.rp2040_costs
     out.append("* ESTIMATE, not a measurement: emulated RP2040 @ 125 MHz, " + model.FORMULA
                + "; no §3 figure for I (integer op), B (built-in float call: sin, floor, "

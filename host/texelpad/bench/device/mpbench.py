@@ -9,9 +9,14 @@
 #   micropython mpbench.py JOB.json
 #
 # JOB.json: {"timing": params, "cases": [[name, params], ...], "repeat": N,
-#            "outdir": path, "variants": [names] or null}
+#            "outdir": path, "variants": [names] or null, "calibrate": rounds,
+#            "formats": params of the plan-by-format timing (default: timing)}
+# (texelpad bench --chip rp2040 runs main() on the emulated Pico with no cases:
+# timings only, its flash is no place for 38 KB maps)
 # Output: one JSON document per line on stdout, in this order:
 #   {"event": "info", ...}                       runtime, variants, calibration
+#   {"event": "plan", "v": 1|2, "plan_us": [...]}  the timing case's plan in
+#                                                each texture format
 #   {"event": "timing", "variant": v, ...}       per variant, as it finishes
 #   {"event": "case", "variant": v, "case": c}   per map written to outdir
 #   {"event": "error", "variant": v, ...}        a variant (or one of its
@@ -250,6 +255,24 @@ def _error(variant, e, case=None):
     return doc
 
 
+def time_formats(params, repeat):
+    """The plan alone, in texture format 1 (the float plan) and 2 (the
+    integer plan, gen/plan_int.py), for the same parameters."""
+    out = []
+    for v in (1, 2):
+        p = dict(params)
+        p["v"] = v
+        texel.make_plan(p)              # warm-up: imports, tables
+        us = []
+        for _ in range(repeat):
+            gc.collect()
+            t0 = ticks_us()
+            texel.make_plan(p)
+            us.append(_us(t0, ticks_us()))
+        out.append({"event": "plan", "v": v, "plan_us": us})
+    return out
+
+
 def main(job_path):
     with open(job_path) as f:
         job = json.load(f)
@@ -262,7 +285,12 @@ def main(job_path):
           "machine": getattr(impl, "_machine", None), "build": getattr(impl, "_build", None),
           "platform": sys.platform, "float_bits": compat.FLOAT_BITS, "viper": engine_int.VIPER,
           "ulab": compat.ulab_version(), "variants": names, "heap_free": compat.heap_free(),
-          "calibration": calibrate(25)})
+          "calibration": calibrate(job.get("calibrate", 25))})
+    try:
+        for doc in time_formats(job.get("formats") or job["timing"], repeat):
+            emit(doc)
+    except Exception as e:
+        emit(_error("plan formats", e))
     for v in names:
         try:
             doc = time_variant(v, job["timing"], repeat)
