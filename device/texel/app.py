@@ -495,6 +495,14 @@ def stop():
     global _rt
     rt = _rt
     if rt is None:
+        if sys.platform == "rp2":
+            # nothing runs here: disarm a refresh interrupt that a soft reset
+            # without stop() may have left (hw/rp2.py clear_stale_tick)
+            try:
+                from .hw.rp2 import clear_stale_tick
+                clear_stale_tick()
+            except ImportError:
+                pass
         return
     try:
         rt.hw.stop()

@@ -42,6 +42,12 @@ def _board_for_platform():
 def main():
     cfg = _config()
     board = cfg.get("board") or _board_for_platform()
+    if sys.platform == "rp2":
+        try:                        # a refresh interrupt a soft reset left armed
+            from texel.hw.rp2 import clear_stale_tick
+            clear_stale_tick()
+        except Exception as e:
+            print("texelpad: could not check the refresh interrupt:", repr(e))
     try:
         import texel.app
         st = texel.app.start(board, cfg.get("scene"))

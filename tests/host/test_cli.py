@@ -237,9 +237,10 @@ def bench_instruments(tmp_path_factory):
 
 def test_bench_default_runtimes_include_the_instruments():
     assert bench.RUNTIMES == ("cpython", "micropython") + INSTRUMENTS
-    assert set(bench.RUNTIME_NAMES) == set(bench.RUNTIMES)
+    # the emulated chip is named too, but runs only with --chip (minutes of emulation)
+    assert set(bench.RUNTIME_NAMES) == set(bench.RUNTIMES) | {bench.CHIP}
     args = cli.build_parser(["bench"]).parse_args(["bench"])
-    assert args.runtimes == list(bench.RUNTIMES)
+    assert args.runtimes == list(bench.RUNTIMES) and args.chip is None
 
 
 @pytest.mark.instruments
@@ -385,8 +386,9 @@ def test_mpbench_goes_on_after_a_device_error(tmp_path, name):
     toolchain.json_events(work / "mpbench.py", job, events.append, workdir=work, exe=exe,
                           heapsize=bench.MP_HEAP, timeout_s=300)
     kinds = [(e["event"], e.get("variant")) for e in events]
-    assert kinds == [("info", None), ("timing", "int"), ("error", "int"), ("timing", "pure"),
-                     ("error", "pure"), ("done", None)]
+    assert kinds == [("info", None), ("plan", None), ("plan", None), ("timing", "int"),
+                     ("error", "int"), ("timing", "pure"), ("error", "pure"), ("done", None)]
+    assert [e["v"] for e in events if e["event"] == "plan"] == [1, 2]
     for e in events:
         if e["event"] == "error":
             assert e["case"] == "bad" and "gain" in e["error"].splitlines()[-1]

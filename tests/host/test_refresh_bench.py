@@ -284,3 +284,44 @@ def test_model_paths_and_costs():
     assert chk.predicted_us == pytest.approx(0.04 + 16 * 0.01)
     assert chk.ratio == pytest.approx(chk.predicted_us / 0.2)
     assert math.isfinite(chk.ratio)
+
+
+# --- --chip rp2040 (texelpad/bench/chip.py): the parts that need no emulator ----------
+# (the emulated run itself: tests/host/test_chip_bench.py, marked instruments and slow)
+
+@pytest.mark.parametrize("flags", [["--no-unix"], ["--soak-seconds", "1"]])
+def test_chip_only_flags_need_chip(flags, capsys):
+    rc, stdout, stderr = _main(["bench-refresh", "--quiet"] + flags)
+    assert rc == 2 and "only with --chip rp2040" in stderr and "Traceback" not in stderr
+
+
+def test_chip_hold_counts_mean_whole_positions():
+    from texel.runtime import boards
+    from texelpad.bench import chip
+    board = boards.load("pico")
+    sensor, positions = board["sensor"], board["display"]["positions"]
+    holds = chip.hold_counts(sensor, positions)
+    assert len(holds) == len(chip.HOLD_TARGETS)
+    for c, target in zip(holds, chip.HOLD_TARGETS):
+        p = chip.ideal_position(c, sensor, positions)
+        assert abs(p - round(p)) < 0.1 and abs(p - target) < 100
+    assert chip.raw16(0xFFF) == 0xFFFF and chip.raw16(1) == 0x10     # rp2's read_u16 scaling
+    js = chip.finger_js(holds)
+    assert js.startswith("(ch, t) =>") and ", ".join(map(str, holds)) in js
+
+
+def test_chip_probe_line_and_opcount_check():
+    from texelpad.bench import chip
+    text = ("probe GPIO16: 33603.7 Hz, duty mean 0.183, min 0.000, max 0.500, edges 27848, "
+            "most common period 3676 cycles = 34004.4 Hz (99.7 % of periods)\n"
+            "emulated_seconds=13.362374 cycles=1670296742 wall_seconds=30.01\n")
+    p = chip.parse_probes(text)[16]
+    assert p["period_cycles"] == 3676 and p["carrier_hz"] == 34004.4
+    assert (p["duty_min"], p["duty_max"], p["period_share_pct"]) == (0.0, 0.5, 99.7)
+    costs, _ = rb.rp2040_costs(None)
+    est = rb.estimates(costs, True)
+    res = {"mode": "viper-irq", "irq": {"median_us": 8.0}}
+    chk = chip.opcount_check(res, est)
+    want = next(e.est_us for e in est if e.path == "viper-irq")
+    assert chk["estimate_us"] == want and chk["error_pct"] == pytest.approx(100 * (want / 8 - 1))
+    assert chip.opcount_check({"mode": "python"}, est) is None          # nothing measured

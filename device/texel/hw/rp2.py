@@ -32,10 +32,37 @@
 #           i.e. both legs low (B inverted and always "high" internally):
 #           no voltage across the load.
 # The duty is clamped to max_counts = floor(duty_cap * (TOP+1)).
+#
+# Refresh interrupt (start()). When the callback offers native_entry()
+# (texel.runtime.refresh_viper.irq_rp2, on an RP2040) the refresh runs as a
+# raw interrupt: a spare PWM slice (7, or 6 when the carrier is on 7) counts
+# the refresh period in clk_sys cycles (125 MHz * 120 us = 15,000 = TOP+1:
+# the same 120 us as machine.Timer's whole microseconds) and its wrap
+# interrupt (PWM_IRQ_WRAP, IRQ 4) jumps through the RAM vector table to a
+# 12-instruction Thumb trampoline (_TRAMPOLINE below) that acknowledges the
+# wrap and calls the viper refresh's machine code. machine.Timer's path -
+# pico-sdk's alarm pool, mp_irq_dispatch (scheduler and GC locks, an nlr
+# frame, stack-limit swap), mp_call_function - and the viper function's
+# handling of a global took 10.7 us of the 21-24 us a refresh cost on the
+# emulated RP2040 (texelpad bench-refresh --chip rp2040, docs/runtime.md).
+# The vector handler has the highest priority, so other interrupts (USB)
+# delay it less. On this path the refresh also lets the ADC
+# convert continuously (START_MANY) and takes its last conversion, at most 2 us
+# old, instead of starting one and waiting 2 us for it (refresh_viper.core).
+# stop() disables the interrupt, the slice and the free-running ADC and puts
+# the old vector back. A soft reset that skips stop() disables every
+# PWM slice (MicroPython's machine_pwm_deinit_all), so the interrupt stops;
+# its enable bits stay set until the next start() or stop(): do not run
+# machine.PWM on the tick slice's pins (GPIO 14/15 for slice 7) after such a
+# reset before texel.app.start(). Anything unexpected (not an RP2040, the
+# vector table in flash, the slice in use, a period the slice cannot count
+# exactly) falls back to machine.Timer.
 import sys
 import time
+from array import array
 
 import machine
+import uctypes
 
 from ..compat import const
 
@@ -47,6 +74,49 @@ _SLICE_STRIDE = const(0x14)
 _CH_CC = const(0x0C)                # bits 15:0 channel A, 31:16 channel B
 _CH_TOP = const(0x10)
 _TOP_LIMIT = const(16383)          # TOP+1 < 2^14: (TOP+1) << 16 < 2^30
+_CH_CSR = const(0x00)
+_CH_DIV = const(0x04)
+_CH_CTR = const(0x08)
+_PWM_INTR = const(0xA4)            # write 1 to clear a slice's wrap flag
+_PWM_INTE = const(0xA8)
+_PWM_IRQ = const(4)                # PWM_IRQ_WRAP
+_VTOR = const(0xE000ED08)
+_NVIC_ISER = const(0xE000E100)
+_NVIC_ICER = const(0xE000E180)
+_NVIC_ICPR = const(0xE000E280)
+_NVIC_IPR1 = const(0xE000E404)     # priorities of IRQ 4..7, one byte each (bits 7:6 used)
+_ADC_CS = const(0x4004C000)       # bit 3 START_MANY: free-running conversions
+_SRAM = const(0x20000000)
+_SRAM_END = const(0x20042000)
+
+# The trampoline, Thumb-1 halfwords (ARMv6-M), then its five literals. The
+# exception entry has stacked r0-r3, r12, lr, pc, xPSR and put EXC_RETURN in
+# lr; push {r4, lr} keeps the stack 8-byte aligned for the call (AAPCS);
+# pop {r4, pc} with EXC_RETURN returns from the exception. Each ldr reads a
+# literal 20 bytes past its aligned PC (imm8 = 5): see the byte offsets.
+_TRAMPOLINE = (
+    0xB510, 0x4805,     # 0: push {r4, lr}      2: ldr r0, [pc, #20] -> 24 PWM INTR address
+    0x4905, 0x6001,     # 4: ldr r1, [pc, #20]  -> 28 slice bit      6: str r1, [r0]: acknowledge
+    0x4805, 0x2101,     # 8: ldr r0, [pc, #20]  -> 32 function obj   10: movs r1, #1 (n_args)
+    0x2200, 0x4B05,     # 12: movs r2, #0 (n_kw) 14: ldr r3, [pc, #20] -> 36 args array
+    0x4C05, 0x47A0,     # 16: ldr r4, [pc, #20] -> 40 code | 1       18: blx r4
+    0xBD10, 0xBF00)     # 20: pop {r4, pc}      22: nop (literals start word-aligned at 24)
+
+
+def clear_stale_tick():
+    """Disarm a refresh interrupt left behind by a soft reset that skipped
+    stop(): the NVIC enable of PWM_IRQ_WRAP and the tick slices' (6, 7) wrap
+    enables stay set across it while the vector points at a trampoline in the
+    freed heap, so a later machine.PWM on those slices' pins would jump there.
+    Call it only while texelpad's refresh is not running (texel/main.py does
+    at power-up and after a soft reset from the REPL; texel.app.stop() when
+    nothing runs). Does nothing off an RP2040."""
+    if not _is_rp2040():
+        return
+    m = machine.mem32
+    m[_NVIC_ICER] = 1 << _PWM_IRQ
+    m[_PWM_BASE + _PWM_INTE] = m[_PWM_BASE + _PWM_INTE] & ~0xC0
+    m[_NVIC_ICPR] = 1 << _PWM_IRQ
 
 
 def _is_rp2040():
@@ -110,6 +180,9 @@ class Hw:
             direct = _is_rp2040()
         self.direct = bool(direct)
         self._timer = None
+        self._vector = None             # (trampoline, vector address, old vector, slice)
+        self.irq_source = None          # how the refresh runs: for status and benches
+        self._cpu_hz = cpu
         self._period = top + 1
         self._half = (top + 1) // 2     # rounding of the duty_u16 fallback
 
@@ -193,20 +266,89 @@ class Hw:
 
     def start(self, callback, hz):
         """Call callback(timer) hz times a second from a hard IRQ
-        (machine.Timer(hard=True), MicroPython >= 1.26). The period is whole
+        (machine.Timer(hard=True), MicroPython >= 1.26), or - when callback
+        offers native_entry() and this is an RP2040 - its machine code from
+        a PWM-wrap interrupt (see the top of this file). The period is whole
         microseconds: 8,333 Hz -> 120 us. The timer object is kept here:
         rp2 Timers stop when garbage-collected."""
         self.stop_timer()
+        entry = getattr(callback, "native_entry", None)
+        if entry is not None and self.direct and _is_rp2040():
+            if self._start_vector(entry(), 1000000 // hz):
+                return
         try:
             self._timer = machine.Timer(freq=hz, mode=machine.Timer.PERIODIC,
                                         callback=callback, hard=True)
         except TypeError:
             raise RuntimeError("machine.Timer(hard=True) needs MicroPython >= 1.26 on rp2")
+        self.irq_source = "machine.Timer (hard)"
+
+    def _start_vector(self, entry, period_us):
+        """The refresh as a PWM-wrap interrupt calling entry = (function object,
+        machine code, argument array) addresses; False (nothing changed) when
+        it cannot be done here."""
+        m = machine.mem32
+        fun, code, args = entry
+        sl = 6 if self.slice == 7 else 7
+        base = _PWM_BASE + _SLICE_STRIDE * sl
+        vtor = m[_VTOR] & 0xFFFFFFFF
+        cycles = self._cpu_hz * period_us
+        if cycles % 1000000:
+            return False                # the slice counts whole clk_sys cycles
+        cycles //= 1000000
+        div = 1
+        while cycles // div > 65536 or cycles % div:
+            div += 1
+            if div > 255:
+                return False
+        ok = (_SRAM <= vtor < _SRAM_END and _SRAM <= fun < _SRAM_END
+              and _SRAM <= code < _SRAM_END and _SRAM <= args < _SRAM_END
+              and machine.mem16[code & ~1] & 0xFF00 == 0xB500     # push {..., lr}: a function
+              and not m[base + _CH_CSR] & 1)                      # the slice is free
+        if not ok:
+            return False
+        tramp = array("I", [0] * 11)
+        for i in range(6):
+            tramp[i] = _TRAMPOLINE[2 * i] | (_TRAMPOLINE[2 * i + 1] << 16)
+        tramp[6] = _PWM_BASE + _PWM_INTR
+        tramp[7] = 1 << sl
+        tramp[8] = fun
+        tramp[9] = args
+        tramp[10] = code | 1
+        vec = vtor + 4 * (16 + _PWM_IRQ)
+        self._vector = (tramp, vec, m[vec] & 0xFFFFFFFF, sl)
+        m[base + _CH_CSR] = 0
+        m[base + _CH_DIV] = div << 4    # integer divider, no fraction
+        m[base + _CH_CTR] = 0
+        m[base + _CH_TOP] = cycles // div - 1
+        m[_PWM_BASE + _PWM_INTR] = 1 << sl
+        m[_PWM_BASE + _PWM_INTE] = m[_PWM_BASE + _PWM_INTE] | (1 << sl)
+        m[vec] = uctypes.addressof(tramp) | 1
+        m[_NVIC_IPR1] = m[_NVIC_IPR1] & ~0xFF          # IRQ 4: priority 0 (highest)
+        m[_NVIC_ICPR] = 1 << _PWM_IRQ
+        m[_NVIC_ISER] = 1 << _PWM_IRQ
+        m[base + _CH_CSR] = 1           # free-running: the first wrap in one period
+        self.irq_source = "PWM slice %d wrap interrupt -> refresh machine code" % sl
+        return True
 
     def stop_timer(self):
         if self._timer is not None:
             self._timer.deinit()
             self._timer = None
+        if self._vector is not None:
+            m = machine.mem32
+            tramp, vec, old, sl = self._vector
+            m[_NVIC_ICER] = 1 << _PWM_IRQ
+            m[_PWM_BASE + _PWM_INTE] = m[_PWM_BASE + _PWM_INTE] & ~(1 << sl)
+            m[_PWM_BASE + _SLICE_STRIDE * sl + _CH_CSR] = 0
+            m[_PWM_BASE + _PWM_INTR] = 1 << sl
+            m[_NVIC_ICPR] = 1 << _PWM_IRQ
+            m[vec] = old
+            self._vector = None         # the trampoline may go: nothing points at it
+            # the refresh let the ADC convert continuously (refresh_viper's
+            # START_MANY branch): stop that too
+            m[_ADC_CS] = m[_ADC_CS] & ~8
+        self.irq_source = None
 
     def stop(self):
         """Stop the refresh, then the safe state."""

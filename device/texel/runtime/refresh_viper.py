@@ -1,20 +1,36 @@
 # The fused refresh: ADC reading, sensor tracking, scene lookup, duty law and
-# the PWM compare store in one viper function, refresh(), with no Python call
-# inside - on an RP2040 it is the hard timer IRQ itself - so a refresh costs
-# tens of microseconds on an emulated RP2040 instead of the hundreds a
-# Python-level refresh (about ten calls and a hundred bytecodes) would. It computes exactly what Refresh.step with
-# AdcLinearSensor, Scene.amp and DutyLaw.duty compute (tests/runtime/test_refresh_viper.py
-# runs both on the same inputs and compares every refresh).
+# the PWM compare store in one viper function, core(), with no Python call
+# inside. On an RP2040 it is the refresh interrupt itself: hw/rp2.py points the
+# PWM-wrap vector at a 12-instruction Thumb trampoline that calls core()'s
+# machine code directly (irq_rp2.native_entry), so neither machine.Timer's
+# alarm pool nor MicroPython's IRQ dispatch runs per refresh: 8.1 us per
+# refresh over a map and 10.3 us over a texel plan on the emulated RP2040,
+# IRQ entry and exit included, against 21.1 and 24.1 us through a hard
+# machine.Timer (`texelpad bench-refresh --chip rp2040`, docs/runtime.md).
+# It computes exactly what Refresh.step with AdcLinearSensor, Scene.amp and
+# DutyLaw.duty compute (tests/runtime/test_refresh_viper.py runs both on the
+# same inputs and compares every refresh).
 #
-# Layout. Everything the refresh touches is reached from one array('I'), _W,
-# holding each entry as two 32-bit halves (lo, hi): hi is 0 on 32-bit boards
-# and completes the address on the 64-bit unix port (viper here can load 32-
-# bit words, not machine words). _W holds: the addresses of the state array S (int32 words), the
-# scene's region table and sample buffers, the duty law's fine table, the
-# telemetry ring, and (rp2) the register addresses. A scene swap builds a new
-# word array and replaces _W with one store: the IRQ sees the old scene or the
-# new one, never a mix. The Python objects behind the addresses are kept
+# Layout. Everything the refresh touches is reached from one array('I'), the
+# word array W (indices below): the state array S (int32 words), the scene's
+# region table (core()'s copy) and sample buffers or plans, the duty law's
+# fine table, the telemetry ring and (rp2) the registers, each as a 32-bit
+# offset from BASE, the lowest of those addresses, kept as two 32-bit halves
+# (viper here loads 32-bit words, not machine words: the high half is 0 on
+# 32-bit boards and completes the addresses on the 64-bit unix port). core(w)
+# gets W's address as its one argument and reads no global, so it has no
+# exception frame, no globals swap and no global lookup (viper adds them to a
+# function that reads a global: ~250 cycles, 2 us, per call on the emulated
+# RP2040, measured with rp2emu's --profile). A scene
+# swap builds a new W and publishes its address with one store (_WA for
+# refresh(), _ARGS[0] for the trampoline): the refresh sees the old scene or
+# the new one, never a mix. The Python objects behind the addresses are kept
 # referenced by FastRefresh while they are in use.
+#
+# Speed on Thumb-1 (armv6m, as mpy-cross compiles it): viper keeps only two
+# locals in registers (r4, r5: the argument w and the first local, s); the
+# rest live on the stack, so the body reads each value it needs once, and S
+# words used in every refresh sit below index 32 (an immediate-offset load).
 #
 # Kept alone in this file: a port without a native emitter cannot compile it.
 import micropython
@@ -24,29 +40,37 @@ import uctypes
 from .refresh import Refresh, TELEMETRY_SLOTS
 from ..gen import sine_table
 
-# _W: word array indices
-W_S = const(0)          # state S (array 'i')
-W_TAB = const(1)        # scene region table (array 'i', rows start,end,kind,value + sentinel)
-W_FINE = const(2)       # DutyLaw fine table (array 'H')
-W_TEL_T = const(3)      # telemetry ring: time (array 'i')
-W_TEL_P = const(4)      # telemetry ring: position (array 'i')
-W_TEL_A = const(5)      # telemetry ring: amplitude (array 'H')
-W_IDLE = const(6)       # scene idle amplitude (uint16)
-W_TIMER = const(7)      # rp2: TIMERAWL register address (us counter)
-W_ADC = const(8)        # rp2: ADC CS register address (RESULT follows)
-W_CC = const(9)         # rp2: PWM slice CC register address
-W_MUL = const(10)       # rp2: CC word = counts * MUL (leg A, and B for a bridge)
-W_SINE = const(11)      # sine_table (array 'H') for plan-backed texel regions
-W_NBUF = const(12)      # number of scene buffers
-W_BUF0 = const(13)      # scene buffer k at W_BUF0 + k; then plan p at
-                        # W_BUF0 + nbuf + 4p: t28 address, d28 address, L, gain Q14
-W_FIXED = const(13)
+# W: word array indices, one 32-bit word each. Addresses are kept as offsets
+# from BASE (words 0 and 1: its low and high halves; high is 0 on 32-bit
+# boards), the lowest address the refresh uses, so every offset is one
+# non-negative word (RP2040: the registers at 0x4xxxxxxx lie above the SRAM
+# heap; the unix port: everything in its one heap) and an address costs core()
+# one load and one add instead of rebuilding 64 bits from two halves.
+W_BASE = const(0)       # 2 words
+W_S = const(2)          # state S (array 'i')
+W_TAB = const(3)        # scene region table (array 'i', rows start,end,kind,value + sentinel)
+W_FINE = const(4)       # DutyLaw fine table (array 'H')
+W_TEL_T = const(5)      # telemetry ring: time (array 'i')
+W_TEL_P = const(6)      # telemetry ring: position (array 'i')
+W_TEL_A = const(7)      # telemetry ring: amplitude (array 'H')
+W_IDLE = const(8)       # scene idle amplitude (uint16; a value, not an address)
+W_TIMER = const(9)      # rp2: TIMERAWL register (us counter)
+W_ADC = const(10)       # rp2: ADC CS register (RESULT follows)
+W_CC = const(11)        # rp2: PWM slice CC register
+W_MUL = const(12)       # rp2: CC word = counts * MUL (leg A, and B for a bridge; a value)
+W_SINE = const(13)      # sine_table (array 'H') for plan-backed texel regions
+W_BUF0 = const(14)      # scene buffer k at W_BUF0 + k (scene.K_CHUNK: its chunk-offset
+                        # table); then plan p at W_BUF0 + nbuf + W_PLAN*p: t28, d28,
+                        # L, gain Q14, R = 65536 // L + 1 (see the texel branch)
+W_FIXED = const(14)
+W_PLAN = const(5)
 
 # S: state indices (int32 words; every value non-negative and < 2^30 - the
-# velocity is stored biased by V_BIAS - so 32- and 64-bit viper agree)
+# velocity is stored biased by V_BIAS - so 32- and 64-bit viper agree). The
+# words every refresh reads come first: indices below 32 are one Thumb load.
 S_TOUCH = const(0)
 S_LOW = const(1)
-S_DEB = const(2)
+S_ADC12 = const(2)      # 1: RESULT is a 12-bit RP2040 reading, scaled as read_u16 does
 S_F = const(3)
 S_V = const(4)
 S_FR = const(5)
@@ -69,50 +93,79 @@ S_AMP = const(21)
 S_DUTY = const(22)
 S_COUNT = const(23)
 S_TEL_EVERY = const(24)
-S_TEL_DIV = const(25)
-S_TEL_HEAD = const(26)
-S_Q = const(27)         # DutyLaw q
-S_HALF = const(28)      # DutyLaw rounding offset
-S_MAXC = const(29)      # DutyLaw max_counts
-S_WORST = const(30)
-S_OVR = const(31)
-S_PERIOD = const(32)    # refresh period, us
-S_ADC_CS = const(33)    # the word written to the ADC's CS (rp2: starts one conversion)
-S_ADC12 = const(34)     # 1: RESULT is a 12-bit RP2040 reading, scaled as read_u16 does
+S_Q = const(25)         # DutyLaw q
+S_HALF = const(26)      # DutyLaw rounding offset
+S_MAXC = const(27)      # DutyLaw max_counts
+S_WORST = const(28)
+S_OVR = const(29)
+S_PERIOD = const(30)    # refresh period, us
+S_ADC_CS = const(31)    # the word written to the ADC's CS (rp2: starts one conversion)
+S_DEB = const(32)       # lift debounce (read only when the finger lifts)
+S_TEL_DIV = const(33)
+S_TEL_HEAD = const(34)
 S_SIZE = const(35)
 V_BIAS = const(0x10000000)      # 2^28 > any |v| (v <= qmax < 2^28)
 _SLOTS = const(256)             # = refresh.TELEMETRY_SLOTS (checked below)
+_FAST_O = const(32768)          # offsets below this divide by reciprocal (texel branch)
 
-_W = None
+_W = None               # the word array in use (kept referenced here too)
+_WA = 0                 # its address: core()'s argument from refresh() and FastRefresh.step
+# core()'s argument as the RP2040 trampoline passes it: one word holding W's
+# address as a MicroPython small-int object ((address << 1) | 1; SRAM
+# addresses are below 2^30). Updated with one 32-bit store at each swap.
+_ARGS = array("I", [1])
+_RP2 = None             # the FastRefresh that use_rp2_registers() set up (irq_rp2's)
 
 
 @micropython.viper
-def refresh(timer) -> int:
-    """The whole refresh, with no Python call: the timer IRQ itself on an
-    RP2040. Reads its input from the "registers" whose addresses are in _W -
-    on an RP2040 the real TIMERAWL, ADC CS/RESULT and the slice's CC; on other
-    boards three small arrays that FastRefresh.step fills and reads - tracks
-    the finger, looks the scene up, applies the duty law, writes the CC word
-    and returns the duty (PWM counts). timer: the Timer object (unused)."""
-    w = ptr32(_W)
-    s = ptr32((int(w[W_S * 2]) | ((int(w[W_S * 2 + 1]) << 16) << 16)))
-    clock = ptr32(int(w[W_TIMER * 2]) | ((int(w[W_TIMER * 2 + 1]) << 16) << 16))
+def core(w: int):
+    """The whole refresh, with no Python call. w: the word array W's address
+    (an int: the cheapest argument to convert on entry; every use casts it
+    with ptr32(w), which costs nothing). Reads its input from the "registers"
+    in W - on an RP2040 the real TIMERAWL, ADC CS/RESULT and the slice's CC;
+    on other boards three small arrays that FastRefresh.step fills and reads -
+    tracks the finger, looks the scene up, applies the duty law and writes the
+    CC word. Range checks of the common path are single unsigned compares
+    (uint(d) > uint(span) is d < 0 or d > span): each viper comparison costs
+    ~15 cycles on Thumb-1."""
+    s = ptr32((int(ptr32(w)[W_BASE]) | ((int(ptr32(w)[W_BASE + 1]) << 16) << 16))
+              + int(ptr32(w)[W_S]))
+    base = int(s) - int(ptr32(w)[W_S])
+    adc = ptr32(base + int(ptr32(w)[W_ADC]))
+    cs = int(s[S_ADC_CS])                   # rp2: EN | START_ONCE | AINSEL (or START_MANY)
+    if not (cs & 8):
+        adc[0] = cs                         # start one conversion
+    # while the conversion runs (2 us on an RP2040), what does not need it
+    clock = ptr32(base + int(ptr32(w)[W_TIMER]))
     t0 = int(clock[0])
-    adc = ptr32(int(w[W_ADC * 2]) | ((int(w[W_ADC * 2 + 1]) << 16) << 16))
-    adc[0] = s[S_ADC_CS]                    # rp2: EN | START_ONCE | AINSEL
-    while (int(adc[0]) & 0x100) == 0:       # READY after ~2 us
-        pass
-    raw = int(adc[1])
+    touch = int(s[S_TOUCH])
+    if cs & 8:
+        # START_MANY (the RP2040's refresh interrupt, irq_rp2.native_entry):
+        # the ADC converts continuously and RESULT is its last conversion, at
+        # most one conversion (2 us) old: no wait. Other code that used the
+        # ADC (machine.ADC on another channel, adc_init) changed CS: convert
+        # once, then let it run again.
+        raw = int(adc[1])
+        if (int(adc[0]) & 0x1F700F) != cs:
+            adc[0] = (cs ^ 8) | 4
+            while (int(adc[0]) & 0x100) == 0:
+                pass
+            raw = int(adc[1])
+            adc[0] = cs
+    else:
+        while (int(adc[0]) & 0x100) == 0:   # READY after ~2 us
+            pass
+        raw = int(adc[1])
     if int(s[S_ADC12]):
-        raw = raw & 0xFFF
-        raw = (raw << 4) | (raw >> 8)       # read_u16 scaling of a 12-bit result
-    t = t0 & 0x3FFFFFFF
+        # read_u16 scaling of the RP2040's 12-bit RESULT (bits 31:12 read 0)
+        raw = (raw << 4) | (raw >> 8)
     # --- sensor: AdcLinearSensor.read + _Tracker._track ---------------------
     p = -1
     if raw < int(s[S_LIFT]):
-        if int(s[S_TOUCH]):
+        if touch:
             n = int(s[S_LOW]) + 1
             if n >= int(s[S_DEB]):
+                touch = 0
                 s[S_TOUCH] = 0
                 s[S_LOW] = 0
             else:
@@ -120,26 +173,21 @@ def refresh(timer) -> int:
                 s[S_LOW] = n
                 v = int(s[S_V]) - V_BIAS
                 nf = int(s[S_F]) + v
-                if nf < 0:
-                    nf = 0
-                elif nf > int(s[S_QMAX]):
-                    nf = int(s[S_QMAX])
+                if uint(nf) > uint(s[S_QMAX]):
+                    nf = 0 if nf < 0 else int(s[S_QMAX])
                 s[S_F] = nf
                 p = nf + ((v * int(s[S_LQ8]) + 128) >> 8)
     else:
         s[S_LOW] = 0
+        d = raw - int(s[S_R0])
         if int(s[S_REV]):
-            d = int(s[S_R0]) - raw
-        else:
-            d = raw - int(s[S_R0])
-        if d < 0:
-            d = 0
-        elif d > int(s[S_SPAN]):
-            d = int(s[S_SPAN])
+            d = 0 - d
+        if uint(d) > uint(s[S_SPAN]):
+            d = 0 if d < 0 else int(s[S_SPAN])
         x = d * int(s[S_SHI]) + ((d * int(s[S_SLO]) + 8192) >> 14)
         if x > int(s[S_QMAX]):
             x = int(s[S_QMAX])
-        if int(s[S_TOUCH]):
+        if touch:
             f = int(s[S_F])
             e = int(s[S_FR]) + x - f
             nf = f + (e >> int(s[S_K]))
@@ -147,18 +195,15 @@ def refresh(timer) -> int:
             v = int(s[S_V]) - V_BIAS
             e = int(s[S_VR]) + (nf - f) - v
             v += e >> int(s[S_KV])
-            vmax = int(s[S_VMAX])
-            if v > vmax:
-                v = vmax
-                e = 0
-            elif v < 0 - vmax:
-                v = 0 - vmax
+            if uint(v + int(s[S_VMAX])) > uint(int(s[S_VMAX]) << 1):
+                v = int(s[S_VMAX]) if v > 0 else 0 - int(s[S_VMAX])
                 e = 0
             s[S_VR] = e & int(s[S_KVM])
             s[S_F] = nf
             s[S_V] = v + V_BIAS
         else:
             # touch-down: re-seed, no glide and no velocity kick
+            touch = 1
             s[S_TOUCH] = 1
             s[S_F] = x
             s[S_FR] = 0
@@ -167,85 +212,148 @@ def refresh(timer) -> int:
             nf = x
             v = 0
         p = nf + ((v * int(s[S_LQ8]) + 128) >> 8)
-    if p >= 0 or int(s[S_TOUCH]):
-        if p < 0:
-            p = 0
-        elif p > int(s[S_QMAX]):
-            p = int(s[S_QMAX])
-        p = (p + 128) >> 8
     # --- scene: Scene.amp ----------------------------------------------------
-    if p < 0:
-        amp = int(w[W_IDLE * 2])
-    else:
-        tab = ptr32((int(w[W_TAB * 2]) | ((int(w[W_TAB * 2 + 1]) << 16) << 16)))
+    if touch:                               # p is -1 exactly when not touching
+        if uint(p) > uint(s[S_QMAX]):
+            p = 0 if p < 0 else int(s[S_QMAX])
+        p = (p + 128) >> 8
+        tab = ptr32(base + int(ptr32(w)[W_TAB]))
         i = 1
         while p >= int(tab[i]):
             i += 4
         st = int(tab[i - 1])
+        kind = int(tab[i + 1])
         if p < st:
-            amp = int(w[W_IDLE * 2])
-        elif int(tab[i + 1]) == 1:
-            amp = int(ptr16((int(w[(W_BUF0 + int(tab[i + 2])) * 2]) | ((int(w[(W_BUF0 + int(tab[i + 2])) * 2 + 1]) << 16) << 16)))[p - st])
-        elif int(tab[i + 1]) == 0:
-            amp = int(tab[i + 2])
-        elif int(tab[i + 1]) == 3:
-            # an uploaded map in chunks (scene.K_CHUNK): the buffer's word is
-            # the address of its chunk-address table (lo, hi pairs)
+            amp = int(ptr32(w)[W_IDLE])
+        elif kind == 2:
+            # scene.K_PLAN, a texel region played from its plan: engine_int's
+            # sample, as Scene.amp (tested first: the costliest kind)
+            b = int(tab[i + 2])                 # the plan's first word in W
             o = p - st
-            ct = ptr32(int(w[(W_BUF0 + int(tab[i + 2])) * 2]) | ((int(w[(W_BUF0 + int(tab[i + 2])) * 2 + 1]) << 16) << 16))
-            c = (o >> 9) * 2            # scene.CHUNK_BITS, CHUNK_MASK (checked below)
-            amp = int(ptr16(int(ct[c]) | ((int(ct[c + 1]) << 16) << 16))[o & 511])
-        else:
-            # plan-backed texel region: engine_int's sample, as Scene.amp
-            b = W_BUF0 + int(w[W_NBUF * 2]) + 4 * int(tab[i + 2])
-            o = p - st
-            ln = int(w[(b + 2) * 2])
-            j = o // ln
-            k = o - j * ln + 1
+            ln = int(ptr32(w)[b + 2])
+            if o < _FAST_O:
+                # o // ln by reciprocal: R = 65536 // ln + 1 > 2^16/ln, so
+                # j = o*R >> 16 is floor(o/ln) or one more (o*(R - 2^16/ln)
+                # < o/2^16 < 0.5), corrected below; o*R < 2^15 * 13,108 < 2^29
+                j = (o * int(ptr32(w)[b + 4])) >> 16
+                k = o - j * ln
+                if k < 0:
+                    j -= 1
+                    k += ln
+            else:
+                j = o // ln
+                k = o - j * ln
             # k*d wraps at the machine word on 32-bit ports: the low 28 bits,
             # all that is kept, are exact either way
-            t28 = ptr32(int(w[b * 2]) | ((int(w[b * 2 + 1]) << 16) << 16))
-            d28 = ptr32(int(w[(b + 1) * 2]) | ((int(w[(b + 1) * 2 + 1]) << 16) << 16))
-            ph = (int(t28[j]) + k * int(d28[j])) & 0x0FFFFFFF
-            sine = ptr16(int(w[W_SINE * 2]) | ((int(w[W_SINE * 2 + 1]) << 16) << 16))
+            ph = (int(ptr32(base + int(ptr32(w)[b]))[j])
+                  + (k + 1) * int(ptr32(base + int(ptr32(w)[b + 1]))[j])) & 0x0FFFFFFF
+            sine = ptr16(base + int(ptr32(w)[W_SINE]))
             ii = ph >> 18
             y0 = int(sine[ii])
             v = y0 + (((int(sine[ii + 1]) - y0) * ((ph >> 2) & 0xFFFF) + 32768) >> 16)
-            amp = (v * int(w[(b + 3) * 2]) + 8192) >> 14
+            amp = (v * int(ptr32(w)[b + 3]) + 8192) >> 14
+        elif kind == 1:
+            amp = int(ptr16(base + int(tab[i + 2]))[p - st])
+        elif kind == 0:
+            amp = int(tab[i + 2])
+        else:
+            # scene.K_CHUNK, an uploaded map in chunks: the row's value is
+            # the offset of its chunk-offset table
+            o = p - st
+            ct = ptr32(base + int(tab[i + 2]))
+            # scene.CHUNK_BITS, CHUNK_MASK (checked below)
+            amp = int(ptr16(base + int(ct[o >> 9]))[o & 511])
+    else:
+        amp = int(ptr32(w)[W_IDLE])
     # --- duty: DutyLaw.duty ----------------------------------------------------
-    fine = ptr16((int(w[W_FINE * 2]) | ((int(w[W_FINE * 2 + 1]) << 16) << 16)))
+    fine = ptr16(base + int(ptr32(w)[W_FINE]))
     j = amp >> 6
     lo = int(fine[j])
     dc = (lo + (((int(fine[j + 1]) - lo) * (amp & 63)) >> 6) + int(s[S_HALF])) >> int(s[S_Q])
     if dc > int(s[S_MAXC]):
         dc = int(s[S_MAXC])
+    ptr32(base + int(ptr32(w)[W_CC]))[0] = dc * int(ptr32(w)[W_MUL])
     # --- bookkeeping and telemetry ------------------------------------------------
     s[S_POS1] = p + 1
     s[S_AMP] = amp
     s[S_DUTY] = dc
     s[S_COUNT] = (int(s[S_COUNT]) + 1) & 0x3FFFFFFF
-    every = int(s[S_TEL_EVERY])
-    if every:
+    if int(s[S_TEL_EVERY]):
         n = int(s[S_TEL_DIV]) + 1
-        if n >= every:
+        if n >= int(s[S_TEL_EVERY]):
             n = 0
             h = int(s[S_TEL_HEAD])
             k = h & (_SLOTS - 1)
-            ptr32((int(w[W_TEL_T * 2]) | ((int(w[W_TEL_T * 2 + 1]) << 16) << 16)))[k] = t
-            ptr32((int(w[W_TEL_P * 2]) | ((int(w[W_TEL_P * 2 + 1]) << 16) << 16)))[k] = p
-            ptr16((int(w[W_TEL_A * 2]) | ((int(w[W_TEL_A * 2 + 1]) << 16) << 16)))[k] = amp
+            ptr32(base + int(ptr32(w)[W_TEL_T]))[k] = t0 & 0x3FFFFFFF
+            ptr32(base + int(ptr32(w)[W_TEL_P]))[k] = p
+            ptr16(base + int(ptr32(w)[W_TEL_A]))[k] = amp
             s[S_TEL_HEAD] = (h + 1) & 0x3FFFFFFF
         s[S_TEL_DIV] = n
-    ptr32(int(w[W_CC * 2]) | ((int(w[W_CC * 2 + 1]) << 16) << 16))[0] = dc * int(w[W_MUL * 2])
     dt = int(clock[0]) - t0
     if dt > int(s[S_WORST]):
         s[S_WORST] = dt
     if dt > int(s[S_PERIOD]):
         s[S_OVR] = (int(s[S_OVR]) + 1) & 0x3FFFFFFF
-    return dc
 
 
-irq_rp2 = refresh       # the name app.py gives the timer on an RP2040
+@micropython.viper
+def refresh(timer) -> int:
+    """One refresh (core() on the word array in use); returns the duty (PWM
+    counts). timer: the Timer object when machine.Timer calls it (unused)."""
+    core(_WA)
+    w = ptr32(_WA)
+    s = ptr32((int(w[W_BASE]) | ((int(w[W_BASE + 1]) << 16) << 16)) + int(w[W_S]))
+    return int(s[S_DUTY])
+
+
+@micropython.viper
+def _word(a: int) -> int:
+    return int(ptr32(a)[0])
+
+
+@micropython.viper
+def _publish(args: ptr32, a: int):
+    args[0] = (a << 1) | 1                  # a small-int object; a < 2^30 on a board
+
+
+class _Rp2Irq:
+    """irq_rp2: the fused refresh as the RP2040's refresh interrupt. Called
+    (machine.Timer's hard callback, tests) it runs one refresh; hw/rp2.py's
+    Hw.start() asks native_entry() instead and makes the PWM-wrap interrupt
+    call core()'s machine code itself."""
+
+    def __call__(self, timer):
+        return refresh(timer)
+
+    def native_entry(self):
+        """(function object address, its machine code address, address of its
+        one-word argument array): what a Thumb trampoline passes to call
+        core(W) as MicroPython's native calling convention has it - r0 the
+        function object, r1 = 1 argument, r2 = 0 keywords, r3 the arguments.
+        The refresh that use_rp2_registers() set up switches its ADC to
+        free-running conversions (START_MANY).
+        The code address is the function object's fourth word
+        (py/objfun.h mp_obj_fun_bc_t.bytecode: a viper function's machine
+        code); hw/rp2.py checks it before use."""
+        if _RP2 is not None:
+            # the ADC converts continuously from now on (core()'s START_MANY
+            # branch): the refresh takes the last conversion instead of
+            # starting one and waiting 2 us for it
+            S = _RP2._S
+            S[S_ADC_CS] = (S[S_ADC_CS] & ~4) | 8
+        a = id(core)
+        return a, _word(a + 12), uctypes.addressof(_ARGS)
+
+
+irq_rp2 = _Rp2Irq()     # what app.py gives the rp2 backend on an RP2040
+
+
+def _offset(a, base):
+    # an address as core() finds it: one word above BASE
+    d = a - base
+    if not 0 <= d <= 0xFFFFFFFF:
+        raise MemoryError("fused refresh: address %x is more than 4 GB above %x" % (a, base))
+    return d
 
 
 def _state(i, bias=0):
@@ -312,70 +420,95 @@ class FastRefresh(Refresh):
     def use_rp2_registers(self, cc_addr, mul, adc_channel, timer_addr=_RP2_TIMERAWL,
                           adc_addr=_RP2_ADC_CS):
         """Let irq_rp2 drive the hardware directly (RP2040)."""
+        global _RP2
+        _RP2 = self
         self._S[S_ADC_CS] = 1 | 4 | (adc_channel << 12)
         self._S[S_ADC12] = 1
         self._regs = (timer_addr, adc_addr, cc_addr, mul)
         self._install(self.scene)
 
     def _install(self, scene):
-        global _W
+        global _W, _WA
         bufs = scene.buffers() if scene is not None else ()
         plans = scene.plans() if scene is not None else ()
-        words = array("I", [0] * (2 * (W_FIXED + len(bufs) + 4 * len(plans))))
-
-        def put(k, v):
-            words[2 * k] = v & 0xFFFFFFFF
-            words[2 * k + 1] = (v >> 16) >> 16
-
+        nbuf = len(bufs)
+        words = array("I", [0] * (W_FIXED + nbuf + W_PLAN * len(plans)))
+        # core()'s copy of the region table: the same rows, with each row's
+        # value resolved to what core() needs - a K_BUF or K_CHUNK row the
+        # offset of its buffer (or chunk table), a K_PLAN row the index of its
+        # plan's first word in W - so a lookup is one load less (Scene.amp
+        # keeps using scene._t)
         if scene is None:
-            tab = _EMPTY_TABLE
-            put(W_IDLE, self.idle_amp)
+            tab = array("i", _EMPTY_TABLE)
+            words[W_IDLE] = self.idle_amp
         else:
-            tab = scene._t
-            put(W_IDLE, scene.idle)
-        put(W_S, uctypes.addressof(self._S))
-        put(W_TAB, uctypes.addressof(tab))
-        put(W_FINE, uctypes.addressof(self.law._fine))
-        put(W_TEL_T, uctypes.addressof(self.tel_t))
-        put(W_TEL_P, uctypes.addressof(self.tel_pos))
-        put(W_TEL_A, uctypes.addressof(self.tel_amp))
-        for k in range(4):
-            put(W_TIMER + k, self._regs[k])
+            tab = array("i", scene._t)
+            words[W_IDLE] = scene.idle
+        # (index, address) of everything core() reaches by address; chunked
+        # uploads get a table of their chunks' offsets
+        addr = [(W_S, uctypes.addressof(self._S)), (W_TAB, uctypes.addressof(tab)),
+                (W_FINE, uctypes.addressof(self.law._fine)),
+                (W_TEL_T, uctypes.addressof(self.tel_t)),
+                (W_TEL_P, uctypes.addressof(self.tel_pos)),
+                (W_TEL_A, uctypes.addressof(self.tel_amp)),
+                (W_TIMER, self._regs[0]), (W_ADC, self._regs[1]), (W_CC, self._regs[2]),
+                (W_SINE, uctypes.addressof(sine_table.table()))]
+        words[W_MUL] = self._regs[3]
         chunked = []
-        for k in range(len(bufs)):
+        for k in range(nbuf):
             b = bufs[k]
-            if isinstance(b, tuple):    # scene.K_CHUNK: a table of its chunks' addresses
-                ct = array("I", [0] * (2 * len(b)))
-                for c in range(len(b)):
-                    a = uctypes.addressof(b[c])
-                    ct[2 * c] = a & 0xFFFFFFFF
-                    ct[2 * c + 1] = (a >> 16) >> 16
-                chunked.append(ct)
+            if isinstance(b, tuple):    # scene.K_CHUNK: a table of its chunks' offsets
+                ct = array("I", [0] * len(b))
+                chunked.append((ct, [uctypes.addressof(c) for c in b]))
                 b = ct
-            put(W_BUF0 + k, uctypes.addressof(b))
-        put(W_SINE, uctypes.addressof(sine_table.table()))
-        put(W_NBUF, len(bufs))
+            addr.append((W_BUF0 + k, uctypes.addressof(b)))
         for k in range(len(plans)):
-            b = W_BUF0 + len(bufs) + 4 * k
+            b = W_BUF0 + nbuf + W_PLAN * k
             t28, d28, ln, g = plans[k]
-            put(b, uctypes.addressof(t28))
-            put(b + 1, uctypes.addressof(d28))
-            put(b + 2, ln)
-            put(b + 3, g)
+            addr.append((b, uctypes.addressof(t28)))
+            addr.append((b + 1, uctypes.addressof(d28)))
+            words[b + 2] = ln
+            words[b + 3] = g
+            words[b + 4] = 65536 // ln + 1      # core()'s reciprocal of L
+        base = min(a for _, a in addr)
+        for ct, cs in chunked:
+            base = min(base, min(cs))
+        for k, a in addr:
+            words[k] = _offset(a, base)
+        for ct, cs in chunked:
+            for c in range(len(cs)):
+                ct[c] = _offset(cs[c], base)
+        for r in range(0, len(tab) - 4, 4):      # every row but the sentinel
+            kind = tab[r + 2]
+            if kind == 2:                       # scene.K_PLAN
+                tab[r + 3] = W_BUF0 + nbuf + W_PLAN * tab[r + 3]
+            elif kind == 1 or kind == 3:        # scene.K_BUF, K_CHUNK
+                tab[r + 3] = words[W_BUF0 + tab[r + 3]]
+        words[W_BASE] = base & 0xFFFFFFFF
+        words[W_BASE + 1] = (base >> 16) >> 16
+        chunked = [ct for ct, _ in chunked]
         keep = (words, scene, tab, chunked)
         # The previous generation stays referenced until the next swap: the
         # viper refresh holds raw addresses the GC cannot see, and on a port
         # with real threads (the unix port's realtime virtual board) a refresh
         # may still be reading the old scene just after this store.
         self._prev = self._keep
-        self._keep = keep               # referenced before the IRQ can see them
+        self._keep = keep               # referenced before the refresh can see them
+        # the swap: one store each (refresh() and FastRefresh.step read _WA;
+        # the RP2040 trampoline reads _ARGS[0], stored by viper code: the
+        # small-int word (address << 1) | 1 is above 2^30, a big int here)
+        _W = words
+        _WA = uctypes.addressof(words)
+        _publish(_ARGS, _WA)
         if not self.threaded:
             # a hard IRQ (rp2, stm32) runs to its end before this code goes on:
-            # once _W is stored no refresh can still read the old scene, whose
-            # buffers go now (on a Pico, keeping a full-screen upload one swap
-            # longer left no room for the next: measured on the emulated Pico)
+            # now that W is published no refresh can still read the old scene,
+            # whose buffers go now (on a Pico, keeping a full-screen upload one
+            # swap longer left no room for the next: measured on the emulated
+            # Pico). On a port with real threads (the unix port's realtime
+            # virtual board) a refresh may still be reading the old scene just
+            # after the store: the previous generation stays until the next swap.
             self._prev = None
-        _W = words                      # the swap: one store
         return self._prev
 
     def swap(self, scene):
@@ -388,7 +521,7 @@ class FastRefresh(Refresh):
         c0 = self.cost_ticks()
         self._clk[0] = self.ticks_us() & 0x3FFFFFFF
         self._adc[1] = self._read()
-        refresh(None)
+        core(_WA)
         self.set_duty(self._cc[0])
         dt = self.ticks_diff(self.cost_ticks(), c0)
         S = self._S

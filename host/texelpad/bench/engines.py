@@ -363,7 +363,7 @@ def bench_chip(repeat: int, ref: Reference, progress: Progress) -> MpRun:
     # half a screen: a Pico with the image imported has no free 38.4 KB block
     # for a full uint16 map (measured: MemoryError allocating 38,400 bytes)
     job = {"timing": dict(HARD_CASES[TIMING_CASE][0], length_samples=CHIP_SAMPLES), "cases": [],
-           "repeat": repeat, "outdir": None, "calibrate": 3,
+           "repeat": repeat, "outdir": None, "calibrate": 3, "churn": False,
            "formats": HARD_CASES[TIMING_CASE][0]}       # a plan fits: the full screen
     with stop_on_signals():             # SIGTERM/SIGHUP: the emulator goes with us
         out = _run_on_chip(job, progress)

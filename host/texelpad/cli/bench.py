@@ -34,6 +34,10 @@ def add_bench(p: argparse.ArgumentParser) -> None:
     p.add_argument("--repeat", type=positive_int, default=11, metavar="N",
                    help="timing repeats, the median is reported (default: 11; a full map "
                         "takes milliseconds, and more runs steady the median on a busy host)")
+    p.add_argument("--chip", choices=("rp2040",),
+                   help="also on the emulated Pico (../shared/instruments/rp2emu, node): the "
+                        "chip's own timings of every engine and of the plan in each texture "
+                        "format, beside the estimate (a few wall minutes)")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.set_defaults(func=cmd_bench)
 
@@ -53,7 +57,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     if args.json:                       # before the minutes of work, not after
         check_output("--json", args.json, (".json",))
     progress = None if args.quiet else (lambda m: _stderr("bench: " + m))
-    res = bench.run(args.cases, args.runtimes, args.repeat, progress)
+    res = bench.run(args.cases, args.runtimes, args.repeat, progress, chip=args.chip)
     return _report(bench, res, args.json, progress)
 
 
@@ -70,6 +74,7 @@ def _report(module, res, json_path: str | None, progress) -> int:
 
 def add_bench_refresh(p: argparse.ArgumentParser) -> None:
     from ..bench.refresh import BUDGET_US, DEFAULT_SECONDS, GOAL_US
+    from ..bench.chip import CHIP_SOAK_S
     p.description = ("Run the device runtime on the virtual board under the MicroPython unix "
                     "port while a scripted finger swipes across the study's split screen, and "
                     "time one refresh (Python and, where present, the fused viper refresh; "
@@ -83,16 +88,37 @@ def add_bench_refresh(p: argparse.ArgumentParser) -> None:
                    help="wall time spent timing each refresh variant, at most (it also stops "
                         "at 16,384 batches of 100); each component gets S/4 (at most 4,096 "
                         "batches). Default %g" % DEFAULT_SECONDS)
+    p.add_argument("--chip", choices=("rp2040",),
+                   help="also on the emulated Pico (../shared/instruments/rp2emu; needs node): "
+                        "the refresh's cost incl. IRQ entry/exit from the chip's own clock, the "
+                        "rate and overruns while the host pushes scenes, the carrier on the "
+                        "pin probe and the amplitude at the finger against the scene's map "
+                        "(texelpad/bench/chip.py; a few minutes)")
+    p.add_argument("--soak-seconds", type=positive_float, metavar="S",
+                   help="with --chip: emulated seconds of pushes for the rate (default %g; "
+                        "~5 wall seconds each)" % CHIP_SOAK_S)
+    p.add_argument("--no-unix", action="store_true",
+                   help="with --chip: leave the unix-port measurements out")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     p.set_defaults(func=cmd_bench_refresh)
 
 
 def cmd_bench_refresh(args: argparse.Namespace) -> int:
     from ..bench import refresh as refresh_bench
+    if not args.chip and (args.no_unix or args.soak_seconds is not None):
+        raise CliError("--no-unix" if args.no_unix else "--soak-seconds",
+                       "only with --chip rp2040")
     if args.json:
         check_output("--json", args.json, (".json",))
+    if args.chip:
+        from ..link.emulated import why_not
+        why = why_not()
+        if why:
+            raise CliError("--chip", why, EXIT_FAIL)
     progress = None if args.quiet else (lambda m: _stderr("bench-refresh: " + m))
-    return _report(refresh_bench, refresh_bench.run(args.seconds, progress), args.json, progress)
+    res = refresh_bench.run(args.seconds, progress, chip=args.chip, soak_s=args.soak_seconds,
+                            unix=not args.no_unix)
+    return _report(refresh_bench, res, args.json, progress)
 
 
 def add_bench_link(p: argparse.ArgumentParser) -> None:

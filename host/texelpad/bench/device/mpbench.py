@@ -10,7 +10,8 @@
 #
 # JOB.json: {"timing": params, "cases": [[name, params], ...], "repeat": N,
 #            "outdir": path, "variants": [names] or null, "calibrate": rounds,
-#            "formats": params of the plan-by-format timing (default: timing)}
+#            "formats": params of the plan-by-format timing (default: timing),
+#            "churn": measure heap churn with gc off (default true)}
 # (texelpad bench --chip rp2040 runs main() on the emulated Pico with no cases:
 # timings only, its flash is no place for 38 KB maps)
 # Output: one JSON document per line on stdout, in this order:
@@ -73,7 +74,7 @@ def _us(t0, t1):
     return ticks_diff(t1, t0)
 
 
-def time_variant(variant, params, repeat):
+def time_variant(variant, params, repeat, churn=True):
     m = select(variant)
     plan = texel.make_plan(params)
     out = m.render_u16(plan)            # warm-up: builds the sine table
@@ -93,13 +94,16 @@ def time_variant(variant, params, repeat):
     # Memory: bytes still held by one rendered map (after a collection), and
     # bytes allocated while rendering it with the collector off (heap churn,
     # an upper bound on the transient peak).
+    # (churn=False on a board: with the collector off, the boxed floats of
+    # the pure and ulab engines fill a Pico's heap - a MemoryError, not a figure)
     out = None
     gc.collect()
     base = gc.mem_alloc()
-    gc.disable()
+    if churn:
+        gc.disable()
     try:
         r = m.render_u16(plan)
-        churn = gc.mem_alloc() - base
+        churn = gc.mem_alloc() - base if churn else None
     finally:
         gc.enable()
     gc.collect()
@@ -293,7 +297,7 @@ def main(job_path):
         emit(_error("plan formats", e))
     for v in names:
         try:
-            doc = time_variant(v, job["timing"], repeat)
+            doc = time_variant(v, job["timing"], repeat, job.get("churn", True))
         except Exception as e:          # MemoryError included: report it, go on
             emit(_error(v, e))
             continue
