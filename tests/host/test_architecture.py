@@ -94,6 +94,15 @@ def test_pure_host_logic_never_imports_the_link_or_a_command():
                        "serial", "mpremote")) == {}
 
 
+def test_study_and_search_are_pure_logic():
+    """The protocols, sessions and the search never touch the link or a web
+    framework: only the lab's web server will own a Board (issue 11)."""
+    pure = modules(HOST, "study") + modules(HOST, "search")
+    assert pure
+    assert _bad(pure, ("texelpad.link", "texelpad.cli", "texelpad.deploy", "serial", "mpremote",
+                       "starlette", "fastapi", "flask", "aiohttp", "uvicorn", "http")) == {}
+
+
 def test_the_link_imports_no_command():
     assert _bad(modules(HOST, "link"), ("texelpad.cli",)) == {}
     assert _bad(modules(HOST, "deploy") + modules(HOST, "bench"), ("texelpad.cli",)) == {}

@@ -1,0 +1,57 @@
+"""A simulated participant for the protocols' tests and benchmarks: it
+answers from a distance between textures plus noise.
+
+The model (documented so a figure made with it can be read): a texture is a
+point of texelpad.study.space's unit square (u: pitch, v: irregularity; a
+search candidate's further dimensions are ignored). The participant holds a
+target point; the perceived distance of a texture is its Euclidean distance
+to the target plus Gaussian noise of SD `noise` (normalised units: 0.025 is
+1 dB of pitch). Comparisons pick the smaller perceived distance, or "unsure"
+when the two differ by less than `unsure_below`. The oddity task is a
+psychometric function of texel length: P(correct) = 1/3 + 2/3 / (1 +
+exp(-(length - threshold) / slope)) - chance (1/3) far below the threshold,
+certain far above.
+"""
+from __future__ import annotations
+
+import math
+import random
+from dataclasses import dataclass, field
+
+from .space import Point
+
+
+@dataclass
+class SimulatedParticipant:
+    target: Point
+    noise: float = 0.0
+    unsure_below: float = 0.0
+    seed: int = 0
+    threshold_mm: float = 6.0
+    slope_mm: float = 1.0
+    _rng: random.Random = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        self._rng = random.Random(self.seed)
+
+    def perceived(self, p: Point) -> float:
+        d = p.distance(self.target)
+        return d + (self._rng.gauss(0.0, self.noise) if self.noise else 0.0)
+
+    def compare(self, a: Point, b: Point) -> str:
+        """'A', 'B' or 'unsure': which of the two is closer to the target."""
+        da, db = self.perceived(a), self.perceived(b)
+        if abs(da - db) < self.unsure_below:
+            return "unsure"
+        return "A" if da < db else "B"
+
+    def pick(self, candidates: list[list[float]]) -> int:
+        """The index of the candidate closest to the target (first two dims)."""
+        ds = [self.perceived(Point(x[0], x[1])) for x in candidates]
+        return min(range(len(ds)), key=ds.__getitem__)
+
+    def odd_one_out(self, length_mm: float) -> bool:
+        """Whether the odd texture is found at this texel length."""
+        z = (length_mm - self.threshold_mm) / self.slope_mm
+        p = 1.0 / 3.0 + (2.0 / 3.0) / (1.0 + math.exp(-max(-60.0, min(60.0, z))))
+        return self._rng.random() < p

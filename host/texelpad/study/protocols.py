@@ -1,0 +1,63 @@
+"""The protocols by name, and resuming a session: a protocol's state is a
+pure function of (config, seed, the answers so far), so a session file
+rebuilds it exactly - after a crash at any point, or to replay it.
+
+    state = start(protocol, config, seed)
+    apply(protocol, state, answer)        # what a participant answered
+    state = replay(session)               # texelpad.study.session.Session
+
+Answers: pursuit "A" | "B" | "unsure"; staircase true | false (the odd one
+was found); search {"choose": k} | {"save": k}.
+"""
+from __future__ import annotations
+
+from typing import Any
+
+from ..search.preference import PreferenceSearch
+from . import pursuit as _pursuit
+from . import staircase as _staircase
+from .session import Session, SessionError
+
+PROTOCOLS = ("pursuit", "staircase", "search")
+
+
+def start(protocol: str, config: dict[str, Any], seed: int) -> Any:
+    if protocol == "pursuit":
+        return _pursuit.Pursuit(seed, _pursuit.Config(**_tuples(config)))
+    if protocol == "staircase":
+        return _staircase.Staircase(_staircase.Config(**config))
+    if protocol == "search":
+        return PreferenceSearch(seed, **_tuples(config))
+    raise SessionError("protocol: unknown %r (known: %s)" % (protocol, ", ".join(PROTOCOLS)))
+
+
+def _tuples(config: dict[str, Any]) -> dict[str, Any]:
+    # JSON has lists where the configs hold tuples
+    return {k: tuple(v) if isinstance(v, list) else v for k, v in config.items()}
+
+
+def apply(protocol: str, state: Any, answer: Any) -> dict:
+    if protocol == "pursuit":
+        return state.answer(answer)
+    if protocol == "staircase":
+        return state.answer(answer)
+    if protocol == "search":
+        if not isinstance(answer, dict) or len(answer) != 1:
+            raise SessionError("search answer: expected {'choose': k} or {'save': k}, got %r"
+                               % (answer,))
+        (what, k), = answer.items()
+        if what == "choose":
+            return state.choose(k)
+        if what == "save":
+            return state.save(k)
+        raise SessionError("search answer: expected choose or save, got %r" % (what,))
+    raise SessionError("protocol: unknown %r" % (protocol,))
+
+
+def replay(session: Session) -> Any:
+    """The protocol state after every answer the session file holds."""
+    h = session.header
+    state = start(h["protocol"], h["config"], h["seed"])
+    for rec in session.answers():
+        apply(h["protocol"], state, rec["answer"])
+    return state

@@ -1,0 +1,101 @@
+"""The texel-length oddity staircase (seed 001, the earlier paper; ../shared/SPEC.md
+§5): three textures, two drawn from the same distribution, the participant
+picks the odd one; 1-up-3-down on texel length from 26 mm in 2.5 mm steps,
+1.25 mm steps after 7 reversals, stop after 10 reversals; 30 s per trial.
+
+1-up-3-down: three correct answers in a row shorten the texels (harder: below
+a threshold length, textures drawn from the same distribution cannot be told
+apart - seed 001, "decreasing texel length with correct responses"), one
+wrong answer lengthens them. It converges on 79.4 % correct (Levitt 1971).
+Each of the three textures fills the display with as many texels of the
+trial's length as fit (seed 001): two seeds, one of them shown twice. A
+reversal is a change of direction; the paper reports a "convergent texel
+length" without its formula, so the threshold here is the mean length at the
+reversals after the step size changed (8..10), a choice recorded in Config.
+
+Choices recorded in Config: the floor (one step: a length never goes below
+it), the threshold rule. Pure logic.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from texel.gen.params import DX_MM
+
+
+@dataclass(frozen=True)
+class Config:
+    start_mm: float = 26.0
+    step_mm: float = 2.5
+    fine_step_mm: float = 1.25
+    fine_after_reversals: int = 7
+    stop_after_reversals: int = 10
+    down_after: int = 3             # correct answers in a row before a step down
+    floor_mm: float = 1.25          # never shorter than this
+    trial_seconds: float = 30.0
+    threshold_from_reversal: int = 8  # mean of the lengths at reversals >= this (1-based)
+
+
+@dataclass
+class Staircase:
+    config: Config = field(default_factory=Config)
+    length_mm: float = 0.0
+    run: int = 0                    # correct answers in a row since the last step
+    direction: int = 0              # -1 going down (harder), +1 up, 0 not yet moved
+    reversals: list[float] = field(default_factory=list)   # lengths at each reversal
+    track: list[dict] = field(default_factory=list)        # every answer
+
+    def __post_init__(self) -> None:
+        if not self.length_mm:
+            self.length_mm = self.config.start_mm
+
+    @property
+    def done(self) -> bool:
+        return len(self.reversals) >= self.config.stop_after_reversals
+
+    @property
+    def step_mm(self) -> float:
+        c = self.config
+        return c.fine_step_mm if len(self.reversals) >= c.fine_after_reversals else c.step_mm
+
+    def texel_samples(self) -> int:
+        """The current texel length in display samples (5.3 um each)."""
+        return max(1, int(round(self.length_mm / DX_MM)))
+
+    def answer(self, correct: bool) -> dict:
+        """Record one trial's answer at the current length; returns the entry
+        (length, correct, the move, reversal or not)."""
+        if self.done:
+            raise ValueError("the staircase is finished: nothing to answer")
+        if not isinstance(correct, bool):
+            raise ValueError("correct: expected True or False, got %r" % (correct,))
+        c = self.config
+        entry = {"trial": len(self.track), "length_mm": self.length_mm, "correct": correct,
+                 "step_mm": self.step_mm}
+        move = 0
+        if correct:
+            self.run += 1
+            if self.run >= c.down_after:
+                move = -1
+                self.run = 0
+        else:
+            move = 1
+            self.run = 0
+        entry["move"] = move
+        entry["reversal"] = False
+        if move:
+            if self.direction and move != self.direction:
+                self.reversals.append(self.length_mm)
+                entry["reversal"] = True
+            self.direction = move
+            if not self.done:
+                step = self.step_mm
+                self.length_mm = max(c.floor_mm, round(self.length_mm + move * step, 6))
+        self.track.append(entry)
+        return entry
+
+    def threshold_mm(self) -> float | None:
+        """Mean length at the reversals from Config.threshold_from_reversal on
+        (None before there are any)."""
+        use = self.reversals[self.config.threshold_from_reversal - 1:]
+        return sum(use) / len(use) if use else None

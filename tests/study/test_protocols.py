@@ -1,0 +1,261 @@
+"""The study protocols as pure logic (texelpad.study, texelpad.search), driven
+by hand and by the simulated participant: the pursuit vector against a worked
+example, the staircase's reversal and stop rules, CMA-ES reaching a target
+with a noiseless participant, and sessions that resume after a kill at every
+step (../shared/SPEC.md §5, §7)."""
+from __future__ import annotations
+
+import math
+import shutil
+
+import pytest
+
+import texel
+from texelpad.search.preference import PreferenceSearch, candidate_params
+from texelpad.study import protocols
+from texelpad.study.participant import SimulatedParticipant
+from texelpad.study.pursuit import STEP, Pursuit
+from texelpad.study.session import Session, SessionError, check_name
+from texelpad.study.space import Point, irregularity_db, pitch_db, texel_params, to_point
+from texelpad.study.staircase import Staircase
+
+R2 = 1 / math.sqrt(2)
+
+
+def _pick(q, r: int) -> str:
+    """The A/B answer that means r_k = r for comparison q."""
+    if r == 0:
+        return "unsure"
+    return "A" if (r == 1) == q.a_is_plus else "B"
+
+
+# --- the space ---------------------------------------------------------------------------
+
+def test_space_is_the_papers_and_its_textures_are_valid():
+    assert pitch_db(0) == -15 and pitch_db(1) == 25 and irregularity_db(0) == -25
+    assert irregularity_db(1) == 5
+    # P = 10^(4u - 1.5) c/mm, sigma = 10^(3v - 2.5) decades
+    u, v = 0.3, 0.6
+    assert math.isclose(10 ** (pitch_db(u) / 10), 10 ** (4 * u - 1.5))
+    assert math.isclose(10 ** (irregularity_db(v) / 10), 10 ** (3 * v - 2.5))
+    back = to_point(pitch_db(u), irregularity_db(v))
+    assert (back.u, back.v) == (pytest.approx(u), pytest.approx(v))
+    # beyond Nyquist (u > 0.8687) the texture is clamped to the display's limit
+    p = texel_params(Point(1.0, 1.0), v=2)
+    assert p["pitch_db"] == 19.747 and texel.validate(p)["v"] == 2
+
+
+# --- the pursuit vector ------------------------------------------------------------------
+
+def test_pursuit_worked_example_by_hand():
+    """Trial 1 from (0.5, 0.5), edge 1: N +1, NE +1, E -1, SE unsure.
+    p = (0, 1) + (1/sqrt2, 1/sqrt2) - (1, 0) = (1/sqrt2 - 1, 1 + 1/sqrt2);
+    step 0.1 / (1 + sqrt2): u moves -0.0121320, v +0.0707107 (= 0.1/sqrt2)."""
+    pv = Pursuit(seed=1)
+    pts = {name: (plus, minus) for name, plus, minus in pv.points()}
+    assert pts["N"] == (Point(0.5, 0.75), Point(0.5, 0.25))             # radius edge/4
+    assert pts["NE"][0] == Point(0.5 + 0.25 * R2, 0.5 + 0.25 * R2)
+    want = {"N": 1, "NE": 1, "E": -1, "SE": 0}
+    seen = []
+    for i in range(4):
+        q = pv.next_comparison()
+        seen.append(q.direction)
+        assert {q.a, q.b} == set(pts[q.direction])
+        out = pv.answer(_pick(q, want[q.direction]))
+        assert (out == {}) == (i < 3)
+    assert sorted(seen) == sorted(want)
+    assert out["r"] == want
+    assert out["pursuit"] == [pytest.approx(R2 - 1), pytest.approx(1 + R2)]
+    assert math.isclose(STEP, 0.1 / (1 + math.sqrt(2)))
+    assert pv.centre.u == pytest.approx(0.5 - 0.0121320, abs=1e-7)
+    assert pv.centre.v == pytest.approx(0.5 + 0.0707107, abs=1e-7)
+    assert pv.edge == pytest.approx(0.8) and pv.trial == 1
+
+
+def test_pursuit_stops_after_5_trials_of_4_comparisons_in_random_order_and_sides():
+    pv = Pursuit(seed=3)
+    orders, sides, n = [], [], 0
+    while not pv.done:
+        trial = []
+        for _ in range(4):
+            q = pv.next_comparison()
+            trial.append(q.direction)
+            sides.append(q.a_is_plus)
+            pv.answer("A")
+            n += 1
+        orders.append(tuple(trial))
+    assert n == 20 and len(pv.history) == 5 and pv.next_comparison() is None
+    assert [h["edge"] for h in pv.history] == pytest.approx([1.0, 0.8, 0.6, 0.4, 0.2])
+    assert len(set(orders)) > 1 and 0 < sum(sides) < 20            # drawn, not fixed
+    with pytest.raises(ValueError, match="finished"):
+        pv.answer("A")
+    # the same seed asks the same questions
+    again = Pursuit(seed=3)
+    assert again.next_comparison() == Pursuit(seed=3).next_comparison()
+
+
+def test_pursuit_moves_towards_a_noiseless_participants_target():
+    target = Point(0.3, 0.7)
+    sim = SimulatedParticipant(target)
+    pv = Pursuit(seed=5)
+    d0 = pv.centre.distance(target)
+    while not pv.done:
+        q = pv.next_comparison()
+        pv.answer(sim.compare(q.a, q.b))
+    assert pv.centre.distance(target) < d0 - 0.2
+    with pytest.raises(ValueError, match="answer: expected"):
+        Pursuit(seed=1).answer("left")
+
+
+# --- the staircase ---------------------------------------------------------------------
+
+def test_staircase_reversals_step_change_and_stop_by_hand():
+    """CCC W repeated: reversals alternate between 23.5 and 26 mm; after the
+    7th (at 23.5) the step is 1.25 mm; the 10th ends it."""
+    sc = Staircase()
+    assert sc.length_mm == 26.0 and sc.texel_samples() == round(26 / 0.0053)
+    pattern = [True, True, True, False]
+    i = 0
+    while not sc.done:
+        sc.answer(pattern[i % 4])
+        i += 1
+    assert sc.reversals == [23.5, 26.0, 23.5, 26.0, 23.5, 26.0, 23.5, 24.75, 23.5, 24.75]
+    assert sc.threshold_mm() == pytest.approx((24.75 + 23.5 + 24.75) / 3)
+    steps = [t["step_mm"] for t in sc.track]
+    assert steps[0] == 2.5 and steps[-1] == 1.25
+    with pytest.raises(ValueError, match="finished"):
+        sc.answer(True)
+    with pytest.raises(ValueError, match="True or False"):
+        Staircase().answer(1)
+
+
+def test_staircase_converges_near_a_simulated_threshold():
+    """1-up-3-down tracks 79.4 % correct: with P(correct) = 1/3 + 2/3 *
+    logistic((L - 6 mm) / 1 mm), that is L = 6 + ln(0.691/0.309) = 6.8 mm."""
+    ends = []
+    for seed in range(20):
+        sim = SimulatedParticipant(Point(0, 0), seed=seed, threshold_mm=6.0, slope_mm=1.0)
+        sc = Staircase()
+        while not sc.done:
+            sc.answer(sim.odd_one_out(sc.length_mm))
+        ends.append(sc.threshold_mm())
+    mean = sum(ends) / len(ends)
+    print("\nstaircase thresholds over 20 simulated runs: mean %.2f mm" % mean)
+    assert 4.0 < mean < 10.0
+
+
+# --- the preference search ----------------------------------------------------------------
+
+@pytest.mark.parametrize("target", [Point(0.3, 0.7), Point(0.75, 0.2), Point(0.5, 0.5)])
+def test_search_reaches_a_noiseless_participants_target(target):
+    s = PreferenceSearch(seed=11)
+    sim = SimulatedParticipant(target)
+    for _ in range(60):
+        xs = s.ask()
+        assert len(xs) == 3 and all(0 <= v <= 1 for x in xs for v in x)
+        s.choose(sim.pick(xs))
+        if Point(*s.mean).distance(target) < 0.025:          # 1 dB of pitch
+            break
+    print("\nsearch to %s: %d iterations, %d choices, mean %s"
+          % (target, s.iteration, s.iteration, [round(v, 3) for v in s.mean]))
+    assert Point(*s.mean).distance(target) < 0.025
+
+
+def test_search_is_mirrored_ranked_and_deterministic():
+    s = PreferenceSearch(seed=2)
+    xs = s.ask()
+    m = s.mean
+    # two of the three mirror each other about the mean (CMA_mirrors = 1)
+    assert any(all(math.isclose(a + b, 2 * c, abs_tol=1e-9) for a, b, c in zip(xs[i], xs[j], m))
+               for i in range(3) for j in range(i + 1, 3))
+    rec = s.choose(1)
+    assert rec["ranking"][0] == 1 and sorted(rec["ranking"]) == [0, 1, 2]
+    t = PreferenceSearch(seed=2)
+    t.ask()
+    assert t.choose(1)["ranking"] == rec["ranking"] and t.mean == s.mean
+    saved = s.save(0)
+    assert texel.validate(saved["params"])["v"] == 2
+    with pytest.raises(ValueError, match="choice"):
+        s.choose(3)
+    p = candidate_params([0.5, 0.5, 0.0, 1.0], ("pitch", "irregularity", "texel_length", "level"))
+    assert p["texel_samples"] == round(0.05 / 0.0053) and p["gain"] == 1.0
+
+
+# --- sessions ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("bad", ["", "../x", "a/b", "x" * 41, "nul\0", "é", None, 7])
+def test_names_cannot_escape_the_data_folder(bad, tmp_path):
+    with pytest.raises(SessionError):
+        Session.create(tmp_path, "pursuit", bad, {}, 1)
+    assert list(tmp_path.iterdir()) == []
+
+
+def _run_pursuit(sess: Session, state: Pursuit, sim: SimulatedParticipant, stop_after=None):
+    k = 0
+    while not state.done and (stop_after is None or k < stop_after):
+        q = state.next_comparison()
+        a = sim.compare(q.a, q.b)
+        sess.append({"question": [q.direction, q.a_is_plus], "answer": a,
+                     "scene": {"regions": []}, "state": {"centre": [state.centre.u,
+                                                                    state.centre.v]}})
+        state.answer(a)
+        k += 1
+
+
+@pytest.mark.parametrize("protocol", ["pursuit", "search"])
+def test_a_session_resumes_after_a_kill_at_every_step(protocol, tmp_path):
+    """The uninterrupted run, then for every answer k a copy of the file as a
+    crash would leave it after k answers (and with a torn half record after
+    it): replaying the copy and going on gives the same end state."""
+    target = Point(0.35, 0.65)
+    config = {} if protocol == "pursuit" else {"dims": ["pitch", "irregularity"]}
+    full = Session.create(tmp_path / "full", protocol, "p01", config, 9)
+    state = protocols.start(protocol, config, 9)
+    sim = SimulatedParticipant(target)
+    answers = []
+    for _ in range(20 if protocol == "pursuit" else 12):
+        if protocol == "pursuit":
+            if state.done:
+                break
+            q = state.next_comparison()
+            a = sim.compare(q.a, q.b)
+        else:
+            a = {"choose": sim.pick(state.ask())}
+        full.append({"answer": a})
+        protocols.apply(protocol, state, a)
+        answers.append(a)
+    end = state.history
+    lines = full.path.read_bytes().splitlines(keepends=True)
+    for k in range(len(answers) + 1):
+        for torn in (False, True):
+            copy = tmp_path / ("crash-%d-%d.jsonl" % (k, torn))
+            data = b"".join(lines[: k + 1])
+            if torn and k < len(answers):
+                data += lines[k + 1][: len(lines[k + 1]) // 2]        # cut mid-record
+            copy.write_bytes(data)
+            s = Session.open(copy)
+            assert s.torn is (torn and k < len(answers)) and len(s.records) == k
+            st = protocols.replay(s)
+            for a in answers[k:]:                                     # the participant goes on
+                s.append({"answer": a})
+                protocols.apply(protocol, st, a)
+            assert st.history == end, (k, torn)
+            assert [r["answer"] for r in Session.open(copy).answers()] == answers
+
+
+def test_a_damaged_record_in_the_middle_is_an_error_not_skipped(tmp_path):
+    s = Session.create(tmp_path, "staircase", "p02", {}, 1)
+    for a in (True, False, True):
+        s.append({"answer": a})
+    lines = s.path.read_bytes().splitlines(keepends=True)
+    lines[2] = b'{"broken\n'
+    s.path.write_bytes(b"".join(lines))
+    with pytest.raises(SessionError, match="line 3 is damaged"):
+        Session.open(s.path)
+
+
+def test_sessions_are_numbered_never_overwritten(tmp_path):
+    a = Session.create(tmp_path, "search", "p03", {}, 1)
+    b = Session.create(tmp_path, "search", "p03", {}, 1)
+    assert a.path != b.path and a.path.name == "search-1.jsonl" and b.path.name == "search-2.jsonl"
+    assert check_name("participant", "P-07_b") == "P-07_b"
