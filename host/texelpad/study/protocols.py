@@ -22,6 +22,10 @@ PROTOCOLS = ("pursuit", "staircase", "search")
 
 
 def start(protocol: str, config: dict[str, Any], seed: int) -> Any:
+    """The protocol's state before any answer. config: its Config's fields
+    (JSON); "reference" (the texture compared against: the scenes' business)
+    and "distribution" (the staircase's texel texture) are not the state's."""
+    config = {k: v for k, v in config.items() if k not in ("reference", "distribution")}
     if protocol == "pursuit":
         return _pursuit.Pursuit(seed, _pursuit.Config(**_tuples(config)))
     if protocol == "staircase":

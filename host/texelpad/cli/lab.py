@@ -1,0 +1,63 @@
+"""`texelpad lab`: the study protocols in the browser (web/server.py), on a board
+(--port) or the virtual board. Binds 127.0.0.1 only; the URL is the first
+line it prints. Runs until Ctrl-C, SIGTERM or SIGHUP."""
+from __future__ import annotations
+
+import argparse
+import socket
+import sys
+import webbrowser
+
+from .common import EXIT_OK, _stderr
+
+
+def add_lab(p: argparse.ArgumentParser) -> None:
+    p.description = ("Serve texelpad lab on http://127.0.0.1:PORT (this machine only): the "
+                    "papers' protocols (pursuit vector, texel-length staircase, "
+                    "preference search) driving one board, every answer written to the "
+                    "session's file as it is given. Without --port it runs on the virtual "
+                    "board. The URL is the first line printed.")
+    p.add_argument("--port", help="the board's serial port (default: the virtual board)")
+    p.add_argument("--board", help="board file to start when texelpad is not running there")
+    p.add_argument("--data", default="lab-data", metavar="DIR",
+                   help="the sessions folder (default: ./lab-data)")
+    p.add_argument("--http-port", type=int, default=0, metavar="N",
+                   help="the web server's port on 127.0.0.1 (default: a free one)")
+    p.add_argument("--open", action="store_true", help="open the page in the browser")
+    p.set_defaults(func=cmd_lab)
+
+
+def cmd_lab(args: argparse.Namespace) -> int:
+    import uvicorn
+
+    from ..link.virtual import open_virtual, stop_on_signals
+    from ..web.owner import BoardOwner
+    from ..web.server import Lab, make_app
+    sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    sock.bind(("127.0.0.1", args.http_port))        # never another interface
+    url = "http://127.0.0.1:%d/" % sock.getsockname()[1]
+    with stop_on_signals():
+        vb = None
+        try:
+            if args.port is None:
+                _stderr("lab: starting the virtual board")
+                vb = open_virtual(source=True)
+                owner = BoardOwner(vb.port, args.board or "virtual", realtime=True)
+            else:
+                owner = BoardOwner(args.port, args.board)
+            app = make_app(Lab(owner, args.data))
+            print(url, flush=True)
+            if args.open:
+                webbrowser.open(url)
+            server = uvicorn.Server(uvicorn.Config(app, log_level="warning", lifespan="off"))
+            server.run(sockets=[sock])
+            owner.close()
+        except KeyboardInterrupt:
+            pass
+        finally:
+            sock.close()
+            if vb is not None:
+                vb.stop()
+    sys.stdout.flush()
+    return EXIT_OK

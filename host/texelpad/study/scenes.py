@@ -1,0 +1,59 @@
+"""What a protocol's question plays: the scenes the participant feels, as plain
+scene dicts for Board.push (pure logic: the board is the web layer's).
+
+Pursuit and search (seeds 000, 003): the reference on the left half of the
+display, the option's texel rendering on the right (SPEC §5: "reference on the
+left half, texel rendering on the right"); each option is one scene, and the
+participant switches between them. Staircase (seed 001): each of the three
+textures fills the display with texels of the trial's length; two of them
+share a seed. Texel textures are format 2 (the same texture on every board).
+"""
+from __future__ import annotations
+
+import random
+from typing import Any
+
+from .space import Point, texel_params
+
+DEFAULT_REFERENCE = {"kind": "reference", "name": "4sin"}
+STAIRCASE_TEXTURE = {"pitch_db": 10.0, "irregularity_db": -10.0}   # config: "distribution"
+
+
+def _total_mm(display: dict[str, Any]) -> float:
+    return round(display["positions"] * display["dx_um"] / 1000.0, 6)
+
+
+def split(reference: dict[str, Any], texel: dict[str, Any], display: dict[str, Any],
+          name: str = "") -> dict[str, Any]:
+    """Reference on the left half, a texel texture on the right half."""
+    total = _total_mm(display)
+    half = round(total / 2, 6)
+    scene = {"regions": [{"start_mm": 0, "end_mm": half, "texture": dict(reference)},
+                         {"start_mm": half, "end_mm": total,
+                          "texture": dict(texel, kind="texel")}]}
+    if name:
+        scene["name"] = name
+    return scene
+
+
+def point_scene(reference: dict[str, Any], p: Point, display: dict[str, Any],
+                seed: int = 7, name: str = "") -> dict[str, Any]:
+    return split(reference, texel_params(p, seed=seed, v=2), display, name)
+
+
+def staircase_scenes(length_samples: int, trial: int, seed: int, display: dict[str, Any],
+                     distribution: dict[str, float] | None = None
+                     ) -> tuple[list[dict[str, Any]], int]:
+    """The three textures of a trial and the index of the odd one: two seeds,
+    one shown twice, in an order drawn from (seed, trial)."""
+    rng = random.Random(seed * 100003 + trial)
+    dist = dict(distribution or STAIRCASE_TEXTURE)
+    same, odd = rng.randrange(1 << 31), rng.randrange(1 << 31)
+    seeds = [same, same, odd]
+    rng.shuffle(seeds)
+    total = _total_mm(display)
+    scenes = [{"regions": [{"start_mm": 0, "end_mm": total,
+                            "texture": dict(dist, kind="texel", texel_samples=length_samples,
+                                            seed=s, v=2)}],
+               "name": "texture %d" % (k + 1)} for k, s in enumerate(seeds)]
+    return scenes, seeds.index(odd)

@@ -1,0 +1,97 @@
+"""The one owner of the lab's board: every browser tab's request goes through
+here, one at a time (a lock: pushes are serialised, never interleaved), on
+the same Board API the command line uses. A board that disappears is said so
+plainly, and the next request tries to reach it again.
+"""
+from __future__ import annotations
+
+import threading
+from typing import Any, Callable
+
+from ..link.board import Board, connect, host_check
+from ..link.transport import LinkError
+
+import texel.runtime.scene as _scene
+
+
+class BoardLost(RuntimeError):
+    """The board did not answer; the server goes on and says so."""
+
+
+class BoardOwner:
+    def __init__(self, port: str, board_name: str | None = None, timeout: float = 10.0,
+                 connector: Callable[..., Board] = connect, **start_opts: Any) -> None:
+        # board_name: the board file to start when texelpad is not running
+        # there; start_opts: texel.app.start's options (realtime=True for the
+        # virtual board)
+        self.port = port
+        self.board_name = board_name
+        self.start_opts = start_opts
+        self.timeout = timeout
+        self._connect = connector
+        self._board: Board | None = None
+        self._lock = threading.Lock()
+        self.lost: str | None = None
+
+    def _get(self) -> Board:
+        if self._board is None:
+            try:
+                self._board = self._connect(self.port, timeout=self.timeout)
+            except (LinkError, OSError) as e:
+                self.lost = str(e)
+                raise BoardLost("the board on %s does not answer: %s" % (self.port, e)) from None
+            self.lost = None
+        return self._board
+
+    def _call(self, f: Callable[[Board], Any]) -> Any:
+        with self._lock:
+            b = self._get()
+            try:
+                return f(b)
+            except LinkError as e:
+                if isinstance(e, ValueError):           # the board refused it: still there
+                    raise
+                try:
+                    b.close()
+                except Exception:
+                    pass
+                self._board = None
+                self.lost = str(e)
+                raise BoardLost("lost the board on %s: %s" % (self.port, e)) from None
+
+    def status(self) -> dict[str, Any]:
+        return self._call(lambda b: b.status())
+
+    def push(self, scene: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+        """Play scene; (the board's status, the canonical scene it plays - the
+        board's own validation code run here on the pushed scene). A refused
+        scene raises ValueError and the board plays on."""
+        def go(b: Board) -> tuple[dict[str, Any], dict[str, Any]]:
+            self._running(b)
+            st = b.push(scene)
+            canonical = _scene.validate(host_check(scene, st["display"]), st["display"])
+            return st, canonical
+        return self._call(go)
+
+    def scene_source(self) -> dict[str, Any] | None:
+        """The canonical scene the board plays (to draw the strip)."""
+        return self._call(lambda b: b.scene_source())
+
+    def _running(self, b: Board) -> dict[str, Any]:
+        st = b.status()
+        if st.get("running"):
+            return st
+        if not self.board_name:
+            raise ValueError("texelpad is not running on %s: start it with texelpad push "
+                             "--board NAME, or give texelpad lab --board" % self.port)
+        return b.start(self.board_name, None, **self.start_opts)
+
+    def display(self) -> dict[str, Any]:
+        """The display of the board (started first when it is not running)."""
+        return self._call(self._running)["display"]
+
+    def close(self) -> None:
+        with self._lock:
+            if self._board is not None:
+                self._board.close()
+                self._board = None

@@ -1,0 +1,276 @@
+"""`texelpad lab`'s web server (Starlette, an established ASGI framework; served
+by uvicorn on 127.0.0.1 only): the study protocols (texelpad.study,
+texelpad.search) on one board (web/owner.py, the only owner of a Board).
+
+    GET  /                                     the page
+    GET  /api/status                           the board's status (or why it is lost)
+    POST /api/sessions                         {protocol, participant, seed?, config?}
+    GET  /api/sessions/{participant}/{name}    the session's question (resumed from its file)
+    POST /api/sessions/{participant}/{name}/feel    {option: k}  play option k
+    POST /api/sessions/{participant}/{name}/answer  {answer: ...}
+
+Every request is validated (a JSON object of known keys, at most 16 KB; ids
+as texelpad.study.session.check_name; the board's own scene validation is the
+last word) and a refused one changes nothing: 400 with the reason, 503 when
+the board is gone. Every answer is in the session file (fsynced) before the
+reply. Questions show no parameter values: the participant screen is blind.
+"""
+from __future__ import annotations
+
+import json
+import random
+import threading
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from starlette.applications import Starlette
+from starlette.middleware import Middleware
+from starlette.middleware.trustedhost import TrustedHostMiddleware
+from starlette.requests import Request
+from starlette.responses import HTMLResponse, JSONResponse
+from starlette.routing import Route
+
+from ..link.board import host_check
+from ..search.preference import candidate_params
+from ..study import protocols
+from ..study import scenes as S
+from ..study.session import Session, SessionError, check_name
+from .owner import BoardLost, BoardOwner
+
+BODY_MAX = 16384
+PROTOCOL_KEYS = {"protocol", "participant", "seed", "config", "reference"}
+
+
+class Refused(ValueError):
+    pass
+
+
+@dataclass
+class Live:
+    """A session in memory: its file, the protocol's state, the options of
+    the current question (scenes, server side) and what plays."""
+    session: Session
+    state: Any
+    reference: dict[str, Any]
+    options: list[dict[str, Any]] = field(default_factory=list)
+    labels: list[str] = field(default_factory=list)
+    odd: int | None = None
+    playing: int | None = None
+    playing_scene: dict[str, Any] | None = None
+
+
+class Lab:
+    def __init__(self, owner: BoardOwner, data: str | Path) -> None:
+        self.owner = owner
+        self.data = Path(data)
+        self.data.mkdir(parents=True, exist_ok=True)
+        self.live: dict[str, Live] = {}
+        self._lock = threading.Lock()
+
+    # --- protocol questions ---------------------------------------------------------
+    def _question(self, lv: Live) -> dict[str, Any]:
+        h = lv.session.header
+        proto, st = h["protocol"], lv.state
+        display = self.owner.display()
+        if proto == "pursuit":
+            q = st.next_comparison()
+            if q is None:
+                return {"done": True, "result": {"centre": [st.centre.u, st.centre.v]}}
+            lv.options = [S.point_scene(lv.reference, q.a, display, name="A"),
+                          S.point_scene(lv.reference, q.b, display, name="B")]
+            lv.labels = ["A", "B"]
+            return {"done": False, "trial": q.trial, "index": q.index, "options": lv.labels,
+                    "answers": ["A", "B", "unsure"]}
+        if proto == "search":
+            xs = st.ask()
+            lv.options = [S.split(lv.reference, candidate_params(x, st.dims, st.texture_seed),
+                                  display, name="candidate %d" % (k + 1))
+                          for k, x in enumerate(xs)]
+            lv.labels = ["1", "2", "3"]
+            return {"done": False, "iteration": st.iteration, "options": lv.labels,
+                    "answers": [{"choose": k} for k in range(3)] + [{"save": k} for k in range(3)]}
+        if proto == "staircase":
+            if st.done:
+                return {"done": True, "result": {"threshold_mm": st.threshold_mm()}}
+            lv.options, lv.odd = S.staircase_scenes(st.texel_samples(), len(st.track),
+                                                    h["seed"], display,
+                                                    h["config"].get("distribution"))
+            lv.labels = ["1", "2", "3"]
+            return {"done": False, "trial": len(st.track), "options": lv.labels,
+                    "answers": [0, 1, 2]}
+        raise Refused("protocol: unknown %r" % proto)
+
+    def _play(self, lv: Live, k: int) -> dict[str, Any]:
+        st, canonical = self.owner.push(lv.options[k])
+        lv.playing, lv.playing_scene = k, canonical
+        return st
+
+    # --- the API ----------------------------------------------------------------------
+    def create(self, body: dict[str, Any]) -> dict[str, Any]:
+        _keys(body, PROTOCOL_KEYS)
+        proto = body.get("protocol")
+        if proto not in protocols.PROTOCOLS:
+            raise Refused("protocol: expected one of %s, got %r"
+                          % (", ".join(protocols.PROTOCOLS), proto))
+        participant = check_name("participant", body.get("participant"))
+        seed = body.get("seed", random.SystemRandom().randrange(1 << 31))
+        if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 1 << 31:
+            raise Refused("seed: expected an int in [0, 2^31), got %r" % (seed,))
+        config = body.get("config") or {}
+        if not isinstance(config, dict):
+            raise Refused("config: expected an object")
+        reference = body.get("reference") or S.DEFAULT_REFERENCE
+        if not isinstance(reference, dict):
+            raise Refused("reference: expected a texture object")
+        try:
+            state = protocols.start(proto, config, seed)
+        except (TypeError, ValueError) as e:
+            raise Refused("config: %s" % e) from None
+        # the reference must be a texture the board takes: its own validation, here
+        display = self.owner.display()
+        host_check(S.split(reference, {"pitch_db": 0.0, "irregularity_db": 0.0, "v": 2},
+                           display), display)
+        sess = Session.create(self.data, proto, participant,
+                              dict(config, reference=reference), seed)
+        lv = Live(sess, state, reference)
+        key = "%s/%s" % (participant, sess.path.stem)
+        self.live[key] = lv
+        q = self._question(lv)
+        if not q["done"]:
+            self._play(lv, 0)
+        return {"id": key, "question": q, "playing": lv.playing}
+
+    def get(self, participant: str, name: str) -> Live:
+        check_name("participant", participant)
+        check_name("session", name)
+        key = "%s/%s" % (participant, name)
+        lv = self.live.get(key)
+        if lv is None:                                  # resume from its file
+            path = self.data / participant / (name + ".jsonl")
+            if not path.is_file():
+                raise Refused("no session %s" % key)
+            sess = Session.open(path)
+            reference = sess.header["config"].get("reference", S.DEFAULT_REFERENCE)
+            lv = Live(sess, protocols.replay(sess), reference)
+            self.live[key] = lv
+        return lv
+
+    def question(self, participant: str, name: str) -> dict[str, Any]:
+        lv = self.get(participant, name)
+        return {"id": "%s/%s" % (participant, name), "question": self._question(lv),
+                "playing": lv.playing, "answers_so_far": len(lv.session.records)}
+
+    def feel(self, participant: str, name: str, body: dict[str, Any]) -> dict[str, Any]:
+        _keys(body, {"option"})
+        lv = self.get(participant, name)
+        q = self._question(lv)
+        k = body.get("option")
+        if q["done"] or isinstance(k, bool) or not isinstance(k, int) \
+                or not 0 <= k < len(lv.options):
+            raise Refused("option: expected 0 .. %d, got %r" % (len(lv.options) - 1, k))
+        self._play(lv, k)
+        return {"playing": k}
+
+    def answer(self, participant: str, name: str, body: dict[str, Any]) -> dict[str, Any]:
+        _keys(body, {"answer"})
+        lv = self.get(participant, name)
+        q = self._question(lv)
+        if q["done"]:
+            raise Refused("the session is finished")
+        a = body.get("answer")
+        if a not in q["answers"]:
+            raise Refused("answer: expected one of %s, got %r" % (json.dumps(q["answers"]), a))
+        proto = lv.session.header["protocol"]
+        rec = {"question": q, "answer": a, "scene": lv.playing_scene, "playing": lv.playing}
+        if proto == "staircase":
+            rec["answer"] = a == lv.odd             # what the protocol takes: found or not
+            rec["picked"] = a
+            rec["odd"] = lv.odd
+        _apply(proto, lv.state, rec)
+        lv.session.append(rec)
+        nq = self._question(lv)
+        if not nq["done"]:
+            self._play(lv, 0)
+        return {"question": nq, "playing": lv.playing, "answers_so_far": len(lv.session.records)}
+
+
+def _apply(proto: str, state: Any, rec: dict[str, Any]) -> None:
+    protocols.apply(proto, state, rec["answer"])
+
+
+def _keys(body: Any, allowed: set[str]) -> None:
+    if not isinstance(body, dict):
+        raise Refused("expected a JSON object")
+    bad = sorted(k for k in body if k not in allowed)
+    if bad:
+        raise Refused("unknown key %r (allowed: %s)" % (bad[0], ", ".join(sorted(allowed))))
+
+
+PAGE = """<!doctype html><html><head><meta charset="utf-8"><title>texelpad lab</title></head>
+<body><h1>texelpad lab</h1><p id="status">...</p>
+<script>
+fetch('/api/status').then(r => r.json()).then(s => {
+  document.getElementById('status').textContent = s.error ? s.error :
+    'board ' + s.board + ' playing, ' + s.rate_hz + ' refreshes/s';
+});
+</script></body></html>"""
+
+
+LOCAL_HOSTS = ["127.0.0.1", "localhost"]
+
+
+def make_app(lab: Lab, allowed_hosts: list[str] | None = None) -> Starlette:
+    async def body_of(request: Request) -> Any:
+        raw = await request.body()
+        if len(raw) > BODY_MAX:
+            raise Refused("request body over %d bytes" % BODY_MAX)
+        try:
+            return json.loads(raw or b"{}")
+        except ValueError:
+            raise Refused("the body is not JSON") from None
+
+    def handle(fn):
+        async def endpoint(request: Request) -> JSONResponse:
+            try:
+                with lab._lock:
+                    out = await fn(request)
+                return JSONResponse(out)
+            except BoardLost as e:
+                return JSONResponse({"error": str(e)}, status_code=503)
+            except (Refused, SessionError, ValueError) as e:
+                return JSONResponse({"error": str(e)}, status_code=400)
+        return endpoint
+
+    async def page(request: Request) -> HTMLResponse:
+        return HTMLResponse(PAGE)
+
+    async def status(request: Request):
+        return lab.owner.status()
+
+    async def create(request: Request):
+        return lab.create(await body_of(request))
+
+    async def question(request: Request):
+        p = request.path_params
+        return lab.question(p["participant"], p["name"])
+
+    async def feel(request: Request):
+        p = request.path_params
+        return lab.feel(p["participant"], p["name"], await body_of(request))
+
+    async def answer(request: Request):
+        p = request.path_params
+        return lab.answer(p["participant"], p["name"], await body_of(request))
+
+    routes = [Route("/", page),
+              Route("/api/status", handle(status)),
+              Route("/api/sessions", handle(create), methods=["POST"]),
+              Route("/api/sessions/{participant}/{name}", handle(question)),
+              Route("/api/sessions/{participant}/{name}/feel", handle(feel), methods=["POST"]),
+              Route("/api/sessions/{participant}/{name}/answer", handle(answer),
+                    methods=["POST"])]
+    return Starlette(routes=routes, middleware=[
+        # localhost only, also by name: a page elsewhere cannot reach it by
+        # rebinding a DNS name to 127.0.0.1
+        Middleware(TrustedHostMiddleware, allowed_hosts=allowed_hosts or LOCAL_HOSTS)])

@@ -1,0 +1,169 @@
+"""texelpad lab's API (texelpad.web) against a real virtual board (the device
+image under the MicroPython unix port, on a pty): a session per protocol
+driven by the simulated participant, every answer in the session file with
+the scene the board played, resume from the file, refusals that change
+nothing, localhost only, and `texelpad lab` itself (the URL first)."""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+import urllib.request
+
+import pytest
+from starlette.testclient import TestClient
+
+from texelpad.study.participant import SimulatedParticipant
+from texelpad.study.session import Session
+from texelpad.study.space import Point
+from texelpad.web.owner import BoardOwner
+from texelpad.web.server import Lab, make_app
+
+from support.vboard import virtual_board
+
+pytestmark = pytest.mark.vboard
+BASE = "http://127.0.0.1"
+
+
+@pytest.fixture(scope="module")
+def port():
+    with virtual_board() as p:
+        yield p
+
+
+@pytest.fixture
+def lab(port, tmp_path):
+    owner = BoardOwner(port, "virtual", realtime=True)
+    lab = Lab(owner, tmp_path / "data")
+    with TestClient(make_app(lab), base_url=BASE) as c:
+        c.lab = lab
+        yield c
+    owner.close()
+
+
+def _playing(lab) -> dict:
+    """What the board plays, asked through the lab's own owner (it holds the port)."""
+    return lab.lab.owner.scene_source()
+
+
+def test_a_pursuit_session_end_to_end_with_the_simulated_participant(lab, port):
+    r = lab.post("/api/sessions", json={"protocol": "pursuit", "participant": "p01", "seed": 4})
+    assert r.status_code == 200, r.text
+    sid, q = r.json()["id"], r.json()["question"]
+    assert q["options"] == ["A", "B"] and "pitch_db" not in json.dumps(q)    # blind
+    live = lab.lab.live[sid]
+    sim = SimulatedParticipant(Point(0.3, 0.7))
+    n = 0
+    while not q["done"]:
+        # feel B, then answer as the participant would
+        assert lab.post("/api/sessions/%s/feel" % sid, json={"option": 1}).json() == {"playing": 1}
+        comp = live.state.next_comparison()
+        r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": sim.compare(comp.a, comp.b)})
+        assert r.status_code == 200, r.text
+        q = r.json()["question"]
+        n += 1
+    assert n == 20 and q["result"]["centre"][1] > 0.5
+    s = Session.open(live.session.path)
+    assert len(s.records) == 20 and all(rec["playing"] == 1 for rec in s.records)
+    # the scene recorded is the one that played: B's right half, the reference on the left
+    last = s.records[-1]["scene"]
+    assert last["regions"][0]["texture"] == {"kind": "reference", "name": "4sin"}
+    assert last["regions"][1]["texture"]["v"] == 2
+    # after the last answer option 0 of nothing: the board still plays the last scene felt
+    assert _playing(lab)["regions"][1]["texture"]["pitch_db"] == \
+        last["regions"][1]["texture"]["pitch_db"]
+
+
+def test_search_and_staircase_sessions_and_resume_from_the_file(lab, port):
+    r = lab.post("/api/sessions", json={"protocol": "search", "participant": "p02", "seed": 9})
+    sid = r.json()["id"]
+    sim = SimulatedParticipant(Point(0.4, 0.6))
+    for _ in range(4):
+        xs = lab.lab.live[sid].state.ask()
+        r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": {"choose": sim.pick(xs)}})
+        assert r.status_code == 200, r.text
+    assert lab.post("/api/sessions/%s/answer" % sid, json={"answer": {"save": 2}}).status_code == 200
+    mean = lab.lab.live[sid].state.mean
+    # a server restart: the session comes back from its file, the same state
+    lab.lab.live.clear()
+    r = lab.get("/api/sessions/%s" % sid)
+    assert r.status_code == 200 and r.json()["answers_so_far"] == 5
+    assert lab.lab.live[sid].state.mean == mean and len(lab.lab.live[sid].state.saved) == 1
+    # staircase: pick the odd one (the simulated participant finds it at long texels)
+    r = lab.post("/api/sessions", json={"protocol": "staircase", "participant": "p02", "seed": 3})
+    sid = r.json()["id"]
+    for _ in range(3):
+        odd = lab.lab.live[sid].odd
+        r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": odd})
+        assert r.status_code == 200
+    st = lab.lab.live[sid].state
+    assert st.length_mm == 23.5 and [t["correct"] for t in st.track] == [True] * 3
+    tex = _playing(lab)["regions"][0]["texture"]
+    assert tex["texel_samples"] == round(23.5 / 0.0053) and tex["v"] == 2
+
+
+@pytest.mark.parametrize("path, body, fragment", [
+    ("/api/sessions", {"protocol": "nope", "participant": "p"}, "protocol: expected one of"),
+    ("/api/sessions", {"protocol": "pursuit", "participant": "../etc"}, "participant: expected"),
+    ("/api/sessions", {"protocol": "pursuit", "participant": "p", "x": 1}, "unknown key 'x'"),
+    ("/api/sessions", {"protocol": "pursuit", "participant": "p", "seed": -1}, "seed: expected"),
+    ("/api/sessions", {"protocol": "pursuit", "participant": "p",
+                       "reference": {"kind": "reference", "name": "nope"}}, "reference"),
+    ("/api/sessions", [1, 2], "expected a JSON object"),
+])
+def test_refused_requests_say_why_and_change_nothing(lab, port, path, body, fragment):
+    before = _playing(lab)
+    r = lab.post(path, json=body)
+    assert r.status_code == 400 and fragment in r.json()["error"], r.text
+    assert _playing(lab) == before
+    assert not list((lab.lab.data).rglob("*.jsonl"))
+
+
+def test_a_refused_answer_changes_nothing(lab, port):
+    sid = lab.post("/api/sessions", json={"protocol": "pursuit", "participant": "p03",
+                                          "seed": 1}).json()["id"]
+    before = _playing(lab)
+    for body in ({"answer": "C"}, {"answer": None}, {"option": 0}, {}):
+        r = lab.post("/api/sessions/%s/answer" % sid, json=body)
+        assert r.status_code == 400, (body, r.text)
+    assert lab.post("/api/sessions/%s/feel" % sid, json={"option": 2}).status_code == 400
+    assert lab.post("/api/sessions/%s/feel" % sid, data="x" * 20000).status_code == 400
+    assert len(Session.open(lab.lab.live[sid].session.path).records) == 0
+    assert _playing(lab) == before
+    assert lab.get("/api/sessions/p03/pursuit-9").status_code == 400
+    assert lab.get("/api/sessions/..%2F..%2Fx/pursuit-1").status_code in (400, 404)
+
+
+def test_only_localhost_names_are_served(lab):
+    assert lab.get("/api/status").status_code == 200
+    assert lab.get("/api/status", headers={"host": "evil.example"}).status_code == 400
+
+
+def test_texelpad_lab_prints_its_url_first_and_serves_the_virtual_board(tmp_path):
+    env = dict(os.environ)
+    p = subprocess.Popen([sys.executable, "-m", "texelpad", "lab", "--data", str(tmp_path)],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        url = p.stdout.readline().strip()
+        assert url.startswith("http://127.0.0.1:") and url.endswith("/"), url
+        deadline = time.monotonic() + 30
+        while True:
+            try:
+                with urllib.request.urlopen(url + "api/status", timeout=5) as r:
+                    st = json.loads(r.read())
+                break
+            except OSError:
+                if time.monotonic() > deadline:
+                    raise
+                time.sleep(0.2)
+        assert st["running"] and st["board"] == "virtual"
+    finally:
+        p.send_signal(signal.SIGTERM)
+        try:
+            p.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            raise
