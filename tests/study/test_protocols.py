@@ -259,3 +259,33 @@ def test_sessions_are_numbered_never_overwritten(tmp_path):
     b = Session.create(tmp_path, "search", "p03", {}, 1)
     assert a.path != b.path and a.path.name == "search-1.jsonl" and b.path.name == "search-2.jsonl"
     assert check_name("participant", "P-07_b") == "P-07_b"
+
+
+def test_export_writes_tidy_csv_and_a_figure_per_session(tmp_path, capsys):
+    import csv as _csv
+    from texelpad import cli
+    data = tmp_path / "data"
+    sim = SimulatedParticipant(Point(0.3, 0.7), seed=1)
+    for proto, n in (("pursuit", 20), ("staircase", 12), ("search", 6)):
+        s = Session.create(data, proto, "p01", {}, 5)
+        st = protocols.start(proto, {}, 5)
+        for _ in range(n):
+            if proto == "pursuit":
+                q = st.next_comparison()
+                a = sim.compare(q.a, q.b)
+            elif proto == "staircase":
+                a = sim.odd_one_out(st.length_mm)
+            else:
+                a = {"choose": sim.pick(st.ask())}
+            protocols.apply(proto, st, a)
+            s.append({"answer": a, "scene": {"regions": [
+                {"start_mm": 0, "end_mm": 1, "texture": {"kind": "texel", "pitch_db": 1.0,
+                                                         "irregularity_db": -3.0}}]}})
+    out = tmp_path / "out"
+    assert cli.main(["lab", "export", "--data", str(data), "--out", str(out)]) == 0
+    assert "(38 answers) and 3 figures" in capsys.readouterr().out
+    rows = list(_csv.DictReader(open(out / "sessions.csv")))
+    assert len(rows) == 38 and {r["protocol"] for r in rows} == {"pursuit", "staircase", "search"}
+    assert rows[0]["right_pitch_db"] == "1.0"
+    pngs = sorted(p.name for p in out.glob("*.png"))
+    assert len(pngs) == 3 and all((out / p).stat().st_size > 5000 for p in pngs)

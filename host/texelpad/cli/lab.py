@@ -8,10 +8,16 @@ import socket
 import sys
 import webbrowser
 
-from .common import EXIT_OK, _stderr
+from .common import EXIT_FAIL, EXIT_OK, CliError, _stderr
 
 
 def add_lab(p: argparse.ArgumentParser) -> None:
+    p.add_argument("action", nargs="?", choices=("serve", "export"), default="serve",
+                   help="serve (default) or export: every session under --data as tidy CSV "
+                        "and one summary figure per session into --out")
+    p.add_argument("--out", default="lab-export", metavar="DIR",
+                   help="export: the folder for sessions.csv and the figures (default: "
+                        "./lab-export)")
     p.description = ("Serve texelpad lab on http://127.0.0.1:PORT (this machine only): the "
                     "papers' protocols (pursuit vector, texel-length staircase, "
                     "preference search) driving one board, every answer written to the "
@@ -28,6 +34,16 @@ def add_lab(p: argparse.ArgumentParser) -> None:
 
 
 def cmd_lab(args: argparse.Namespace) -> int:
+    if args.action == "export":
+        from ..study.export import export
+        from ..study.session import SessionError
+        try:
+            res = export(args.data, args.out)
+        except (OSError, SessionError) as e:
+            raise CliError("--data", str(e), EXIT_FAIL) from None
+        print("wrote %s (%d answers) and %d figures to %s"
+              % (res["csv"], res["rows"], len(res["figures"]), args.out))
+        return EXIT_OK
     import uvicorn
 
     from ..link.virtual import open_virtual, stop_on_signals
