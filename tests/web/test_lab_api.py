@@ -130,7 +130,7 @@ def test_a_refused_answer_changes_nothing(lab, port):
         r = lab.post("/api/sessions/%s/answer" % sid, json=body)
         assert r.status_code == 400, (body, r.text)
     assert lab.post("/api/sessions/%s/feel" % sid, json={"option": 2}).status_code == 400
-    assert lab.post("/api/sessions/%s/feel" % sid, data="x" * 20000).status_code == 400
+    assert lab.post("/api/sessions/%s/feel" % sid, content="x" * 20000).status_code == 400
     assert len(Session.open(lab.lab.live[sid].session.path).records) == 0
     assert _playing(lab) == before
     assert lab.get("/api/sessions/p03/pursuit-9").status_code == 400

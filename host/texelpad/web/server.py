@@ -4,6 +4,7 @@ texelpad.search) on one board (web/owner.py, the only owner of a Board).
 
     GET  /                                     the page
     GET  /api/status                           the board's status (or why it is lost)
+    GET  /api/scene                            the canonical scene it plays
     POST /api/sessions                         {protocol, participant, seed?, config?}
     GET  /api/sessions/{participant}/{name}    the session's question (resumed from its file)
     POST /api/sessions/{participant}/{name}/feel    {option: k}  play option k
@@ -207,12 +208,98 @@ def _keys(body: Any, allowed: set[str]) -> None:
         raise Refused("unknown key %r (allowed: %s)" % (bad[0], ", ".join(sorted(allowed))))
 
 
-PAGE = """<!doctype html><html><head><meta charset="utf-8"><title>texelpad lab</title></head>
-<body><h1>texelpad lab</h1><p id="status">...</p>
+PAGE = """<!doctype html>
+<html lang="en"><head><meta charset="utf-8"><title>texelpad lab</title>
+<style>
+body { font: 16px system-ui, sans-serif; margin: 2em; max-width: 46em; }
+button { font-size: 1.1em; margin: 0.2em; padding: 0.4em 1em; }
+#question { margin-top: 1em; } .muted { color: #666; } .err { color: #b00; }
+</style></head>
+<body>
+<h1>texelpad lab</h1>
+<p id="status" class="muted">connecting to the board ...</p>
+<section id="setup">
+  <label>protocol <select id="protocol">
+    <option value="pursuit">guided exploration (pursuit vector)</option>
+    <option value="staircase">texel-length oddity staircase</option>
+    <option value="search">preference search</option></select></label>
+  <label>participant <input id="participant" value="p01" size="10"></label>
+  <button id="start">start</button>
+  <label>or resume <input id="resume-id" placeholder="p01/pursuit-1" size="16"></label>
+  <button id="resume">resume</button>
+</section>
+<section id="question" hidden>
+  <p id="prompt"></p>
+  <div id="feel"></div>
+  <div id="answers"></div>
+  <p id="progress" class="muted"></p>
+</section>
+<p id="error" class="err"></p>
 <script>
-fetch('/api/status').then(r => r.json()).then(s => {
-  document.getElementById('status').textContent = s.error ? s.error :
-    'board ' + s.board + ' playing, ' + s.rate_hz + ' refreshes/s';
+let sid = null;
+const $ = (id) => document.getElementById(id);
+async function call(method, path, body) {
+  const r = await fetch(path, {method, headers: {"content-type": "application/json"},
+                               body: body === undefined ? undefined : JSON.stringify(body)});
+  const j = await r.json();
+  if (!r.ok) { $("error").textContent = j.error || r.statusText; throw new Error(j.error); }
+  $("error").textContent = "";
+  return j;
+}
+const PROMPTS = {
+  pursuit: "Feel A and B. Which one is closer to the reference on the left?",
+  staircase: "Feel the three textures. Which one is different?",
+  search: "Feel the three candidates. Which one is closest to the reference on the left?"};
+function label(a) {
+  if (typeof a === "number") return "texture " + (a + 1) + " is the odd one";
+  if (typeof a === "string") return a === "unsure" ? "unsure" : a + " is closer";
+  const [k, v] = Object.entries(a)[0];
+  return (k === "choose" ? "choose " : "save ") + (v + 1);
+}
+function show(res) {
+  const q = res.question;
+  $("setup").hidden = true; $("question").hidden = false;
+  if (q.done) {
+    $("prompt").textContent = "Done - thank you.";
+    $("feel").innerHTML = ""; $("answers").innerHTML = "";
+    $("progress").textContent = "session " + sid + " finished";
+    return;
+  }
+  $("prompt").textContent = PROMPTS[$("protocol").value] || "";
+  $("feel").innerHTML = "";
+  q.options.forEach((name, k) => {
+    const b = document.createElement("button");
+    b.id = "feel-" + k; b.textContent = "feel " + name;
+    if (res.playing === k) b.style.fontWeight = "bold";
+    b.onclick = async () => { const r = await call("POST", "/api/sessions/" + sid + "/feel",
+                                                  {option: k});
+      [...$("feel").children].forEach((c, i) => c.style.fontWeight = i === r.playing ? "bold" : "");
+    };
+    $("feel").appendChild(b);
+  });
+  $("answers").innerHTML = "";
+  q.answers.forEach((a, i) => {
+    const b = document.createElement("button");
+    b.id = "answer-" + i; b.textContent = label(a);
+    b.onclick = async () => show(await call("POST", "/api/sessions/" + sid + "/answer",
+                                            {answer: a}));
+    $("answers").appendChild(b);
+  });
+  $("progress").textContent = "session " + sid + ": " + (res.answers_so_far || 0) + " answers";
+}
+$("start").onclick = async () => {
+  const res = await call("POST", "/api/sessions", {protocol: $("protocol").value,
+                                                   participant: $("participant").value});
+  sid = res.id; show(res);
+};
+$("resume").onclick = async () => {
+  sid = $("resume-id").value.trim();
+  const res = await call("GET", "/api/sessions/" + sid);
+  $("protocol").value = sid.split("/")[1].split("-")[0]; show(res);
+};
+fetch("/api/status").then(r => r.json()).then(s => {
+  $("status").textContent = s.error ? s.error :
+    "board " + (s.board || "?") + (s.running ? " playing" : " stopped");
 });
 </script></body></html>"""
 
@@ -248,6 +335,9 @@ def make_app(lab: Lab, allowed_hosts: list[str] | None = None) -> Starlette:
     async def status(request: Request):
         return lab.owner.status()
 
+    async def scene(request: Request):
+        return {"scene": lab.owner.scene_source()}
+
     async def create(request: Request):
         return lab.create(await body_of(request))
 
@@ -265,6 +355,7 @@ def make_app(lab: Lab, allowed_hosts: list[str] | None = None) -> Starlette:
 
     routes = [Route("/", page),
               Route("/api/status", handle(status)),
+              Route("/api/scene", handle(scene)),
               Route("/api/sessions", handle(create), methods=["POST"]),
               Route("/api/sessions/{participant}/{name}", handle(question)),
               Route("/api/sessions/{participant}/{name}/feel", handle(feel), methods=["POST"]),
