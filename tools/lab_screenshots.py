@@ -62,15 +62,9 @@ def summaries(data: Path) -> None:
         s = Session.create(data, proto, "sim", {}, 5)
         st = protocols.start(proto, {}, 5)
         for _ in range(n):
-            if proto == "pursuit":
-                q = st.next_comparison()
-                a = sim.compare(q.a, q.b)
-            elif proto == "staircase":
-                if st.done:
-                    break
-                a = sim.odd_one_out(st.length_mm)
-            else:
-                a = {"choose": sim.pick(st.ask())}
+            if proto == "staircase" and st.done:
+                break
+            a = sim.answer(proto, st)
             protocols.apply(proto, st, a)
             s.append({"answer": a})
     res = export(data, data / "export")

@@ -270,13 +270,7 @@ def test_export_writes_tidy_csv_and_a_figure_per_session(tmp_path, capsys):
         s = Session.create(data, proto, "p01", {}, 5)
         st = protocols.start(proto, {}, 5)
         for _ in range(n):
-            if proto == "pursuit":
-                q = st.next_comparison()
-                a = sim.compare(q.a, q.b)
-            elif proto == "staircase":
-                a = sim.odd_one_out(st.length_mm)
-            else:
-                a = {"choose": sim.pick(st.ask())}
+            a = sim.answer(proto, st)
             protocols.apply(proto, st, a)
             s.append({"answer": a, "scene": {"regions": [
                 {"start_mm": 0, "end_mm": 1, "texture": {"kind": "texel", "pitch_db": 1.0,

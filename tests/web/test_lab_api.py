@@ -6,12 +6,6 @@ nothing, localhost only, and `texelpad lab` itself (the URL first)."""
 from __future__ import annotations
 
 import json
-import os
-import signal
-import subprocess
-import sys
-import time
-import urllib.request
 
 import pytest
 from starlette.testclient import TestClient
@@ -22,6 +16,7 @@ from texelpad.study.space import Point
 from texelpad.web.owner import BoardOwner
 from texelpad.web.server import Lab, make_app
 
+from support.lab import lab_process
 from support.vboard import virtual_board
 
 pytestmark = pytest.mark.vboard
@@ -143,27 +138,5 @@ def test_only_localhost_names_are_served(lab):
 
 
 def test_texelpad_lab_prints_its_url_first_and_serves_the_virtual_board(tmp_path):
-    env = dict(os.environ)
-    p = subprocess.Popen([sys.executable, "-m", "texelpad", "lab", "--data", str(tmp_path)],
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-    try:
-        url = p.stdout.readline().strip()
-        assert url.startswith("http://127.0.0.1:") and url.endswith("/"), url
-        deadline = time.monotonic() + 30
-        while True:
-            try:
-                with urllib.request.urlopen(url + "api/status", timeout=5) as r:
-                    st = json.loads(r.read())
-                break
-            except OSError:
-                if time.monotonic() > deadline:
-                    raise
-                time.sleep(0.2)
+    with lab_process(tmp_path) as (url, st):
         assert st["running"] and st["board"] == "virtual"
-    finally:
-        p.send_signal(signal.SIGTERM)
-        try:
-            p.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            p.kill()
-            raise

@@ -8,16 +8,14 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import signal
-import subprocess
-import sys
-import time
 import urllib.request
 from pathlib import Path
 
 import pytest
 
 from texelpad.study.session import Session
+
+from support.lab import lab_process
 
 pytestmark = [pytest.mark.vboard, pytest.mark.slow]
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
@@ -27,27 +25,8 @@ ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-f
 
 @pytest.fixture
 def lab_url(tmp_path):
-    p = subprocess.Popen([sys.executable, "-m", "texelpad", "lab", "--data", str(tmp_path)],
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        url = p.stdout.readline().strip()
-        assert url.startswith("http://127.0.0.1:"), url
-        deadline = time.monotonic() + 30
-        while True:
-            try:
-                urllib.request.urlopen(url + "api/status", timeout=5).read()
-                break
-            except OSError:
-                if time.monotonic() > deadline:
-                    raise
-                time.sleep(0.2)
+    with lab_process(tmp_path) as (url, _):
         yield url, tmp_path
-    finally:
-        p.send_signal(signal.SIGTERM)
-        try:
-            p.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            p.kill()
 
 
 def test_a_pursuit_session_clicked_through_in_chromium(lab_url, tmp_path):

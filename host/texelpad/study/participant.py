@@ -55,3 +55,15 @@ class SimulatedParticipant:
         z = (length_mm - self.threshold_mm) / self.slope_mm
         p = 1.0 / 3.0 + (2.0 / 3.0) / (1.0 + math.exp(-max(-60.0, min(60.0, z))))
         return self._rng.random() < p
+
+    def answer(self, protocol: str, state) -> object:
+        """The answer to the protocol state's current question, as
+        texelpad.study.protocols.apply takes it."""
+        if protocol == "pursuit":
+            q = state.next_comparison()
+            return self.compare(q.a, q.b)
+        if protocol == "staircase":
+            return self.odd_one_out(state.length_mm)
+        if protocol == "search":
+            return {"choose": self.pick(state.ask())}
+        raise ValueError("protocol: unknown %r" % (protocol,))
