@@ -31,6 +31,9 @@ class BoardOwner:
         self._connect = connector
         self._board: Board | None = None
         self._lock = threading.Lock()
+        # texelpad seen running on the board: the owner holds the port, so
+        # nothing else can stop it; a lost board clears it
+        self._running_seen = False
         self.lost: str | None = None
 
     def _get(self) -> Board:
@@ -56,6 +59,7 @@ class BoardOwner:
                 except Exception:
                     pass
                 self._board = None
+                self._running_seen = False
                 self.lost = str(e)
                 raise BoardLost("lost the board on %s: %s" % (self.port, e)) from None
 
@@ -67,7 +71,8 @@ class BoardOwner:
         board's own validation code run here on the pushed scene). A refused
         scene raises ValueError and the board plays on."""
         def go(b: Board) -> tuple[dict[str, Any], dict[str, Any]]:
-            self._running(b)
+            if not self._running_seen:          # (one status round trip less per push)
+                self._running(b)
             st = b.push(scene)
             canonical = _scene.validate(host_check(scene, st["display"]), st["display"])
             return st, canonical
@@ -80,11 +85,14 @@ class BoardOwner:
     def _running(self, b: Board) -> dict[str, Any]:
         st = b.status()
         if st.get("running"):
+            self._running_seen = True
             return st
         if not self.board_name:
             raise ValueError("texelpad is not running on %s: start it with texelpad push "
                              "--board NAME, or give texelpad lab --board" % self.port)
-        return b.start(self.board_name, None, **self.start_opts)
+        st = b.start(self.board_name, None, **self.start_opts)
+        self._running_seen = True
+        return st
 
     def display(self) -> dict[str, Any]:
         """The display of the board (started first when it is not running)."""
