@@ -1,7 +1,7 @@
 # Format 2's parameter grid (gen/plan_int.py): pitch_db, irregularity_db and
 # quant_db on 0.001 dB, band_limit_cpmm on 0.001 c/mm. params.validate puts a
 # format-2 parameter set on it, so host and board hold the same values and the
-# plan's integer millidecibels (plan_int.grid_mdb) are the same on every
+# plan's integer millidecibels (mdb) are the same on every
 # runtime. A value within GRID_TIE of a half-way point is refused: a board's
 # float32 (error of x*1000 for |x| <= 95 below 0.006) could round it the other
 # way. Kept out of params.py: format 1 never loads it.
@@ -9,11 +9,18 @@ GRID_KEYS = ("pitch_db", "irregularity_db", "quant_db", "band_limit_cpmm")
 GRID_TIE = 0.01
 
 
+def mdb(value):
+    """value in thousandths, rounded half away from zero: the grid's integer
+    (millidecibels; milli-cycles/mm for the band limit). plan_int reads its
+    parameters through this."""
+    v = value * 1000.0
+    return int(v + 0.5) if v >= 0 else -int(-v + 0.5)
+
+
 def on_grid(key, value):
     """value rounded to the 0.001 grid (half away from zero), or ValueError."""
     v = value * 1000.0
     a = -v if v < 0 else v
-    n = int(a + 0.5)
     if abs(a - int(a) - 0.5) < GRID_TIE:
         lo = int(a) / 1000.0
         hi = (int(a) + 1) / 1000.0
@@ -21,7 +28,7 @@ def on_grid(key, value):
             lo, hi = -lo, -hi
         raise ValueError("%s: %r is half-way between two points of format 2's 0.001 grid "
                          "(give %r or %r)" % (key, value, lo, hi))
-    return (-n if v < 0 else n) / 1000.0
+    return mdb(value) / 1000.0
 
 
 def to_grid(p):

@@ -15,7 +15,7 @@
 # are float32: the only float work per texel is f_i and two fractions of it.
 import math
 from . import params as _params
-from .rng import Rng, phase_fraction_u28
+from .rng import Rng, phase_fraction_u28, uniform_of
 from ..compat import float_buffer
 
 UNITS_PER_TURN = 1 << 28        # fixed-point phase: 2^28 per turn
@@ -62,7 +62,7 @@ class Plan:
         if draws is None:
             rng = Rng(p["seed"], F)
             hi, lo = rng.next_hi_lo()
-            u = (F(hi) * 65536.0 + (lo + 0.5)) / 4294967296.0
+            u = uniform_of(hi, lo, F)
             t28 = phase_fraction_u28(hi, lo)
             draw_z = rng.normal
         else:

@@ -37,8 +37,9 @@
 # (plan_int_viper.py), with identical results: nothing exceeds 31 bits.
 from array import array
 from . import params as _params
-from .rng import phase_fraction_u28, WARMUP, SEED_CONSTS
+from .rng import phase_fraction_u28, uniform_of, WARMUP, SEED_CONSTS
 from .plan_int_tables import table, EXP_HI, EXP_MID, NORM
+from .grid import mdb
 from ..compat import native
 
 FORMAT = 2
@@ -264,15 +265,6 @@ _texels = native("texel.gen.plan_int_viper", "texels") or texels_py
 VIPER = _texels is not texels_py
 
 
-def grid_mdb(value):
-    """A dB parameter on format 2's 0.001 dB grid, as integer millidecibels
-    (half away from zero; params.validate refuses values within float error
-    of a half, so every runtime rounds alike)."""
-    v = value * 1000.0
-    n = int(v + 0.5) if v >= 0 else -int(-v + 0.5)
-    return n
-
-
 class PlanInt:
     """The format-2 plan of a validated parameter set (v == 2): t28, d28 (the
     int engine's phases), y (log2 pitch, Q24 octaves), and, for the float
@@ -286,16 +278,16 @@ class PlanInt:
         # array less to allocate, ~1.4 ms on a Pico); engine="py" runs the
         # Python loop where viper is there (tests compare the two).
         self.params = p
-        self.n = n = p["length_samples"]
+        self.n = p["length_samples"]
         self.L = L = p["texel_samples"]
         self.count = count = _params.texel_count(p)
         self.gain = p["gain"]
         tab = table()
-        self.mu = _round_q(grid_mdb(p["pitch_db"]))
-        self.sigma = exp2_q24(LOG2_LOG2_10 + _round_q(grid_mdb(p["irregularity_db"])), tab)
-        self.q = _round_q(grid_mdb(p["quant_db"])) if p["quant_db"] else 0
+        self.mu = _round_q(mdb(p["pitch_db"]))
+        self.sigma = exp2_q24(LOG2_LOG2_10 + _round_q(mdb(p["irregularity_db"])), tab)
+        self.q = _round_q(mdb(p["quant_db"])) if p["quant_db"] else 0
         cap = p["band_limit_cpmm"]
-        self.cap_mc = grid_mdb(cap) if cap is not None else 0
+        self.cap_mc = mdb(cap) if cap is not None else 0
         # cap_mc * 53 * 2^28 / 10^7 = cap (c/mm) * DX_MM * 2^28; a bigint
         # on MicroPython, once per texture
         self.dcap = (self.cap_mc * 53 * (1 << 28) + 5000000) // 10000000 if cap is not None else 0
@@ -305,13 +297,12 @@ class PlanInt:
         both = memoryview(_ints(2 * count))
         self.t28 = both[:count]
         self.d28 = both[count:]
-        one = _ONE
         self.y = _ints(count) if keep_y else None      # log2 pitch, Q24 octaves
         self.z = _ints(count) if keep_z else None      # the draws, Q24
         fill = texels_py if engine == "py" else _texels
         self.above_nyquist = fill(st, count, L, self.mu, self.sigma, self.q, self.dcap,
-                                  tab, self.t28, self.d28, self.y if keep_y else one,
-                                  self.z if keep_z else one,
+                                  tab, self.t28, self.d28, self.y if keep_y else _ONE,
+                                  self.z if keep_z else _ONE,
                                   (1 if keep_z else 0) | (2 if keep_y else 0))
         self.x0 = (st[8], st[9])        # the start phase's draw
         self._f = None
@@ -324,8 +315,7 @@ class PlanInt:
 
     @property
     def u(self):
-        hi, lo = self.x0
-        return (hi * 65536.0 + (lo + 0.5)) / 4294967296.0
+        return uniform_of(self.x0[0], self.x0[1])
 
     @property
     def f(self):

@@ -78,7 +78,7 @@ class Rng:
     def uniform(self):
         """u in (0, 1): (x + 0.5) / 2^32, exact in binary64."""
         hi, lo = self.next_hi_lo()
-        return (self.F(hi) * 65536.0 + (lo + 0.5)) / _TWO32
+        return uniform_of(hi, lo, self.F)
 
     def normal(self):
         """A standard-normal draw: AS241 inverse CDF of one uniform. The
@@ -88,9 +88,15 @@ class Rng:
         absolute resolution and lose the tail (pitch errors of 3e-4)."""
         hi, lo = self.next_hi_lo()
         F = self.F
-        u = (F(hi) * 65536.0 + (lo + 0.5)) / _TWO32
-        uc = (F(0xFFFF - hi) * 65536.0 + ((0xFFFF - lo) + 0.5)) / _TWO32
+        u = uniform_of(hi, lo, F)
+        uc = uniform_of(0xFFFF - hi, 0xFFFF - lo, F)
         return ppnd16(u, uc)
+
+
+def uniform_of(hi, lo, F=float):
+    """u = (x + 0.5) / 2^32 of the 32-bit output x = (hi, lo), in float type F:
+    in (0, 1), exact in binary64."""
+    return (F(hi) * 65536.0 + (lo + 0.5)) / _TWO32
 
 
 def phase_fraction_u28(hi, lo):
