@@ -8,7 +8,8 @@ from __future__ import annotations
 import threading
 from typing import Any, Callable
 
-from ..link.board import Board, connect, host_check
+from ..link.board import Board, connect
+from ..link.protocol import plain
 from ..link.transport import LinkError
 
 import texel.runtime.scene as _scene
@@ -31,9 +32,10 @@ class BoardOwner:
         self._connect = connector
         self._board: Board | None = None
         self._lock = threading.Lock()
-        # texelpad seen running on the board: the owner holds the port, so
-        # nothing else can stop it; a lost board clears it
-        self._running_seen = False
+        # the display of the board once texelpad was seen running there: the
+        # owner holds the port, so nothing else can stop it or change it; a
+        # lost board clears it
+        self._display: dict[str, Any] | None = None
         self.lost: str | None = None
 
     def _get(self) -> Board:
@@ -59,7 +61,7 @@ class BoardOwner:
                 except Exception:
                     pass
                 self._board = None
-                self._running_seen = False
+                self._display = None
                 self.lost = str(e)
                 raise BoardLost("lost the board on %s: %s" % (self.port, e)) from None
 
@@ -68,14 +70,13 @@ class BoardOwner:
 
     def push(self, scene: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
         """Play scene; (the board's status, the canonical scene it plays - the
-        board's own validation code run here on the pushed scene). A refused
-        scene raises ValueError and the board plays on."""
+        board's own validation code run here on the scene Board.push checked
+        and sent). A refused scene raises ValueError and the board plays on."""
         def go(b: Board) -> tuple[dict[str, Any], dict[str, Any]]:
-            if not self._running_seen:          # (one status round trip less per push)
+            if self._display is None:           # (no status round trip once seen running)
                 self._running(b)
             st = b.push(scene)
-            canonical = _scene.validate(host_check(scene, st["display"]), st["display"])
-            return st, canonical
+            return st, _scene.validate(plain(scene), st["display"])
         return self._call(go)
 
     def scene_source(self) -> dict[str, Any] | None:
@@ -83,20 +84,22 @@ class BoardOwner:
         return self._call(lambda b: b.scene_source())
 
     def _running(self, b: Board) -> dict[str, Any]:
+        """texelpad running on the board (started when it is not): its display."""
         st = b.status()
-        if st.get("running"):
-            self._running_seen = True
-            return st
-        if not self.board_name:
-            raise ValueError("texelpad is not running on %s: start it with texelpad push "
-                             "--board NAME, or give texelpad lab --board" % self.port)
-        st = b.start(self.board_name, None, **self.start_opts)
-        self._running_seen = True
-        return st
+        if not st.get("running"):
+            if not self.board_name:
+                raise ValueError("texelpad is not running on %s: start it with texelpad push "
+                                 "--board NAME, or give texelpad lab --board" % self.port)
+            st = b.start(self.board_name, None, **self.start_opts)
+        self._display = st["display"]
+        return self._display
 
     def display(self) -> dict[str, Any]:
-        """The display of the board (started first when it is not running)."""
-        return self._call(self._running)["display"]
+        """The display of the board (started first when it is not running;
+        asked once, then known)."""
+        if self._display is not None:
+            return self._display
+        return self._call(self._running)
 
     def close(self) -> None:
         with self._lock:

@@ -36,7 +36,7 @@ from ..link.board import host_check
 from ..search.preference import candidate_params
 from ..study import protocols
 from ..study import scenes as S
-from ..study.session import Session, SessionError, check_name
+from ..study.session import Session, check_name
 from .owner import BoardLost, BoardOwner
 
 BODY_MAX = 16384
@@ -49,13 +49,14 @@ class Refused(ValueError):
 
 @dataclass
 class Live:
-    """A session in memory: its file, the protocol's state, the options of
-    the current question (scenes, server side) and what plays."""
+    """A session in memory: its file, the protocol's state, the current
+    question (built once per state: None after an answer), its options
+    (scenes, server side) and what plays."""
     session: Session
     state: Any
     reference: dict[str, Any]
+    question: dict[str, Any] | None = None
     options: list[dict[str, Any]] = field(default_factory=list)
-    labels: list[str] = field(default_factory=list)
     odd: int | None = None
     playing: int | None = None
     playing_scene: dict[str, Any] | None = None
@@ -71,6 +72,12 @@ class Lab:
 
     # --- protocol questions ---------------------------------------------------------
     def _question(self, lv: Live) -> dict[str, Any]:
+        """The current question of the session (built when its state changed)."""
+        if lv.question is None:
+            lv.question = self._build_question(lv)
+        return lv.question
+
+    def _build_question(self, lv: Live) -> dict[str, Any]:
         h = lv.session.header
         proto, st = h["protocol"], lv.state
         display = self.owner.display()
@@ -80,16 +87,14 @@ class Lab:
                 return {"done": True, "result": {"centre": [st.centre.u, st.centre.v]}}
             lv.options = [S.point_scene(lv.reference, q.a, display, name="A"),
                           S.point_scene(lv.reference, q.b, display, name="B")]
-            lv.labels = ["A", "B"]
-            return {"done": False, "trial": q.trial, "index": q.index, "options": lv.labels,
+            return {"done": False, "trial": q.trial, "index": q.index, "options": ["A", "B"],
                     "answers": ["A", "B", "unsure"]}
         if proto == "search":
             xs = st.ask()
             lv.options = [S.split(lv.reference, candidate_params(x, st.dims, st.texture_seed),
                                   display, name="candidate %d" % (k + 1))
                           for k, x in enumerate(xs)]
-            lv.labels = ["1", "2", "3"]
-            return {"done": False, "iteration": st.iteration, "options": lv.labels,
+            return {"done": False, "iteration": st.iteration, "options": ["1", "2", "3"],
                     "answers": [{"choose": k} for k in range(3)] + [{"save": k} for k in range(3)]}
         if proto == "staircase":
             if st.done:
@@ -97,8 +102,7 @@ class Lab:
             lv.options, lv.odd = S.staircase_scenes(st.texel_samples(), len(st.track),
                                                     h["seed"], display,
                                                     h["config"].get("distribution"))
-            lv.labels = ["1", "2", "3"]
-            return {"done": False, "trial": len(st.track), "options": lv.labels,
+            return {"done": False, "trial": len(st.track), "options": ["1", "2", "3"],
                     "answers": [0, 1, 2]}
         raise Refused("protocol: unknown %r" % proto)
 
@@ -188,16 +192,14 @@ class Lab:
             rec["answer"] = a == lv.odd             # what the protocol takes: found or not
             rec["picked"] = a
             rec["odd"] = lv.odd
-        _apply(proto, lv.state, rec)
+        protocols.apply(proto, lv.state, rec["answer"])
+        lv.question = None                              # the state moved on
         lv.session.append(rec)
         nq = self._question(lv)
         if not nq["done"]:
             self._play(lv, 0)
         return {"question": nq, "playing": lv.playing, "answers_so_far": len(lv.session.records)}
 
-
-def _apply(proto: str, state: Any, rec: dict[str, Any]) -> None:
-    protocols.apply(proto, state, rec["answer"])
 
 
 def _keys(body: Any, allowed: set[str]) -> None:
@@ -325,7 +327,7 @@ def make_app(lab: Lab, allowed_hosts: list[str] | None = None) -> Starlette:
                 return JSONResponse(out)
             except BoardLost as e:
                 return JSONResponse({"error": str(e)}, status_code=503)
-            except (Refused, SessionError, ValueError) as e:
+            except ValueError as e:             # Refused, SessionError, the board's refusal
                 return JSONResponse({"error": str(e)}, status_code=400)
         return endpoint
 
