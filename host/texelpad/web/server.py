@@ -30,21 +30,19 @@ from starlette.middleware import Middleware
 from starlette.middleware.trustedhost import TrustedHostMiddleware
 from starlette.requests import Request
 from starlette.responses import HTMLResponse, JSONResponse
-from starlette.routing import Route
+from starlette.routing import Mount, Route
+from starlette.staticfiles import StaticFiles
 
 from ..link.board import host_check
 from ..search.preference import candidate_params
 from ..study import protocols
 from ..study import scenes as S
 from ..study.session import Session, check_name
-from .owner import BoardLost, BoardOwner
+from .api import BODY_MAX, Refused, body_of, handle, keys as _keys
+from . import strip
+from .owner import BoardOwner
 
-BODY_MAX = 16384
 PROTOCOL_KEYS = {"protocol", "participant", "seed", "config", "reference"}
-
-
-class Refused(ValueError):
-    pass
 
 
 @dataclass
@@ -68,7 +66,7 @@ class Lab:
         self.data = Path(data)
         self.data.mkdir(parents=True, exist_ok=True)
         self.live: dict[str, Live] = {}
-        self._lock = threading.Lock()
+        self.lock = threading.Lock()       # one request at a time (web/api.handle)
 
     # --- protocol questions ---------------------------------------------------------
     def _question(self, lv: Live) -> dict[str, Any]:
@@ -202,14 +200,6 @@ class Lab:
 
 
 
-def _keys(body: Any, allowed: set[str]) -> None:
-    if not isinstance(body, dict):
-        raise Refused("expected a JSON object")
-    bad = sorted(k for k in body if k not in allowed)
-    if bad:
-        raise Refused("unknown key %r (allowed: %s)" % (bad[0], ", ".join(sorted(allowed))))
-
-
 PAGE = """<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><title>texelpad lab</title>
 <style>
@@ -306,31 +296,11 @@ fetch("/api/status").then(r => r.json()).then(s => {
 </script></body></html>"""
 
 
+STATIC = Path(__file__).with_name("static")   # the pages' scripts and styles
 LOCAL_HOSTS = ["127.0.0.1", "localhost"]
 
 
 def make_app(lab: Lab, allowed_hosts: list[str] | None = None) -> Starlette:
-    async def body_of(request: Request) -> Any:
-        raw = await request.body()
-        if len(raw) > BODY_MAX:
-            raise Refused("request body over %d bytes" % BODY_MAX)
-        try:
-            return json.loads(raw or b"{}")
-        except ValueError:
-            raise Refused("the body is not JSON") from None
-
-    def handle(fn):
-        async def endpoint(request: Request) -> JSONResponse:
-            try:
-                with lab._lock:
-                    out = await fn(request)
-                return JSONResponse(out)
-            except BoardLost as e:
-                return JSONResponse({"error": str(e)}, status_code=503)
-            except ValueError as e:             # Refused, SessionError, the board's refusal
-                return JSONResponse({"error": str(e)}, status_code=400)
-        return endpoint
-
     async def page(request: Request) -> HTMLResponse:
         return HTMLResponse(PAGE)
 
@@ -356,13 +326,15 @@ def make_app(lab: Lab, allowed_hosts: list[str] | None = None) -> Starlette:
         return lab.answer(p["participant"], p["name"], await body_of(request))
 
     routes = [Route("/", page),
-              Route("/api/status", handle(status)),
-              Route("/api/scene", handle(scene)),
-              Route("/api/sessions", handle(create), methods=["POST"]),
-              Route("/api/sessions/{participant}/{name}", handle(question)),
-              Route("/api/sessions/{participant}/{name}/feel", handle(feel), methods=["POST"]),
-              Route("/api/sessions/{participant}/{name}/answer", handle(answer),
+              Route("/api/status", handle(lab.lock, status)),
+              Route("/api/scene", handle(lab.lock, scene)),
+              Route("/api/sessions", handle(lab.lock, create), methods=["POST"]),
+              Route("/api/sessions/{participant}/{name}", handle(lab.lock, question)),
+              Route("/api/sessions/{participant}/{name}/feel", handle(lab.lock, feel), methods=["POST"]),
+              Route("/api/sessions/{participant}/{name}/answer", handle(lab.lock, answer),
                     methods=["POST"])]
+    routes += strip.routes(lab)
+    routes.append(Mount("/static", StaticFiles(directory=STATIC), name="static"))
     return Starlette(routes=routes, middleware=[
         # localhost only, also by name: a page elsewhere cannot reach it by
         # rebinding a DNS name to 127.0.0.1
