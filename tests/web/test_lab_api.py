@@ -44,11 +44,31 @@ def _playing(lab) -> dict:
     return lab.lab.owner.scene_source()
 
 
+def _answer_all(lab, sid, sim, protocol, limit=100):
+    """Answer as the simulated participant until the session is done (or
+    limit answers); returns the last reply."""
+    live = lab.lab.live[sid]
+    r = None
+    for _ in range(limit):
+        if live.question.done:
+            break
+        a = sim.answer(protocol, live.state)
+        if protocol == "staircase":                 # the page sends the texture picked
+            a = live.question.odd if a else (live.question.odd + 1) % 3
+        r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": a})
+        assert r.status_code == 200, r.text
+    return r
+
+
 def test_a_pursuit_session_end_to_end_with_the_simulated_participant(lab, port):
-    r = lab.post("/api/sessions", json={"protocol": "pursuit", "participant": "p01", "seed": 4})
+    r = lab.post("/api/sessions", json={"config": "pursuit-4sin", "participant": "p01",
+                                        "seed": 4})
     assert r.status_code == 200, r.text
     sid, q = r.json()["id"], r.json()["question"]
     assert q["options"] == ["A", "B"] and "pitch_db" not in json.dumps(q)    # blind
+    mon = lab.get("/api/sessions/%s/monitor" % sid).json()           # the experimenter's view
+    assert mon["detail"]["centre"] == {"pitch_db": 5.0, "irregularity_db": -10.0}
+    assert mon["config"]["config_file"] == "pursuit-4sin"
     live = lab.lab.live[sid]
     sim = SimulatedParticipant(Point(0.3, 0.7))
     n = 0
@@ -60,26 +80,72 @@ def test_a_pursuit_session_end_to_end_with_the_simulated_participant(lab, port):
         assert r.status_code == 200, r.text
         q = r.json()["question"]
         n += 1
-    assert n == 20 and q["result"]["centre"][1] > 0.5
+    assert n == 20 and live.state.centre.v > 0.5
     s = Session.open(live.session.path)
-    assert len(s.records) == 20 and all(rec["playing"] == 1 for rec in s.records)
+    answers = list(s.answers())
+    assert len(answers) == 20 and all(rec["playing"] == 1 for rec in answers)
+    assert s.finished and s.records[-1]["result"]["trials"] == 5
+    assert answers[0]["state"]["edge"] == 1.0 and answers[-1]["state"]["edge"] == pytest.approx(0.2)
     # the scene recorded is the one that played: B's right half, the reference on the left
-    last = s.records[-1]["scene"]
+    last = answers[-1]["scene"]
     assert last["regions"][0]["texture"] == {"kind": "reference", "name": "4sin"}
     assert last["regions"][1]["texture"]["v"] == 2
-    # after the last answer option 0 of nothing: the board still plays the last scene felt
-    assert _playing(lab)["regions"][1]["texture"]["pitch_db"] == \
-        last["regions"][1]["texture"]["pitch_db"]
+    assert _playing(lab) == last            # the board still plays the last scene felt
+    # replay: what answer 0 heard plays again
+    assert lab.post("/api/sessions/%s/replay" % sid, json={"record": 0}).status_code == 200
+    assert _playing(lab) == answers[0]["scene"]
+
+
+def test_free_exploration_then_the_quantization_test_with_its_matches(lab, port):
+    r = lab.post("/api/sessions", json={"config": "free-nine", "participant": "p05", "seed": 2})
+    assert r.status_code == 200, r.text
+    sid = r.json()["id"]
+    live = lab.lab.live[sid]
+    first = live.state.reference
+    # the sliders start in the middle; every change re-draws and plays
+    assert r.json()["sliders"] == [5.0, -15.0]
+    seeds = set()
+    for p, s in ((0.0, -20.0), (4.5, -12.25), (20.0, -3.0)):
+        r = lab.post("/api/sessions/%s/feel" % sid, json={"pitch_db": p, "irregularity_db": s})
+        assert r.status_code == 200, r.text
+        right = _playing(lab)["regions"][1]["texture"]
+        assert right["pitch_db"] == min(p, 19.747) and right["irregularity_db"] == s
+        seeds.add(right["seed"])
+        assert _playing(lab)["regions"][0]["texture"] == {"kind": "reference", "name": first}
+    assert len(seeds) == 3
+    for bad in ({"pitch_db": 21, "irregularity_db": 0}, {"pitch_db": 1}, {"option": 0}):
+        assert lab.post("/api/sessions/%s/feel" % sid, json=bad).status_code == 400
+    moves = [x for x in Session.open(live.session.path).records if x["kind"] == "move"]
+    assert [m["pitch_db"] for m in moves] == [5.0, 0.0, 4.5, 20.0]
+    # a server restart: the sliders come back where they were
+    lab.lab.live.clear()
+    assert lab.get("/api/sessions/%s" % sid).json()["sliders"] == [20.0, -3.0]
+    sim = SimulatedParticipant(Point(0.5, 0.4))
+    _answer_all(lab, sid, sim, "free")
+    st = lab.lab.live[sid].state
+    assert st.done and [m["reference"] for m in st.matches] == st.order
+    # the quantization test on this participant's own matches
+    r = lab.post("/api/sessions", json={"config": "quant-exemplars", "participant": "p05",
+                                        "seed": 3, "matches_from": sid})
+    assert r.status_code == 200, r.text
+    qid = r.json()["id"]
+    qs = lab.lab.live[qid]
+    assert qs.session.header["config"]["match_source"] == sid
+    tex = _playing(lab)["regions"][1]["texture"]
+    ref, level = qs.state.current
+    assert tex["pitch_db"] == 5.0 and tex["irregularity_db"] == -13.0
+    assert tex.get("quant_db", 0.0) == level
+    assert "quant" not in json.dumps(r.json()["question"])                 # blind
+    _answer_all(lab, qid, sim, "quant")
+    assert [x["similarity"] for x in qs.state.ratings] == \
+        [int(round(5 - q / 2)) if q != 1 else 4 for _, q in qs.state.trials]
 
 
 def test_search_and_staircase_sessions_and_resume_from_the_file(lab, port):
     r = lab.post("/api/sessions", json={"protocol": "search", "participant": "p02", "seed": 9})
     sid = r.json()["id"]
     sim = SimulatedParticipant(Point(0.4, 0.6))
-    for _ in range(4):
-        xs = lab.lab.live[sid].state.ask()
-        r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": {"choose": sim.pick(xs)}})
-        assert r.status_code == 200, r.text
+    _answer_all(lab, sid, sim, "search", limit=4)
     assert lab.post("/api/sessions/%s/answer" % sid, json={"answer": {"save": 2}}).status_code == 200
     mean = lab.lab.live[sid].state.mean
     # a server restart: the session comes back from its file, the same state
@@ -87,17 +153,23 @@ def test_search_and_staircase_sessions_and_resume_from_the_file(lab, port):
     r = lab.get("/api/sessions/%s" % sid)
     assert r.status_code == 200 and r.json()["answers_so_far"] == 5
     assert lab.lab.live[sid].state.mean == mean and len(lab.lab.live[sid].state.saved) == 1
+    r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": {"stop": True}})
+    assert r.json()["question"]["done"] and Session.open(lab.lab.live[sid].session.path).finished
+    assert lab.post("/api/sessions/%s/answer" % sid,
+                    json={"answer": {"choose": 0}}).status_code == 400
     # staircase: pick the odd one (the simulated participant finds it at long texels)
-    r = lab.post("/api/sessions", json={"protocol": "staircase", "participant": "p02", "seed": 3})
+    r = lab.post("/api/sessions", json={"config": "staircase", "participant": "p02", "seed": 3})
     sid = r.json()["id"]
     for _ in range(3):
-        odd = lab.lab.live[sid].odd
+        odd = lab.lab.live[sid].question.odd
         r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": odd})
         assert r.status_code == 200
     st = lab.lab.live[sid].state
     assert st.length_mm == 23.5 and [t["correct"] for t in st.track] == [True] * 3
     tex = _playing(lab)["regions"][0]["texture"]
     assert tex["texel_samples"] == round(23.5 / 0.0053) and tex["v"] == 2
+    listed = {x["id"]: x for x in lab.get("/api/sessions").json()["sessions"]}
+    assert listed[sid]["answers"] == 3 and listed[sid]["config_file"] == "staircase"
 
 
 @pytest.mark.parametrize("path, body, fragment", [
@@ -108,6 +180,14 @@ def test_search_and_staircase_sessions_and_resume_from_the_file(lab, port):
     ("/api/sessions", {"protocol": "pursuit", "participant": "p",
                        "reference": {"kind": "reference", "name": "nope"}}, "reference"),
     ("/api/sessions", [1, 2], "expected a JSON object"),
+    ("/api/sessions", {"config": "nope", "participant": "p"}, "config: no 'nope'"),
+    ("/api/sessions", {"config": "../x", "participant": "p"}, "config: expected"),
+    ("/api/sessions", {"config": "free-nine", "protocol": "free", "participant": "p"}, "not both"),
+    ("/api/sessions", {"config": "free-nine", "participant": "p",
+                       "reference": {"kind": "reference", "name": "4sin"}}, "only the pursuit"),
+    ("/api/sessions", {"config": "quant-exemplars", "participant": "p",
+                       "matches_from": "p/free-7"}, "no session p/free-7"),
+    ("/api/sessions", {"protocol": "quant", "participant": "p"}, "config: "),
 ])
 def test_refused_requests_say_why_and_change_nothing(lab, port, path, body, fragment):
     before = _playing(lab)
@@ -121,12 +201,13 @@ def test_a_refused_answer_changes_nothing(lab, port):
     sid = lab.post("/api/sessions", json={"protocol": "pursuit", "participant": "p03",
                                           "seed": 1}).json()["id"]
     before = _playing(lab)
-    for body in ({"answer": "C"}, {"answer": None}, {"option": 0}, {}):
+    for body in ({"answer": "C"}, {"answer": None}, {"option": 0}, {}, {"answer": ["A"]}):
         r = lab.post("/api/sessions/%s/answer" % sid, json=body)
         assert r.status_code == 400, (body, r.text)
     assert lab.post("/api/sessions/%s/feel" % sid, json={"option": 2}).status_code == 400
     assert lab.post("/api/sessions/%s/feel" % sid, content="x" * 20000).status_code == 400
     assert len(Session.open(lab.lab.live[sid].session.path).records) == 0
+    assert lab.lab.live[sid].state.trial == 0 and not lab.lab.live[sid].state.answers[0]
     assert _playing(lab) == before
     assert lab.get("/api/sessions/p03/pursuit-9").status_code == 400
     assert lab.get("/api/sessions/..%2F..%2Fx/pursuit-1").status_code in (400, 404)

@@ -1,8 +1,11 @@
 """texelpad lab in a real browser: Playwright (PyPI) driving Debian's Chromium
 (/usr/bin/chromium; .ci/run installs it) against `texelpad lab` on the
-virtual board. A whole pursuit session is clicked through; the session file
-holds every answer and the board plays the scene of the last one felt.
-Skipped where Chromium or Playwright is missing."""
+virtual board. One end-to-end test per protocol: the experimenter's page
+starts the session from a shipped config, the participant's page is clicked
+through (it shows no parameter value), and the session file holds every
+answer with the scene the board played - the scene the board plays at the
+end is the one the last answer heard. Skipped where Chromium or Playwright is
+missing."""
 from __future__ import annotations
 
 import json
@@ -21,43 +24,169 @@ pytestmark = [pytest.mark.vboard, pytest.mark.slow]
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+# words a participant's screen must never show (parameter values, the answer)
+SECRET = ("pitch_db", "irregularity_db", " dB", "c/mm", "seed", "odd", "4sin", "pink",
+          "sawtooth", "sigma", "mm")
 
 
-@pytest.fixture
-def lab_url(tmp_path):
-    with lab_process(tmp_path) as (url, _):
-        yield url, tmp_path
-
-
-def test_a_pursuit_session_clicked_through_in_chromium(lab_url, tmp_path):
+@pytest.fixture(scope="module")
+def browser():
     sync_api = pytest.importorskip("playwright.sync_api")
     if not os.path.exists(CHROMIUM):
         pytest.skip("Debian's chromium is not installed (.ci/run installs it)")
-    url, data = lab_url
     with sync_api.sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS,
-                                     chromium_sandbox=False)
-        page = browser.new_page()
-        page.goto(url)
-        page.wait_for_function("document.getElementById('status').textContent.includes('board')")
-        page.select_option("#protocol", "pursuit")
-        page.fill("#participant", "web01")
-        page.click("#start")
-        page.wait_for_selector("#feel-1")
-        assert "pitch" not in page.inner_text("#question")          # blind
-        for i in range(20):
-            page.click("#feel-1")
-            page.wait_for_function("document.getElementById('feel-1').style.fontWeight"
-                                   " === 'bold'")
-            page.click("#answer-%d" % (i % 3))                     # A, B, unsure in turn
-            page.wait_for_function("document.getElementById('progress').textContent"
-                                   ".includes('%s')" % ("finished" if i == 19 else
-                                                        ": %d answers" % (i + 1)))
-        page.screenshot(path=str(tmp_path / "pursuit-done.png"))
-        playing = json.loads(urllib.request.urlopen(url + "api/scene").read())["scene"]
-        browser.close()
-    (path,) = list(Path(data).glob("web01/pursuit-*.jsonl"))
-    s = Session.open(path)
-    assert [r["answer"] for r in s.records] == [["A", "B", "unsure"][i % 3] for i in range(20)]
-    assert all(r["playing"] == 1 for r in s.records)
-    assert playing == s.records[-1]["scene"]
+        b = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS, chromium_sandbox=False)
+        yield b
+        b.close()
+
+
+@pytest.fixture(scope="module")
+def lab(tmp_path_factory):
+    data = tmp_path_factory.mktemp("lab")
+    with lab_process(data) as (url, _):
+        yield url, data
+
+
+def _get(url: str):
+    return json.loads(urllib.request.urlopen(url).read())
+
+
+def _start(browser, url: str, config: str, participant: str, seed: int, **extra):
+    """The experimenter's page: pick the config, the participant, the seed;
+    start; the participant's page opened from its link."""
+    page = browser.new_page()
+    page.goto(url)
+    page.wait_for_function("document.getElementById('config').options.length > 3")
+    page.select_option("#config", config)
+    page.fill("#participant", participant)
+    page.fill("#seed", str(seed))
+    if "matches" in extra:
+        page.wait_for_function("[...document.getElementById('matches').options]"
+                               ".some(o => o.value === %s)" % json.dumps(extra["matches"]))
+        page.select_option("#matches", extra["matches"])
+    page.click("#start")
+    page.wait_for_selector("#participant-link[href*='/participant?s=%s/']" % participant)
+    href = page.get_attribute("#participant-link", "href")
+    sid = href.split("s=")[1]
+    page.wait_for_selector("#detail")           # the experimenter sees the parameters
+    detail = page.inner_text("#detail")
+    p = browser.new_page()
+    p.goto(url + href.lstrip("/"))
+    p.wait_for_selector("#question:not([hidden])")
+    return page, p, sid, detail
+
+
+def _wait_answers(p, n: int, done: bool = False):
+    if done:
+        p.wait_for_selector("#done:not([hidden])")
+    else:
+        p.wait_for_function("document.getElementById('progress').textContent"
+                            ".includes('%d answer')" % n)
+
+
+def _blind(p):
+    text = p.inner_text("body")
+    for word in SECRET:
+        assert word not in text, word
+
+
+def _finish(url: str, data: Path, sid: str, n: int) -> Session:
+    s = Session.open(Path(data) / (sid + ".jsonl"))
+    answers = list(s.answers())
+    assert len(answers) == n and s.finished
+    assert _get(url + "api/scene")["scene"] == answers[-1]["scene"]
+    return s
+
+
+def test_pursuit_clicked_through(browser, lab):
+    url, data = lab
+    exp, p, sid, detail = _start(browser, url, "pursuit-4sin", "web01", 4)
+    assert "centre\t5 dB pitch, -10 dB irregularity" in detail and "edge" in detail
+    _blind(p)
+    for i in range(20):
+        p.click("#feel-1")
+        p.wait_for_selector("#feel-1.playing")
+        p.click("#answer-%d" % (i % 3))                     # A, B, unsure in turn
+        _wait_answers(p, i + 1, done=i == 19)
+    s = _finish(url, data, sid, 20)
+    assert [r["answer"] for r in s.answers()] == [["A", "B", "unsure"][i % 3] for i in range(20)]
+    assert all(r["playing"] == 1 for r in s.answers())
+
+
+def test_staircase_clicked_through(browser, lab):
+    url, data = lab
+    exp, p, sid, detail = _start(browser, url, "staircase", "web02", 3)
+    assert "length_mm" in detail and "26" in detail
+    _blind(p)
+    assert p.inner_text("#timer").endswith(" s")            # 30 s per trial, shown
+    for i in range(4):
+        p.click("#feel-2")
+        p.wait_for_selector("#feel-2.playing")
+        p.click("#answer-%d" % (i % 3))
+        _wait_answers(p, i + 1)
+    s = Session.open(Path(data) / (sid + ".jsonl"))
+    answers = list(s.answers())
+    assert [r["picked"] for r in answers] == [0, 1, 2, 0]
+    assert all(r["answer"] == (r["picked"] == r["odd"]) for r in answers)
+    assert all(r["scene"]["regions"][0]["texture"]["texel_samples"] ==
+               round(r["state"]["length_mm"] / 0.0053) for r in answers)
+    assert _get(url + "api/scene")["scene"]["regions"][0]["texture"]["texel_samples"] == \
+        round(_get(url + "api/sessions/%s/monitor" % sid)["detail"]["length_mm"] / 0.0053)
+
+
+def test_search_clicked_through(browser, lab):
+    url, data = lab
+    exp, p, sid, detail = _start(browser, url, "search-4sin", "web03", 9)
+    assert "sigma" in detail and "candidates" in detail
+    _blind(p)
+    for i in range(3):
+        p.click("#feel-%d" % (i % 3))
+        p.click("#answer-%d" % (i % 3))                     # choose 1, 2, 3
+        _wait_answers(p, i + 1)
+    p.click("#answer-4")                                    # save candidate 2
+    _wait_answers(p, 4)
+    p.click("#feel-2")
+    p.wait_for_selector("#feel-2.playing")
+    p.click("#answer-6")                                    # satisfied: stop
+    _wait_answers(p, 5, done=True)
+    s = _finish(url, data, sid, 5)
+    assert [r["answer"] for r in s.answers()] == [{"choose": 0}, {"choose": 1}, {"choose": 2},
+                                                  {"save": 1}, {"stop": True}]
+    assert len(s.records[-1]["result"]["saved"]) == 1
+
+
+def test_free_exploration_then_quantization_clicked_through(browser, lab):
+    url, data = lab
+    exp, p, sid, detail = _start(browser, url, "free-nine", "web04", 2)
+    assert "reference" in detail
+    _blind(p)
+    for i in range(9):
+        # drag the sliders (each change plays), pick a confidence, submit
+        for v in (200, 700, 450 + 10 * i):
+            p.fill("#pitch", str(v))
+        p.fill("#irregularity", str(300 + 20 * i))
+        p.check("#confidence-%d" % (1 + i % 5))
+        p.click("#submit")
+        _wait_answers(p, i + 1, done=i == 8)
+    s = _finish(url, data, sid, 9)
+    answers = list(s.answers())
+    # slider 0..1000 over -10..20 dB and -30..0 dB: the values the board played
+    assert answers[0]["answer"] == {"pitch_db": 3.5, "irregularity_db": -21.0, "confidence": 1}
+    assert answers[0]["scene"]["regions"][1]["texture"]["pitch_db"] == 3.5
+    moves = [r for r in s.records if r["kind"] == "move" and r["trial"] == 0]
+    assert len(moves) >= 3 and moves[-1]["pitch_db"] == 3.5
+    # the quantization test on web04's own matches
+    exp2, q, qid, detail = _start(browser, url, "quant-exemplars", "web04", 5, matches=sid)
+    assert "quant_db" in detail
+    _blind(q)
+    for i in range(12):
+        q.click("#answer-%d" % (i % 5))
+        _wait_answers(q, i + 1, done=i == 11)
+    qs = _finish(url, data, qid, 12)
+    free = {a["state"]["reference"]: a["answer"] for a in answers}
+    for r in qs.answers():
+        tex = r["scene"]["regions"][1]["texture"]
+        ref = r["scene"]["regions"][0]["texture"]["name"]
+        assert tex["pitch_db"] == free[ref]["pitch_db"]
+        assert tex.get("quant_db", 0.0) == r["state"]["quant_db"]
+    assert [r["answer"] for r in qs.answers()] == [1 + i % 5 for i in range(12)]

@@ -19,14 +19,16 @@ def add_lab(p: argparse.ArgumentParser) -> None:
                    help="export: the folder for sessions.csv and the figures (default: "
                         "./lab-export)")
     p.description = ("Serve texelpad lab on http://127.0.0.1:PORT (this machine only): the "
-                    "papers' protocols (pursuit vector, texel-length staircase, "
-                    "preference search) driving one board, every answer written to the "
+                    "papers' protocols (free exploration, quantization test, "
+                    "pursuit vector, texel-length staircase, preference search) driving one board, every answer written to the "
                     "session's file as it is given. Without --port it runs on the virtual "
                     "board. The URL is the first line printed.")
     p.add_argument("--port", help="the board's serial port (default: the virtual board)")
     p.add_argument("--board", help="board file to start when texelpad is not running there")
     p.add_argument("--data", default="lab-data", metavar="DIR",
                    help="the sessions folder (default: ./lab-data)")
+    p.add_argument("--configs", metavar="DIR",
+                   help="a folder of your own study configs (*.json) beside the shipped ones")
     p.add_argument("--http-port", type=int, default=0, metavar="N",
                    help="the web server's port on 127.0.0.1 (default: a free one)")
     p.add_argument("--open", action="store_true", help="open the page in the browser")
@@ -62,7 +64,11 @@ def cmd_lab(args: argparse.Namespace) -> int:
                 owner = BoardOwner(vb.port, args.board or "virtual", realtime=True)
             else:
                 owner = BoardOwner(args.port, args.board)
-            app = make_app(Lab(owner, args.data))
+            try:
+                lab = Lab(owner, args.data, args.configs)
+            except ValueError as e:
+                raise CliError("--configs", str(e)) from None
+            app = make_app(lab)
             print(url, flush=True)
             if args.open:
                 webbrowser.open(url)

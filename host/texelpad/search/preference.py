@@ -8,7 +8,7 @@ library's BoundTransform keeps candidates inside). The participant picks the
 candidate closest to the target; the pick becomes a ranking - chosen first,
 the other two in random order (from the search's own seeded generator) - and
 the ranking is CMA-ES's fitness (0, 1, 2). "save" keeps a candidate; the
-search stops when the participant says so.
+search stops when the participant says so (stop()).
 
 Dimensions: "pitch" and "irregularity" always (texelpad.study.space's u, v),
 optionally "texel_length" (0..1 -> 0.05 .. 2 mm, log scale) and "level" (the
@@ -62,6 +62,7 @@ class PreferenceSearch:
     texture_seed: int = 7           # the texel generator's seed of every candidate
     saved: list[dict] = field(default_factory=list)
     history: list[dict] = field(default_factory=list)
+    stopped: bool = False           # the participant was satisfied
 
     def __post_init__(self) -> None:
         dims = tuple(self.dims)
@@ -108,9 +109,25 @@ class PreferenceSearch:
         """ask() as texel parameter sets."""
         return [candidate_params(x, self.dims, self.texture_seed) for x in self.ask()]
 
+    @property
+    def done(self) -> bool:
+        return self.stopped
+
+    def stop(self) -> dict:
+        """The participant is satisfied: the search ends (its mean and the
+        saved candidates are the result)."""
+        self._not_done()
+        self.stopped = True
+        return {"iteration": self.iteration, "mean": self.mean, "saved": len(self.saved)}
+
+    def _not_done(self) -> None:
+        if self.stopped:
+            raise ValueError("the search is finished: nothing to answer")
+
     def choose(self, k: int) -> dict:
         """The participant picked candidate k (0..2): ranking chosen-first, the
         others in random order; CMA-ES's update. Returns the iteration's record."""
+        self._not_done()
         xs = self.ask()
         if isinstance(k, bool) or not isinstance(k, int) or not 0 <= k < len(xs):
             raise ValueError("choice: expected 0 .. %d, got %r" % (len(xs) - 1, k))
@@ -129,6 +146,7 @@ class PreferenceSearch:
 
     def save(self, k: int) -> dict:
         """Keep candidate k of the current iteration."""
+        self._not_done()
         xs = self.ask()
         if isinstance(k, bool) or not isinstance(k, int) or not 0 <= k < len(xs):
             raise ValueError("save: expected 0 .. %d, got %r" % (len(xs) - 1, k))

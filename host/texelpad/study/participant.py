@@ -10,7 +10,10 @@ to the target plus Gaussian noise of SD `noise` (normalised units: 0.025 is
 when the two differ by less than `unsure_below`. The oddity task is a
 psychometric function of texel length: P(correct) = 1/3 + 2/3 / (1 +
 exp(-(length - threshold) / slope)) - chance (1/3) far below the threshold,
-certain far above.
+certain far above. In the free exploration it sets the sliders on its target
+(plus the noise) with confidence 4; in the quantization test it rates
+similarity 5 - q/2 (q the quantization in dB; plus noise of SD noise*40,
+rounded to 1..5) - a model for driving the protocols, not a finding.
 """
 from __future__ import annotations
 
@@ -66,4 +69,16 @@ class SimulatedParticipant:
             return self.odd_one_out(state.length_mm)
         if protocol == "search":
             return {"choose": self.pick(state.ask())}
+        if protocol == "free":
+            from .space import irregularity_db, pitch_db
+            c = state.config
+            n = (lambda: self._rng.gauss(0.0, self.noise)) if self.noise else (lambda: 0.0)
+            p = min(c.pitch_db[1], max(c.pitch_db[0], pitch_db(self.target.u + n())))
+            s = min(c.irregularity_db[1], max(c.irregularity_db[0],
+                                               irregularity_db(self.target.v + n())))
+            return {"pitch_db": round(p, 3), "irregularity_db": round(s, 3), "confidence": 4}
+        if protocol == "quant":
+            q = state.current[1]
+            r = 5.0 - q / 2.0 + (self._rng.gauss(0.0, self.noise * 40) if self.noise else 0.0)
+            return int(min(5, max(1, round(r))))
         raise ValueError("protocol: unknown %r" % (protocol,))

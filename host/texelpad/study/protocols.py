@@ -6,26 +6,42 @@ rebuilds it exactly - after a crash at any point, or to replay it.
     apply(protocol, state, answer)        # what a participant answered
     state = replay(session)               # texelpad.study.session.Session
 
-Answers: pursuit "A" | "B" | "unsure"; staircase true | false (the odd one
-was found); search {"choose": k} | {"save": k}.
+Answers: free {"pitch_db", "irregularity_db", "confidence"}; quant a
+similarity 1..5; pursuit "A" | "B" | "unsure"; staircase true | false (the odd
+one was found); search {"choose": k} | {"save": k} | {"stop": true}.
+Every state has `done`.
 """
 from __future__ import annotations
 
 from typing import Any
 
 from ..search.preference import PreferenceSearch
+from . import free as _free
 from . import pursuit as _pursuit
+from . import quant as _quant
 from . import staircase as _staircase
 from .session import Session, SessionError
 
-PROTOCOLS = ("pursuit", "staircase", "search")
+PROTOCOLS = ("free", "quant", "pursuit", "staircase", "search")
+TITLES = {"free": "free exploration (seed 000)",
+          "quant": "quantization test (seed 000)",
+          "pursuit": "guided exploration: pursuit vector (seed 000)",
+          "staircase": "texel-length oddity staircase (seed 001)",
+          "search": "preference-driven search: CMA-ES (seed 003)"}
+# config keys that are not the state's: the scenes' business (the texture
+# compared against, the staircase's texel texture) and the config file's name
+SCENE_KEYS = ("reference", "distribution", "config_file")
 
 
 def start(protocol: str, config: dict[str, Any], seed: int) -> Any:
     """The protocol's state before any answer. config: its Config's fields
     (JSON); "reference" (the texture compared against: the scenes' business)
     and "distribution" (the staircase's texel texture) are not the state's."""
-    config = {k: v for k, v in config.items() if k not in ("reference", "distribution")}
+    config = {k: v for k, v in config.items() if k not in SCENE_KEYS}
+    if protocol == "free":
+        return _free.Free(seed, _free.Config(**_tuples(config)))
+    if protocol == "quant":
+        return _quant.Quant(seed, _quant.Config(**_tuples(config)))
     if protocol == "pursuit":
         return _pursuit.Pursuit(seed, _pursuit.Config(**_tuples(config)))
     if protocol == "staircase":
@@ -41,21 +57,25 @@ def _tuples(config: dict[str, Any]) -> dict[str, Any]:
 
 
 def apply(protocol: str, state: Any, answer: Any) -> dict:
-    if protocol == "pursuit":
-        return state.answer(answer)
-    if protocol == "staircase":
+    if protocol in ("free", "quant", "pursuit", "staircase"):
         return state.answer(answer)
     if protocol == "search":
         if not isinstance(answer, dict) or len(answer) != 1:
-            raise SessionError("search answer: expected {'choose': k} or {'save': k}, got %r"
-                               % (answer,))
+            raise SessionError("search answer: expected {'choose': k}, {'save': k} or "
+                               "{'stop': true}, got %r" % (answer,))
         (what, k), = answer.items()
         if what == "choose":
             return state.choose(k)
         if what == "save":
             return state.save(k)
-        raise SessionError("search answer: expected choose or save, got %r" % (what,))
+        if what == "stop" and k is True:
+            return state.stop()
+        raise SessionError("search answer: expected choose, save or stop, got %r" % (answer,))
     raise SessionError("protocol: unknown %r" % (protocol,))
+
+
+def done(state: Any) -> bool:
+    return bool(state.done)
 
 
 def replay(session: Session) -> Any:

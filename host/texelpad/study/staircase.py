@@ -35,6 +35,17 @@ class Config:
     trial_seconds: float = 30.0
     threshold_from_reversal: int = 8  # mean of the lengths at reversals >= this (1-based)
 
+    def __post_init__(self) -> None:
+        for name in ("start_mm", "step_mm", "fine_step_mm", "floor_mm", "trial_seconds"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v < 1000:
+                raise ValueError("%s: expected a length/time > 0, got %r" % (name, v))
+        for name in ("fine_after_reversals", "stop_after_reversals", "down_after",
+                     "threshold_from_reversal"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= 100:
+                raise ValueError("%s: expected an int 1 .. 100, got %r" % (name, v))
+
 
 @dataclass
 class Staircase:

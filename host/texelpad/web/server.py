@@ -2,26 +2,35 @@
 by uvicorn on 127.0.0.1 only): the study protocols (texelpad.study,
 texelpad.search) on one board (web/owner.py, the only owner of a Board).
 
-    GET  /                                     the page
-    GET  /api/status                           the board's status (or why it is lost)
-    GET  /api/scene                            the canonical scene it plays
-    POST /api/sessions                         {protocol, participant, seed?, config?}
-    GET  /api/sessions/{participant}/{name}    the session's question (resumed from its file)
-    POST /api/sessions/{participant}/{name}/feel    {option: k}  play option k
-    POST /api/sessions/{participant}/{name}/answer  {answer: ...}
+Two pages: the experimenter's (/) picks a protocol's config, a participant id
+and starts or resumes a session, and follows it with the parameters shown;
+the participant's (/participant?s=P/NAME) shows only what the participant
+may see - option labels and answers, never a parameter value.
+
+    GET  /api/status                            the board's status (or why it is lost)
+    GET  /api/scene                             the canonical scene it plays
+    GET  /api/configs                           the study configs (texelpad.study.configs)
+    GET  /api/sessions                          every session under the data folder
+    POST /api/sessions                          {config: NAME | protocol + config?, participant,
+                                                 seed?, reference?, matches_from?}
+    GET  /api/sessions/P/NAME                   the participant's question (resumed from its file)
+    GET  /api/sessions/P/NAME/monitor           the experimenter's view: parameters, state
+    POST /api/sessions/P/NAME/feel              {option: k} | free: {pitch_db, irregularity_db}
+    POST /api/sessions/P/NAME/answer            {answer: ...}
+    POST /api/sessions/P/NAME/replay            {record: n}: play what answer n heard
 
 Every request is validated (a JSON object of known keys, at most 16 KB; ids
 as texelpad.study.session.check_name; the board's own scene validation is the
 last word) and a refused one changes nothing: 400 with the reason, 503 when
-the board is gone. Every answer is in the session file (fsynced) before the
-reply. Questions show no parameter values: the participant screen is blind.
+the board is gone. An answer is checked, then written to the session file
+(fsynced), and only then moves the protocol's state: a crash at any point
+resumes from the file.
 """
 from __future__ import annotations
 
-import json
 import random
 import threading
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -29,280 +38,286 @@ from starlette.applications import Starlette
 from starlette.middleware import Middleware
 from starlette.middleware.trustedhost import TrustedHostMiddleware
 from starlette.requests import Request
-from starlette.responses import HTMLResponse, JSONResponse
+from starlette.responses import FileResponse
 from starlette.routing import Mount, Route
 from starlette.staticfiles import StaticFiles
 
 from ..link.board import host_check
-from ..search.preference import candidate_params
+from ..study import configs as C
 from ..study import protocols
+from ..study import questions as Q
 from ..study import scenes as S
-from ..study.session import Session, check_name
-from .api import BODY_MAX, Refused, body_of, handle, keys as _keys
+from ..study.quant import EXEMPLARS
+from ..study.session import Session, SessionError, check_name, sessions
 from . import strip
+from .api import Refused, body_of, handle, keys
 from .owner import BoardOwner
 
-PROTOCOL_KEYS = {"protocol", "participant", "seed", "config", "reference"}
+CREATE_KEYS = {"config", "protocol", "participant", "seed", "reference", "matches_from"}
+STATIC = Path(__file__).with_name("static")   # the pages, their scripts and styles
+LOCAL_HOSTS = ["127.0.0.1", "localhost"]
 
 
 @dataclass
 class Live:
     """A session in memory: its file, the protocol's state, the current
-    question (built once per state: None after an answer), its options
-    (scenes, server side) and what plays."""
+    question (built once per state: None after an answer) and what plays."""
     session: Session
     state: Any
-    reference: dict[str, Any]
-    question: dict[str, Any] | None = None
-    options: list[dict[str, Any]] = field(default_factory=list)
-    odd: int | None = None
+    question: Q.Question | None = None
     playing: int | None = None
     playing_scene: dict[str, Any] | None = None
+    moves: int = 0                          # free exploration: slider changes this trial
+    sliders: tuple[float, float] | None = None
+
+    @property
+    def protocol(self) -> str:
+        return self.session.header["protocol"]
 
 
 class Lab:
-    def __init__(self, owner: BoardOwner, data: str | Path) -> None:
+    def __init__(self, owner: BoardOwner, data: str | Path,
+                 configs: str | Path | None = None) -> None:
         self.owner = owner
         self.data = Path(data)
         self.data.mkdir(parents=True, exist_ok=True)
+        self.configs = configs
+        C.available(configs)                # a missing --configs folder is said at once
         self.live: dict[str, Live] = {}
-        self.lock = threading.Lock()       # one request at a time (web/api.handle)
+        self.lock = threading.Lock()        # one request at a time (web/api.handle)
 
-    # --- protocol questions ---------------------------------------------------------
-    def _question(self, lv: Live) -> dict[str, Any]:
-        """The current question of the session (built when its state changed)."""
+    # --- questions and playing ---------------------------------------------------------
+    def _question(self, lv: Live) -> Q.Question:
         if lv.question is None:
-            lv.question = self._build_question(lv)
+            lv.question = Q.ask(lv.protocol, lv.state, lv.session.header, self.owner.display())
         return lv.question
 
-    def _build_question(self, lv: Live) -> dict[str, Any]:
-        h = lv.session.header
-        proto, st = h["protocol"], lv.state
-        display = self.owner.display()
-        if proto == "pursuit":
-            q = st.next_comparison()
-            if q is None:
-                return {"done": True, "result": {"centre": [st.centre.u, st.centre.v]}}
-            lv.options = [S.point_scene(lv.reference, q.a, display, name="A"),
-                          S.point_scene(lv.reference, q.b, display, name="B")]
-            return {"done": False, "trial": q.trial, "index": q.index, "options": ["A", "B"],
-                    "answers": ["A", "B", "unsure"]}
-        if proto == "search":
-            xs = st.ask()
-            lv.options = [S.split(lv.reference, candidate_params(x, st.dims, st.texture_seed),
-                                  display, name="candidate %d" % (k + 1))
-                          for k, x in enumerate(xs)]
-            return {"done": False, "iteration": st.iteration, "options": ["1", "2", "3"],
-                    "answers": [{"choose": k} for k in range(3)] + [{"save": k} for k in range(3)]}
-        if proto == "staircase":
-            if st.done:
-                return {"done": True, "result": {"threshold_mm": st.threshold_mm()}}
-            lv.options, lv.odd = S.staircase_scenes(st.texel_samples(), len(st.track),
-                                                    h["seed"], display,
-                                                    h["config"].get("distribution"))
-            return {"done": False, "trial": len(st.track), "options": ["1", "2", "3"],
-                    "answers": [0, 1, 2]}
-        raise Refused("protocol: unknown %r" % proto)
-
-    def _play(self, lv: Live, k: int) -> dict[str, Any]:
-        st, canonical = self.owner.push(lv.options[k])
+    def _play(self, lv: Live, k: int) -> None:
+        _, canonical = self.owner.push(lv.question.options[k])
         lv.playing, lv.playing_scene = k, canonical
-        return st
+
+    def _begin(self, lv: Live) -> None:
+        """Play what the current question starts with: option 0; the free
+        exploration's sliders at their start (or where they were)."""
+        q = self._question(lv)
+        if q.done:
+            return
+        if lv.protocol == "free":
+            p, s = lv.sliders or lv.state.config.start
+            self._slide(lv, p, s, record=lv.sliders is None)
+        else:
+            self._play(lv, 0)
+
+    def _slide(self, lv: Live, pitch: Any, irregularity: Any, record: bool = True) -> dict:
+        scene, (p, s) = Q.slider_scene(lv.state, lv.session.header, self.owner.display(),
+                                       pitch, irregularity, lv.moves)
+        _, canonical = self.owner.push(scene)
+        lv.playing, lv.playing_scene, lv.sliders = 0, canonical, (p, s)
+        if record:          # the path the participant took, for analysis (not an answer)
+            lv.session.append({"kind": "move", "trial": lv.state.trial, "move": lv.moves,
+                               "pitch_db": p, "irregularity_db": s, "scene": canonical})
+        lv.moves += 1
+        return {"playing": 0}
+
+    def _key(self, participant: Any, name: Any) -> str:
+        return "%s/%s" % (check_name("participant", participant), check_name("session", name))
 
     # --- the API ----------------------------------------------------------------------
     def create(self, body: dict[str, Any]) -> dict[str, Any]:
-        _keys(body, PROTOCOL_KEYS)
-        proto = body.get("protocol")
-        if proto not in protocols.PROTOCOLS:
-            raise Refused("protocol: expected one of %s, got %r"
-                          % (", ".join(protocols.PROTOCOLS), proto))
+        keys(body, CREATE_KEYS)
         participant = check_name("participant", body.get("participant"))
-        seed = body.get("seed", random.SystemRandom().randrange(1 << 31))
+        if isinstance(body.get("config"), str):         # a config file by name
+            if "protocol" in body:
+                raise Refused("give a config's name or a protocol, not both")
+            cf = C.load(body["config"], self.configs)
+            proto, config = cf["protocol"], dict(cf.get("config", {}))
+            reference = body.get("reference") or cf.get("reference")
+            seed = body.get("seed", cf.get("seed"))
+            config["config_file"] = body["config"]
+        else:
+            proto = body.get("protocol")
+            if proto not in protocols.PROTOCOLS:
+                raise Refused("protocol: expected one of %s, got %r"
+                              % (", ".join(protocols.PROTOCOLS), proto))
+            config = body.get("config") or {}
+            if not isinstance(config, dict):
+                raise Refused("config: expected a config's name or an object")
+            config = dict(config)
+            reference, seed = body.get("reference"), body.get("seed")
+        if seed is None:
+            seed = random.SystemRandom().randrange(1 << 31)
         if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 1 << 31:
             raise Refused("seed: expected an int in [0, 2^31), got %r" % (seed,))
-        config = body.get("config") or {}
-        if not isinstance(config, dict):
-            raise Refused("config: expected an object")
-        reference = body.get("reference") or S.DEFAULT_REFERENCE
-        if not isinstance(reference, dict):
-            raise Refused("reference: expected a texture object")
+        if proto in ("pursuit", "search"):
+            reference = reference or S.DEFAULT_REFERENCE
+            if not isinstance(reference, dict):
+                raise Refused("reference: expected a texture object")
+            config["reference"] = reference
+        elif reference is not None:
+            raise Refused("reference: only the pursuit and the search take one (the free "
+                          "exploration and the quantization test name theirs in the config)")
+        if body.get("matches_from") is not None:
+            if proto != "quant":
+                raise Refused("matches_from: only the quantization test takes matches")
+            config["matches"], config["match_source"] = self._matches_from(
+                body["matches_from"], config)
         try:
             state = protocols.start(proto, config, seed)
         except (TypeError, ValueError) as e:
             raise Refused("config: %s" % e) from None
-        # the reference must be a texture the board takes: its own validation, here
         display = self.owner.display()
-        host_check(S.split(reference, {"pitch_db": 0.0, "irregularity_db": 0.0, "v": 2},
-                           display), display)
-        sess = Session.create(self.data, proto, participant,
-                              dict(config, reference=reference), seed)
-        lv = Live(sess, state, reference)
+        if "reference" in config:   # the board's own validation, before any file is made
+            host_check(S.split(config["reference"],
+                               {"pitch_db": 0.0, "irregularity_db": 0.0, "v": 2}, display),
+                       display)
+        sess = Session.create(self.data, proto, participant, config, seed)
+        lv = Live(sess, state)
         key = "%s/%s" % (participant, sess.path.stem)
         self.live[key] = lv
-        q = self._question(lv)
-        if not q["done"]:
-            self._play(lv, 0)
-        return {"id": key, "question": q, "playing": lv.playing}
+        self._begin(lv)
+        return self._view(key, lv)
 
-    def get(self, participant: str, name: str) -> Live:
-        check_name("participant", participant)
-        check_name("session", name)
-        key = "%s/%s" % (participant, name)
+    def _matches_from(self, sid: Any, config: dict[str, Any]) -> tuple[dict, str]:
+        """The participant's own free-exploration matches (seed 000's
+        quantization test), from that session's file."""
+        if not isinstance(sid, str) or sid.count("/") != 1:
+            raise Refused("matches_from: expected a free-exploration session id P/NAME")
+        lv = self.get(*sid.split("/"))
+        if lv.protocol != "free":
+            raise Refused("matches_from: %s is a %s session, not a free exploration"
+                          % (sid, lv.protocol))
+        refs = config.get("references") or EXEMPLARS
+        out = {}
+        for r in refs:
+            m = lv.state.match_of(r)
+            if m is None:
+                raise Refused("matches_from: %s has no match of %s yet" % (sid, r))
+            out[r] = m
+        return out, sid
+
+    def get(self, participant: Any, name: Any) -> Live:
+        key = self._key(participant, name)
         lv = self.live.get(key)
         if lv is None:                                  # resume from its file
             path = self.data / participant / (name + ".jsonl")
             if not path.is_file():
                 raise Refused("no session %s" % key)
             sess = Session.open(path)
-            reference = sess.header["config"].get("reference", S.DEFAULT_REFERENCE)
-            lv = Live(sess, protocols.replay(sess), reference)
+            lv = Live(sess, protocols.replay(sess))
+            if lv.protocol == "free":                   # the sliders where they were
+                moves = [r for r in sess.records if r.get("kind") == "move"
+                         and r.get("trial") == lv.state.trial]
+                if moves:
+                    lv.moves = moves[-1]["move"] + 1
+                    lv.sliders = (moves[-1]["pitch_db"], moves[-1]["irregularity_db"])
             self.live[key] = lv
         return lv
 
+    def _view(self, key: str, lv: Live) -> dict[str, Any]:
+        q = self._question(lv)
+        return {"id": key, "protocol": lv.protocol, "question": q.public,
+                "playing": lv.playing, "sliders": lv.sliders if lv.protocol == "free" else None,
+                "answers_so_far": sum(1 for _ in lv.session.answers())}
+
     def question(self, participant: str, name: str) -> dict[str, Any]:
+        key = self._key(participant, name)
         lv = self.get(participant, name)
-        return {"id": "%s/%s" % (participant, name), "question": self._question(lv),
-                "playing": lv.playing, "answers_so_far": len(lv.session.records)}
+        if lv.playing is None:          # (resumed: play where it stopped)
+            self._begin(lv)
+        return self._view(key, lv)
+
+    def monitor(self, participant: str, name: str) -> dict[str, Any]:
+        """The experimenter's view: the participant's, plus the parameters."""
+        key = self._key(participant, name)
+        lv = self.get(participant, name)
+        out = self._view(key, lv)
+        h = lv.session.header
+        out.update(detail=lv.question.detail, seed=h["seed"], config=h["config"],
+                   title=protocols.TITLES[lv.protocol], file=str(lv.session.path),
+                   records=len(lv.session.records), finished=lv.session.finished,
+                   playing_scene=lv.playing_scene)
+        return out
 
     def feel(self, participant: str, name: str, body: dict[str, Any]) -> dict[str, Any]:
-        _keys(body, {"option"})
         lv = self.get(participant, name)
         q = self._question(lv)
+        if q.done:
+            raise Refused("the session is finished")
+        if lv.protocol == "free":
+            keys(body, {"pitch_db", "irregularity_db"})
+            return self._slide(lv, body.get("pitch_db"), body.get("irregularity_db"))
+        keys(body, {"option"})
         k = body.get("option")
-        if q["done"] or isinstance(k, bool) or not isinstance(k, int) \
-                or not 0 <= k < len(lv.options):
-            raise Refused("option: expected 0 .. %d, got %r" % (len(lv.options) - 1, k))
+        if isinstance(k, bool) or not isinstance(k, int) or not 0 <= k < len(q.options):
+            raise Refused("option: expected 0 .. %d, got %r" % (len(q.options) - 1, k))
         self._play(lv, k)
         return {"playing": k}
 
     def answer(self, participant: str, name: str, body: dict[str, Any]) -> dict[str, Any]:
-        _keys(body, {"answer"})
+        keys(body, {"answer"})
+        key = self._key(participant, name)
         lv = self.get(participant, name)
         q = self._question(lv)
-        if q["done"]:
-            raise Refused("the session is finished")
-        a = body.get("answer")
-        if a not in q["answers"]:
-            raise Refused("answer: expected one of %s, got %r" % (json.dumps(q["answers"]), a))
-        proto = lv.session.header["protocol"]
-        rec = {"question": q, "answer": a, "scene": lv.playing_scene, "playing": lv.playing}
-        if proto == "staircase":
-            rec["answer"] = a == lv.odd             # what the protocol takes: found or not
-            rec["picked"] = a
-            rec["odd"] = lv.odd
-        protocols.apply(proto, lv.state, rec["answer"])
-        lv.question = None                              # the state moved on
-        lv.session.append(rec)
+        taken = Q.normalise(lv.protocol, q, lv.state, body.get("answer"))
+        rec = {"question": q.public, "answer": taken, "scene": lv.playing_scene,
+               "playing": lv.playing, "state": q.detail}
+        if lv.protocol == "staircase":
+            rec["picked"], rec["odd"] = body["answer"], q.odd
+        lv.session.append(rec)                          # on disk first, then the state moves
+        result = protocols.apply(lv.protocol, lv.state, taken)
+        lv.question, lv.sliders, lv.moves = None, None, 0
         nq = self._question(lv)
-        if not nq["done"]:
-            self._play(lv, 0)
-        return {"question": nq, "playing": lv.playing, "answers_so_far": len(lv.session.records)}
+        if nq.done:
+            lv.session.append({"kind": "end", "result": nq.detail})
+        else:
+            self._begin(lv)
+        out = self._view(key, lv)
+        out["result"] = result if lv.protocol != "staircase" else None
+        return out
 
+    def replay(self, participant: str, name: str, body: dict[str, Any]) -> dict[str, Any]:
+        """Play what answer n of a session heard (the recorded canonical scene)."""
+        keys(body, {"record"})
+        lv = self.get(participant, name)
+        n = body.get("record")
+        recs = list(lv.session.answers())
+        if isinstance(n, bool) or not isinstance(n, int) or not 0 <= n < len(recs):
+            raise Refused("record: expected 0 .. %d, got %r" % (len(recs) - 1, n))
+        scene = recs[n].get("scene")
+        if not scene:
+            raise Refused("answer %d has no scene recorded" % n)
+        self.owner.push(scene)
+        lv.playing = None
+        return {"replayed": n}
 
-
-PAGE = """<!doctype html>
-<html lang="en"><head><meta charset="utf-8"><title>texelpad lab</title>
-<style>
-body { font: 16px system-ui, sans-serif; margin: 2em; max-width: 46em; }
-button { font-size: 1.1em; margin: 0.2em; padding: 0.4em 1em; }
-#question { margin-top: 1em; } .muted { color: #666; } .err { color: #b00; }
-</style></head>
-<body>
-<h1>texelpad lab</h1>
-<p id="status" class="muted">connecting to the board ...</p>
-<section id="setup">
-  <label>protocol <select id="protocol">
-    <option value="pursuit">guided exploration (pursuit vector)</option>
-    <option value="staircase">texel-length oddity staircase</option>
-    <option value="search">preference search</option></select></label>
-  <label>participant <input id="participant" value="p01" size="10"></label>
-  <button id="start">start</button>
-  <label>or resume <input id="resume-id" placeholder="p01/pursuit-1" size="16"></label>
-  <button id="resume">resume</button>
-</section>
-<section id="question" hidden>
-  <p id="prompt"></p>
-  <div id="feel"></div>
-  <div id="answers"></div>
-  <p id="progress" class="muted"></p>
-</section>
-<p id="error" class="err"></p>
-<script>
-let sid = null;
-const $ = (id) => document.getElementById(id);
-async function call(method, path, body) {
-  const r = await fetch(path, {method, headers: {"content-type": "application/json"},
-                               body: body === undefined ? undefined : JSON.stringify(body)});
-  const j = await r.json();
-  if (!r.ok) { $("error").textContent = j.error || r.statusText; throw new Error(j.error); }
-  $("error").textContent = "";
-  return j;
-}
-const PROMPTS = {
-  pursuit: "Feel A and B. Which one is closer to the reference on the left?",
-  staircase: "Feel the three textures. Which one is different?",
-  search: "Feel the three candidates. Which one is closest to the reference on the left?"};
-function label(a) {
-  if (typeof a === "number") return "texture " + (a + 1) + " is the odd one";
-  if (typeof a === "string") return a === "unsure" ? "unsure" : a + " is closer";
-  const [k, v] = Object.entries(a)[0];
-  return (k === "choose" ? "choose " : "save ") + (v + 1);
-}
-function show(res) {
-  const q = res.question;
-  $("setup").hidden = true; $("question").hidden = false;
-  if (q.done) {
-    $("prompt").textContent = "Done - thank you.";
-    $("feel").innerHTML = ""; $("answers").innerHTML = "";
-    $("progress").textContent = "session " + sid + " finished";
-    return;
-  }
-  $("prompt").textContent = PROMPTS[$("protocol").value] || "";
-  $("feel").innerHTML = "";
-  q.options.forEach((name, k) => {
-    const b = document.createElement("button");
-    b.id = "feel-" + k; b.textContent = "feel " + name;
-    if (res.playing === k) b.style.fontWeight = "bold";
-    b.onclick = async () => { const r = await call("POST", "/api/sessions/" + sid + "/feel",
-                                                  {option: k});
-      [...$("feel").children].forEach((c, i) => c.style.fontWeight = i === r.playing ? "bold" : "");
-    };
-    $("feel").appendChild(b);
-  });
-  $("answers").innerHTML = "";
-  q.answers.forEach((a, i) => {
-    const b = document.createElement("button");
-    b.id = "answer-" + i; b.textContent = label(a);
-    b.onclick = async () => show(await call("POST", "/api/sessions/" + sid + "/answer",
-                                            {answer: a}));
-    $("answers").appendChild(b);
-  });
-  $("progress").textContent = "session " + sid + ": " + (res.answers_so_far || 0) + " answers";
-}
-$("start").onclick = async () => {
-  const res = await call("POST", "/api/sessions", {protocol: $("protocol").value,
-                                                   participant: $("participant").value});
-  sid = res.id; show(res);
-};
-$("resume").onclick = async () => {
-  sid = $("resume-id").value.trim();
-  const res = await call("GET", "/api/sessions/" + sid);
-  $("protocol").value = sid.split("/")[1].split("-")[0]; show(res);
-};
-fetch("/api/status").then(r => r.json()).then(s => {
-  $("status").textContent = s.error ? s.error :
-    "board " + (s.board || "?") + (s.running ? " playing" : " stopped");
-});
-</script></body></html>"""
-
-
-STATIC = Path(__file__).with_name("static")   # the pages' scripts and styles
-LOCAL_HOSTS = ["127.0.0.1", "localhost"]
+    def list_sessions(self) -> list[dict[str, Any]]:
+        out = []
+        for path in sessions(self.data):
+            try:
+                s = Session.open(path)
+            except (OSError, SessionError) as e:
+                out.append({"id": "%s/%s" % (path.parent.name, path.stem), "error": str(e)})
+                continue
+            out.append({"id": "%s/%s" % (path.parent.name, path.stem),
+                        "protocol": s.header["protocol"], "time": s.header["time"],
+                        "config_file": s.header["config"].get("config_file"),
+                        "answers": sum(1 for _ in s.answers()), "finished": s.finished})
+        return out
 
 
 def make_app(lab: Lab, allowed_hosts: list[str] | None = None) -> Starlette:
-    async def page(request: Request) -> HTMLResponse:
-        return HTMLResponse(PAGE)
+    def page(name: str):
+        async def endpoint(request: Request) -> FileResponse:
+            return FileResponse(STATIC / name, media_type="text/html")
+        return endpoint
+
+    def session_route(method):
+        async def endpoint(request: Request):
+            p = request.path_params
+            if method in (Lab.question, Lab.monitor):
+                return method(lab, p["participant"], p["name"])
+            return method(lab, p["participant"], p["name"], await body_of(request))
+        return endpoint
 
     async def status(request: Request):
         return lab.owner.status()
@@ -310,29 +325,29 @@ def make_app(lab: Lab, allowed_hosts: list[str] | None = None) -> Starlette:
     async def scene(request: Request):
         return {"scene": lab.owner.scene_source()}
 
+    async def configs(request: Request):
+        return {"configs": C.available(lab.configs), "protocols": protocols.TITLES}
+
+    async def list_sessions(request: Request):
+        return {"sessions": lab.list_sessions()}
+
     async def create(request: Request):
         return lab.create(await body_of(request))
 
-    async def question(request: Request):
-        p = request.path_params
-        return lab.question(p["participant"], p["name"])
-
-    async def feel(request: Request):
-        p = request.path_params
-        return lab.feel(p["participant"], p["name"], await body_of(request))
-
-    async def answer(request: Request):
-        p = request.path_params
-        return lab.answer(p["participant"], p["name"], await body_of(request))
-
-    routes = [Route("/", page),
-              Route("/api/status", handle(lab.lock, status)),
-              Route("/api/scene", handle(lab.lock, scene)),
-              Route("/api/sessions", handle(lab.lock, create), methods=["POST"]),
-              Route("/api/sessions/{participant}/{name}", handle(lab.lock, question)),
-              Route("/api/sessions/{participant}/{name}/feel", handle(lab.lock, feel), methods=["POST"]),
-              Route("/api/sessions/{participant}/{name}/answer", handle(lab.lock, answer),
-                    methods=["POST"])]
+    h = lambda fn: handle(lab.lock, fn)             # noqa: E731
+    s = "/api/sessions/{participant}/{name}"
+    routes = [Route("/", page("experimenter.html")),
+              Route("/participant", page("participant.html")),
+              Route("/api/status", h(status)),
+              Route("/api/scene", h(scene)),
+              Route("/api/configs", h(configs)),
+              Route("/api/sessions", h(list_sessions)),
+              Route("/api/sessions", h(create), methods=["POST"]),
+              Route(s, h(session_route(Lab.question))),
+              Route(s + "/monitor", h(session_route(Lab.monitor))),
+              Route(s + "/feel", h(session_route(Lab.feel)), methods=["POST"]),
+              Route(s + "/answer", h(session_route(Lab.answer)), methods=["POST"]),
+              Route(s + "/replay", h(session_route(Lab.replay)), methods=["POST"])]
     routes += strip.routes(lab)
     routes.append(Mount("/static", StaticFiles(directory=STATIC), name="static"))
     return Starlette(routes=routes, middleware=[

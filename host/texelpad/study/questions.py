@@ -1,0 +1,172 @@
+"""What a protocol asks now, as the lab shows it: the participant's view (blind:
+option labels and the allowed answers, never a parameter value), the scenes
+the options play, and the experimenter's view (the parameters, the state).
+Built from the protocol's state, the session's header and the board's display;
+pure logic (scenes are plain dicts for Board.push; the web layer pushes them).
+
+    q = ask(protocol, state, header, display)
+    q.public      -> the participant page's question ({"done": ...})
+    q.options     -> scene per option (feel k plays options[k])
+    q.detail      -> the experimenter's view (parameters; never sent to the
+                     participant page)
+    normalise(protocol, q, state, answer)  -> the answer the protocol takes,
+                     or ValueError (checked before anything is written)
+    slider_scene(state, header, display, pitch_db, irregularity_db, move)
+                  -> the free exploration's scene for a slider setting
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..search.preference import candidate_params
+from . import scenes as S
+from .space import Point, irregularity_db, pitch_db
+
+
+@dataclass
+class Question:
+    public: dict[str, Any]
+    options: list[dict[str, Any]] = field(default_factory=list)
+    detail: dict[str, Any] = field(default_factory=dict)
+    odd: int | None = None          # the staircase's odd texture (never public)
+
+    @property
+    def done(self) -> bool:
+        return bool(self.public["done"])
+
+
+def reference_of(header: dict[str, Any]) -> dict[str, Any]:
+    return header["config"].get("reference") or S.DEFAULT_REFERENCE
+
+
+def _db(p: Point) -> dict[str, float]:
+    return {"pitch_db": round(pitch_db(p.u), 3), "irregularity_db": round(irregularity_db(p.v), 3)}
+
+
+def ask(protocol: str, state: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
+    if protocol == "pursuit":
+        return _pursuit(state, header, display)
+    if protocol == "staircase":
+        return _staircase(state, header, display)
+    if protocol == "search":
+        return _search(state, header, display)
+    if protocol == "free":
+        return _free(state, header, display)
+    if protocol == "quant":
+        return _quant(state, header, display)
+    raise ValueError("protocol: unknown %r" % (protocol,))
+
+
+def _pursuit(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
+    q = st.next_comparison()
+    if q is None:
+        return Question({"done": True}, detail={"centre": _db(st.centre),
+                                                 "trials": len(st.history)})
+    ref = reference_of(header)
+    options = [S.point_scene(ref, q.a, display, name="A"),
+               S.point_scene(ref, q.b, display, name="B")]
+    return Question({"done": False, "kind": "pair", "trial": q.trial, "index": q.index,
+                     "of": [5, 4], "options": ["A", "B"], "answers": ["A", "B", "unsure"]},
+                    options,
+                    {"reference": ref, "centre": _db(st.centre), "edge": st.edge,
+                     "direction": q.direction, "A": _db(q.a), "B": _db(q.b),
+                     "A_is_plus": q.a_is_plus})
+
+
+def _staircase(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
+    if st.done:
+        return Question({"done": True}, detail={"threshold_mm": st.threshold_mm(),
+                                                 "reversals": st.reversals})
+    options, odd = S.staircase_scenes(st.texel_samples(), len(st.track), header["seed"],
+                                      display, header["config"].get("distribution"))
+    return Question({"done": False, "kind": "three", "trial": len(st.track),
+                     "options": ["1", "2", "3"], "answers": [0, 1, 2],
+                     "seconds": st.config.trial_seconds},
+                    options,
+                    {"length_mm": st.length_mm, "step_mm": st.step_mm,
+                     "reversals": len(st.reversals), "odd": odd}, odd=odd)
+
+
+def _search(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
+    if st.done:
+        return Question({"done": True}, detail={"mean": _mean(st), "saved": st.saved,
+                                                 "iterations": st.iteration})
+    ref = reference_of(header)
+    cands = [candidate_params(x, st.dims, st.texture_seed) for x in st.ask()]
+    options = [S.split(ref, c, display, name="candidate %d" % (k + 1))
+               for k, c in enumerate(cands)]
+    answers: list[Any] = [{"choose": k} for k in range(3)] + [{"save": k} for k in range(3)]
+    answers.append({"stop": True})
+    return Question({"done": False, "kind": "pick", "iteration": st.iteration,
+                     "options": ["1", "2", "3"], "answers": answers,
+                     "saved": len(st.saved)},
+                    options,
+                    {"reference": ref, "mean": _mean(st), "sigma": st.sigma,
+                     "candidates": cands})
+
+
+def _mean(st: Any) -> dict[str, Any]:
+    m = st.mean
+    return dict(_db(Point(m[0], m[1])), x=m)
+
+
+def _free(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
+    if st.done:
+        return Question({"done": True}, detail={"matches": st.matches})
+    c = st.config
+    return Question({"done": False, "kind": "sliders", "trial": st.trial,
+                     "of": len(st.order),
+                     "sliders": {"pitch_db": list(c.pitch_db),
+                                 "irregularity_db": list(c.irregularity_db)},
+                     "start": list(c.start), "confidence": list(c.confidence),
+                     "options": [], "answers": None},
+                    [], {"reference": st.reference, "trial": st.trial,
+                         "matches": len(st.matches)})
+
+
+def slider_scene(st: Any, header: dict[str, Any], display: dict[str, Any], pitch: Any,
+                 irregularity: Any, move: int) -> tuple[dict[str, Any], tuple[float, float]]:
+    """The free exploration's scene for a slider setting (checked: ValueError
+    for a value off the sliders) and the setting as kept (0.001 dB)."""
+    p, s = st.check(pitch, irregularity)
+    ref = {"kind": "reference", "name": st.reference}
+    return S.split(ref, st.texture(p, s, move), display, name="rendering"), (p, s)
+
+
+def _quant(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
+    if st.done:
+        return Question({"done": True}, detail={"ratings": st.ratings})
+    ref, level = st.current
+    lo, hi = st.config.scale
+    tex = st.texture()
+    return Question({"done": False, "kind": "rate", "trial": st.trial, "of": len(st.trials),
+                     "options": ["rendering"], "answers": list(range(lo, hi + 1))},
+                    [S.split({"kind": "reference", "name": ref}, tex, display,
+                             name="rendering")],
+                    {"reference": ref, "quant_db": level, "texture": tex,
+                     "match_source": st.config.match_source})
+
+
+def normalise(protocol: str, q: Question, state: Any, answer: Any) -> Any:
+    """The answer as the protocol takes it, checked against the question
+    (ValueError says why; nothing has changed). Answers are compared as JSON,
+    so true is not 1 and {"choose": true} is not {"choose": 1}."""
+    if q.done:
+        raise ValueError("the session is finished")
+    if protocol == "free":
+        return state.checked_answer(answer)
+    allowed = q.public["answers"]
+    if _js(answer) not in [_js(a) for a in allowed]:
+        raise ValueError("answer: expected one of %s, got %s" % (_js(allowed), _js(answer)))
+    if protocol == "staircase":
+        return answer == q.odd              # what the protocol takes: found or not
+    return answer
+
+
+def _js(x: Any) -> str:
+    try:
+        return json.dumps(x, sort_keys=True)
+    except (TypeError, ValueError):
+        return repr(x)

@@ -1,0 +1,121 @@
+// The participant's screen: only what a participant may see - option labels,
+// the answers, a slider's position - never a parameter value (the server
+// sends none). ?s=PARTICIPANT/SESSION names the session; reloading the page
+// (or a crashed server coming back) resumes where it stopped.
+"use strict";
+const sid = new URLSearchParams(location.search).get("s");
+let strip = null, timer = null;
+
+const PROMPTS = {
+  pair: "Feel A and B. Which one is closer to the reference on the left half?",
+  three: "Feel the three textures. Which one is different from the other two?",
+  pick: "Feel the three candidates. Which one is closest to the reference on the left half?",
+  sliders: "Move the sliders until the right half feels like the left half.",
+  rate: "How similar do the left and right halves feel? (1 = not at all, 5 = the same)"};
+
+function label(kind, a, q) {
+  if (kind === "pair") return a === "unsure" ? "unsure" : a + " is closer";
+  if (kind === "three") return q.options[a] + " is different";
+  if (kind === "rate") return String(a);
+  const [k, v] = Object.entries(a)[0];
+  if (k === "stop") return "I am satisfied: stop";
+  return (k === "choose" ? "closest: " : "save ") + q.options[v];
+}
+
+function markPlaying(k) {
+  [...$("feel").children].forEach((c, i) => c.classList.toggle("playing", i === k));
+  if (strip) strip.refresh();
+}
+
+async function answer(a) {
+  show(await call("POST", "/api/sessions/" + sid + "/answer", {answer: a}));
+}
+
+// free exploration: slider changes go to the board one at a time, the latest wins
+let sliderBusy = false, sliderNext = null, sliderRange = null;
+function sliderValues() {
+  const [p0, p1] = sliderRange.pitch_db, [s0, s1] = sliderRange.irregularity_db;
+  return {pitch_db: Math.round((p0 + (p1 - p0) * $("pitch").value / 1000) * 1000) / 1000,
+          irregularity_db: Math.round((s0 + (s1 - s0) * $("irregularity").value / 1000) * 1000) / 1000};
+}
+async function slide() {
+  sliderNext = sliderValues();
+  if (sliderBusy) return;
+  sliderBusy = true;
+  try {
+    while (sliderNext) {
+      const v = sliderNext; sliderNext = null;
+      await call("POST", "/api/sessions/" + sid + "/feel", v);
+      if (strip) strip.refresh();
+    }
+  } finally { sliderBusy = false; }
+}
+
+function show(res) {
+  const q = res.question;
+  clearInterval(timer); $("timer").textContent = "";
+  if (q.done) {
+    $("question").hidden = true; $("done").hidden = false;
+    $("progress").textContent = "";
+    if (strip) strip.refresh();
+    return;
+  }
+  $("question").hidden = false; $("done").hidden = true;
+  $("prompt").textContent = PROMPTS[q.kind] || "";
+  $("feel").innerHTML = ""; $("answers").innerHTML = "";
+  $("sliders").hidden = q.kind !== "sliders";
+  q.options.forEach((name, k) => {
+    $("feel").appendChild(el("button", {id: "feel-" + k, onclick: async () => {
+      const r = await call("POST", "/api/sessions/" + sid + "/feel", {option: k});
+      markPlaying(r.playing);
+    }}, "feel " + name));
+  });
+  markPlaying(res.playing);
+  if (q.kind === "sliders") {
+    sliderRange = q.sliders;
+    const [p, s] = res.sliders || q.start;
+    const [p0, p1] = q.sliders.pitch_db, [s0, s1] = q.sliders.irregularity_db;
+    $("pitch").value = Math.round(1000 * (p - p0) / (p1 - p0));
+    $("irregularity").value = Math.round(1000 * (s - s0) / (s1 - s0));
+    $("pitch").oninput = slide; $("irregularity").oninput = slide;
+    const box = $("confidence");
+    box.querySelectorAll("label").forEach((l) => l.remove());
+    for (let c = q.confidence[0]; c <= q.confidence[1]; c++) {
+      const l = el("label", {});
+      l.appendChild(el("input", {type: "radio", name: "confidence", id: "confidence-" + c,
+                                 value: String(c)}));
+      l.appendChild(document.createTextNode(" " + c + " "));
+      box.appendChild(l);
+    }
+    $("answers").appendChild(el("button", {id: "submit", onclick: async () => {
+      const c = document.querySelector("input[name=confidence]:checked");
+      if (!c) { showError("choose your confidence (1-5) first"); return; }
+      while (sliderBusy) await new Promise((r) => setTimeout(r, 20));
+      await answer(Object.assign(sliderValues(), {confidence: Number(c.value)}));
+    }}, "this is my match"));
+  } else {
+    q.answers.forEach((a, i) => {
+      $("answers").appendChild(el("button", {id: "answer-" + i, onclick: () => answer(a)},
+                                  label(q.kind, a, q)));
+    });
+  }
+  if (q.seconds) {              // the staircase's 30 s per trial (seed 001): shown, not forced
+    let left = q.seconds;
+    $("timer").textContent = left + " s";
+    timer = setInterval(() => {
+      left -= 1;
+      $("timer").textContent = left > 0 ? left + " s" : "time is up: please answer";
+      if (left <= 0) clearInterval(timer);
+    }, 1000);
+  }
+  const n = res.answers_so_far || 0;
+  $("progress").textContent = (q.of ? "trial " + (q.trial + 1) + " of " +
+                               (Array.isArray(q.of) ? q.of[0] : q.of) + " - " : "") +
+                              n + " answer" + (n === 1 ? "" : "s");
+}
+
+(async () => {
+  if (!sid) { showError("no session: open this page from the experimenter's screen"); return; }
+  strip = await boardLine(false);
+  show(await call("GET", "/api/sessions/" + sid));
+})();
