@@ -273,9 +273,11 @@ def test_export_writes_tidy_csv_and_a_figure_per_session(tmp_path, capsys):
     from texelpad import cli
     data = tmp_path / "data"
     sim = SimulatedParticipant(Point(0.3, 0.7), seed=1)
-    for proto, n in (("pursuit", 20), ("staircase", 12), ("search", 6)):
-        s = Session.create(data, proto, "p01", {}, 5)
-        st = protocols.start(proto, {}, 5)
+    for proto, n in (("pursuit", 20), ("staircase", 12), ("search", 6), ("free", 9),
+                     ("quant", 12)):
+        config = GIVEN if proto == "quant" else {}
+        s = Session.create(data, proto, "p01", config, 5)
+        st = protocols.start(proto, config, 5)
         for _ in range(n):
             a = sim.answer(proto, st)
             protocols.apply(proto, st, a)
@@ -284,9 +286,17 @@ def test_export_writes_tidy_csv_and_a_figure_per_session(tmp_path, capsys):
                                                          "irregularity_db": -3.0}}]}})
     out = tmp_path / "out"
     assert cli.main(["lab", "export", "--data", str(data), "--out", str(out)]) == 0
-    assert "(38 answers) and 3 figures" in capsys.readouterr().out
+    assert "(59 answers) and 5 figures" in capsys.readouterr().out
     rows = list(_csv.DictReader(open(out / "sessions.csv")))
-    assert len(rows) == 38 and {r["protocol"] for r in rows} == {"pursuit", "staircase", "search"}
-    assert rows[0]["right_pitch_db"] == "1.0"
+    assert len(rows) == 59 and {r["protocol"] for r in rows} == set(protocols.PROTOCOLS)
+    assert rows[0]["played_pitch_db"] == "1.0"
+    by = {}
+    for r in rows:
+        by.setdefault(r["protocol"], []).append(r)
+    assert {r["confidence"] for r in by["free"]} == {"4"} and by["free"][0]["reference"]
+    assert by["free"][0]["match_pitch_db"] == "-3.0"            # the target u = 0.3: -3 dB
+    assert [r["quant_db"] for r in by["quant"]][:1] and all(r["similarity"] for r in by["quant"])
+    assert {r["correct"] for r in by["staircase"]} <= {"True", "False"}
+    assert by["search"][0]["chosen"] in ("0", "1", "2")
     pngs = sorted(p.name for p in out.glob("*.png"))
-    assert len(pngs) == 3 and all((out / p).stat().st_size > 5000 for p in pngs)
+    assert len(pngs) == 5 and all((out / p).stat().st_size > 5000 for p in pngs)

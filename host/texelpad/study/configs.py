@@ -5,7 +5,7 @@ adds its own folder (`texelpad lab --configs DIR`), whose files of the same
 name win. A session's file records the config it ran (and the file's name),
 so a config edited later never changes what a session was.
 
-    {"protocol": "pursuit", "title": "...", "reference": {...}?,
+    {"protocol": "pursuit", "title": "...", "note": "..."?, "reference": {...}?,
      "seed": 1234?, "config": {...}}
 
 Every file is checked when listed: the protocol must start from it (the
@@ -22,7 +22,7 @@ from . import protocols
 from .session import SessionError, check_name
 
 SHIPPED = Path(__file__).with_name("configs")
-KEYS = {"protocol", "title", "reference", "seed", "config"}
+KEYS = {"protocol", "title", "note", "reference", "seed", "config"}
 
 
 def _check(name: str, c: Any) -> dict[str, Any]:

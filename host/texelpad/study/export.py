@@ -6,6 +6,7 @@ search: the mean's path and step size). Reads the files only (never a board).
 from __future__ import annotations
 
 import csv
+import json
 import math
 import os
 from pathlib import Path
@@ -15,32 +16,63 @@ from . import protocols
 from .session import Session, sessions
 from .space import irregularity_db, pitch_db
 
-COLUMNS = ("participant", "protocol", "session", "n", "time", "answer", "correct",
-           "option_played", "right_pitch_db", "right_irregularity_db", "right_texel_samples",
-           "seed")
+COLUMNS = ("participant", "protocol", "session", "config_file", "seed", "n", "time",
+           "trial", "answer", "reference", "played_pitch_db", "played_irregularity_db",
+           "played_texel_samples", "played_quant_db", "option_played",
+           "match_pitch_db", "match_irregularity_db", "confidence", "similarity",
+           "quant_db", "correct", "length_mm", "chosen")
 
 
-def _texture(rec: dict[str, Any]) -> dict[str, Any]:
-    scene = rec.get("scene") or {}
-    regs = scene.get("regions") or []
-    tex = regs[-1]["texture"] if regs else {}
-    return tex if tex.get("kind") == "texel" else {}
+def _texel(scene: dict[str, Any] | None) -> dict[str, Any]:
+    """The texel texture of a recorded scene (the rendering: its last texel region)."""
+    regs = (scene or {}).get("regions") or []
+    for r in reversed(regs):
+        if r.get("texture", {}).get("kind") == "texel":
+            return r["texture"]
+    return {}
+
+
+def _reference(scene: dict[str, Any] | None) -> str:
+    for r in (scene or {}).get("regions") or []:
+        if r.get("texture", {}).get("kind") == "reference":
+            return r["texture"].get("name", "")
+    return ""
 
 
 def rows(s: Session) -> list[dict[str, Any]]:
+    """One tidy row per answer: who, what was asked, what played, what was
+    answered (a column per kind of answer; empty where it does not apply)."""
     h = s.header
+    proto = h["protocol"]
+    state = protocols.start(proto, h["config"], h["seed"])     # what each answer answered
     out = []
-    for rec in s.answers():
-        tex = _texture(rec)
+    for k, rec in enumerate(s.answers()):
+        tex = _texel(rec.get("scene"))
         a = rec.get("answer")
-        out.append({"participant": h["participant"], "protocol": h["protocol"],
-                    "session": s.path.stem, "n": rec.get("n"), "time": rec.get("time"),
-                    "answer": a if not isinstance(a, dict) else "%s %s" % next(iter(a.items())),
-                    "correct": a if isinstance(a, bool) else "",
-                    "option_played": rec.get("playing", ""),
-                    "right_pitch_db": tex.get("pitch_db", ""),
-                    "right_irregularity_db": tex.get("irregularity_db", ""),
-                    "right_texel_samples": tex.get("texel_samples", ""), "seed": h["seed"]})
+        q = rec.get("question") or {}
+        row = {c: "" for c in COLUMNS}
+        row.update(participant=h["participant"], protocol=proto, session=s.path.stem,
+                   config_file=h["config"].get("config_file", ""), seed=h["seed"], n=k,
+                   time=rec.get("time"), trial=q.get("trial", q.get("iteration", "")),
+                   answer=json.dumps(a, sort_keys=True),
+                   reference=_reference(rec.get("scene")),
+                   played_pitch_db=tex.get("pitch_db", ""),
+                   played_irregularity_db=tex.get("irregularity_db", ""),
+                   played_texel_samples=tex.get("texel_samples", ""),
+                   played_quant_db=tex.get("quant_db", "") if tex else "",
+                   option_played="" if rec.get("playing") is None else rec["playing"])
+        if proto == "free":
+            row.update(match_pitch_db=a["pitch_db"], match_irregularity_db=a["irregularity_db"],
+                       confidence=a["confidence"], reference=state.reference, trial=state.trial)
+        elif proto == "quant":
+            ref, level = state.current
+            row.update(similarity=a, quant_db=level, reference=ref, trial=state.trial)
+        elif proto == "staircase":
+            row.update(correct=a, length_mm=state.length_mm, trial=len(state.track))
+        elif proto == "search" and "choose" in a:
+            row.update(chosen=a["choose"], trial=state.iteration)
+        protocols.apply(proto, state, a)
+        out.append(row)
     return out
 
 
@@ -70,8 +102,35 @@ def figure(s: Session, out: str | os.PathLike) -> Path:
     state = protocols.replay(s)
     fig, ax = plt.subplots(figsize=(6, 4.2))
     title = "%s, %s (%s): %d answers" % (h["protocol"], h["participant"], s.path.stem,
-                                          len(s.records))
-    if h["protocol"] == "pursuit":
+                                          sum(1 for _ in s.answers()))
+    plane = h["protocol"] in ("pursuit", "search", "free")
+    if plane:
+        _references_on(ax, h)
+    if h["protocol"] == "free":
+        ms = state.matches
+        for m in ms:
+            ax.plot(m["pitch_db"], m["irregularity_db"], "o", ms=4 + 2 * m["confidence"],
+                    color="C%d" % (list(state.config.references).index(m["reference"]) % 10))
+            ax.annotate(m["reference"], (m["pitch_db"], m["irregularity_db"]), fontsize=7,
+                        xytext=(4, 4), textcoords="offset points")
+        ax.set_xlabel("pitch (dB re 1 c/mm)")
+        ax.set_ylabel("irregularity (dB re 1 decade)")
+        ax.text(0.01, 0.99, "o: the matches (size: confidence)\nx: the references' spectral "
+                "positions", transform=ax.transAxes, va="top", fontsize=7)
+    elif h["protocol"] == "quant":
+        by: dict[str, dict[float, list[int]]] = {}
+        for r in state.ratings:
+            by.setdefault(r["reference"], {}).setdefault(r["quant_db"], []).append(r["similarity"])
+        for i, (ref, levels) in enumerate(sorted(by.items())):
+            qs = sorted(levels)
+            ax.plot([q + 0.08 * (i - 1) for q in qs],
+                    [sum(levels[q]) / len(levels[q]) for q in qs], "o-", label=ref)
+        ax.set_xlabel("quantization q (dB)")
+        ax.set_ylabel("similarity (1..5)")
+        ax.set_ylim(0.5, 5.5)
+        ax.set_xticks(list(state.config.levels_db))
+        ax.legend(title="match: %s" % state.config.match_source, fontsize=8, title_fontsize=8)
+    elif h["protocol"] == "pursuit":
         pts = [state.history[0]["centre_before"]] if state.history else \
             [{"u": state.centre.u, "v": state.centre.v}]
         pts += [e["centre_after"] for e in state.history]
@@ -118,6 +177,19 @@ def figure(s: Session, out: str | os.PathLike) -> Path:
     fig.savefig(out, dpi=100)
     plt.close(fig)
     return out
+
+
+def _references_on(ax: Any, header: dict[str, Any]) -> None:
+    """The nine references' positions on the pitch-irregularity plane
+    (texelpad.study.references: the spectral model), the session's own
+    reference in bold."""
+    from .references import positions
+    ref = (header["config"].get("reference") or {}).get("name")
+    for name, (p, s) in positions().items():
+        bold = name == ref
+        ax.plot(p, s, "x", color="k" if bold else "0.6", ms=9 if bold else 6)
+        ax.annotate(name, (p, s), fontsize=8 if bold else 6, color="k" if bold else "0.5",
+                    xytext=(3, -9), textcoords="offset points")
 
 
 def export(data: str | os.PathLike, out_dir: str | os.PathLike) -> dict[str, Any]:
