@@ -221,3 +221,49 @@ def test_only_localhost_names_are_served(lab):
 def test_texelpad_lab_prints_its_url_first_and_serves_the_virtual_board(tmp_path):
     with lab_process(tmp_path) as (url, st):
         assert st["running"] and st["board"] == "virtual"
+
+
+def test_the_server_survives_a_board_that_disappears_and_says_so(tmp_path):
+    """The board is unplugged mid-session (its process killed): the next
+    requests answer 503 saying so, nothing is written, the server goes on; the
+    board comes back (a new one on the owner's port, as a replugged board
+    reappears on its port) and the session goes on where it stopped."""
+    from texelpad.link.virtual import VirtualBoard
+    vb = VirtualBoard(image="source")
+    vb.__enter__()
+    owner = BoardOwner(vb.port, "virtual", realtime=True, timeout=5.0)
+    lab = Lab(owner, tmp_path / "data")
+    with TestClient(make_app(lab), base_url=BASE) as c:
+        sid = c.post("/api/sessions", json={"config": "pursuit-4sin", "participant": "p09",
+                                            "seed": 1}).json()["id"]
+        assert c.post("/api/sessions/%s/answer" % sid, json={"answer": "A"}).status_code == 200
+        vb.stop()                                               # unplugged
+        # the answer to what was felt is kept; the reply says the board is gone
+        r = c.post("/api/sessions/%s/answer" % sid, json={"answer": "B"})
+        assert r.status_code == 200 and "board" in r.json()["board_lost"], r.text
+        assert r.json()["playing"] is None
+        r = c.get("/api/status")
+        assert r.status_code == 503 and "does not answer" in r.json()["error"], r.text
+        assert c.post("/api/sessions/%s/feel" % sid, json={"option": 1}).status_code == 503
+        assert c.post("/api/sessions", json={"config": "staircase",
+                                             "participant": "p09"}).status_code == 503
+        s = Session.open(lab.live[sid].session.path)
+        assert [x["answer"] for x in s.answers()] == ["A", "B"]
+        assert [p.name for p in (tmp_path / "data" / "p09").iterdir()] == [s.path.name]
+        assert c.get("/").status_code == 200                    # the page still loads
+        vb2 = VirtualBoard(image="source")                      # plugged back in
+        vb2.__enter__()
+        try:
+            owner.port = vb2.port
+            assert c.get("/api/status").status_code == 200
+            r = c.get("/api/sessions/%s" % sid)          # the page reloads: plays again
+            assert r.status_code == 200 and r.json()["answers_so_far"] == 2
+            assert r.json()["playing"] == 0
+            q = lab.live[sid].question
+            assert owner.scene_source() == lab.owner.push(q.options[0])[1]
+            r = c.post("/api/sessions/%s/answer" % sid, json={"answer": "unsure"})
+            assert r.status_code == 200 and "board_lost" not in r.json()
+            assert [x["answer"] for x in Session.open(s.path).answers()] == ["A", "B", "unsure"]
+        finally:
+            owner.close()
+            vb2.stop()

@@ -24,7 +24,9 @@ as texelpad.study.session.check_name; the board's own scene validation is the
 last word) and a refused one changes nothing: 400 with the reason, 503 when
 the board is gone. An answer is checked, then written to the session file
 (fsynced), and only then moves the protocol's state: a crash at any point
-resumes from the file.
+resumes from the file. A board that is gone after an answer was written does
+not undo it: the reply says the answer is kept and the board is lost, and the
+next question plays when the board answers again.
 """
 from __future__ import annotations
 
@@ -51,7 +53,7 @@ from ..study.quant import EXEMPLARS
 from ..study.session import Session, SessionError, check_name, sessions
 from . import strip
 from .api import Refused, body_of, handle, keys
-from .owner import BoardOwner
+from .owner import BoardLost, BoardOwner
 
 CREATE_KEYS = {"config", "protocol", "participant", "seed", "reference", "matches_from"}
 STATIC = Path(__file__).with_name("static")   # the pages, their scripts and styles
@@ -267,11 +269,17 @@ class Lab:
         result = protocols.apply(lv.protocol, lv.state, taken)
         lv.question, lv.sliders, lv.moves = None, None, 0
         nq = self._question(lv)
+        lost = None
         if nq.done:
             lv.session.append({"kind": "end", "result": nq.detail})
         else:
-            self._begin(lv)
+            try:
+                self._begin(lv)
+            except BoardLost as e:      # the answer is kept; the next one plays when it is back
+                lv.playing, lost = None, str(e)
         out = self._view(key, lv)
+        if lost:
+            out["board_lost"] = lost
         out["result"] = result if lv.protocol != "staircase" else None
         return out
 

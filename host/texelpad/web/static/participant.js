@@ -28,7 +28,11 @@ function markPlaying(k) {
 }
 
 async function answer(a) {
-  show(await call("POST", "/api/sessions/" + sid + "/answer", {answer: a}));
+  const res = await call("POST", "/api/sessions/" + sid + "/answer", {answer: a});
+  show(res);
+  if (res.board_lost)           // the answer is kept; the next question plays when it is back
+    showError("Your answer is saved, but the board is gone (" + res.board_lost +
+              "). Reload this page when it is back.");
 }
 
 // free exploration: slider changes go to the board one at a time, the latest wins
