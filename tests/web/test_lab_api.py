@@ -141,6 +141,33 @@ def test_free_exploration_then_the_quantization_test_with_its_matches(lab, port)
         [int(round(5 - q / 2)) if q != 1 else 4 for _, q in qs.state.trials]
 
 
+def test_the_similarity_matrix_rates_each_exemplar_against_each_pursuit_match(lab, port):
+    sim = SimulatedParticipant(Point(0.3, 0.6))
+    ends, sids = {}, []
+    for ref in ("4sin", "pink", "sawtooth"):
+        sid = lab.post("/api/sessions", json={"config": "pursuit-%s" % ref, "participant": "p07",
+                                              "seed": 2}).json()["id"]
+        _answer_all(lab, sid, sim, "pursuit")
+        ends[ref] = lab.lab.live[sid].state.centre
+        sids.append(sid)
+    r = lab.post("/api/sessions", json={"config": "similarity-matrix", "participant": "p07",
+                                        "matches_from": sids[:2]})
+    assert r.status_code == 400 and "no match of sawtooth" in r.json()["error"]
+    r = lab.post("/api/sessions", json={"config": "similarity-matrix", "participant": "p07",
+                                        "matches_from": sids, "seed": 1})
+    assert r.status_code == 200, r.text
+    qid = r.json()["id"]
+    st = lab.lab.live[qid].state
+    assert st.config.matches["pink"]["pitch_db"] == round(-15 + 40 * ends["pink"].u, 3)
+    pairs = set()
+    for _ in range(9):
+        tex = _playing(lab)["regions"][1]["texture"]
+        pairs.add((st.current[0], st.current_match))
+        assert tex["pitch_db"] == st.config.matches[st.current_match]["pitch_db"]
+        assert lab.post("/api/sessions/%s/answer" % qid, json={"answer": 3}).status_code == 200
+    assert len(pairs) == 9 and st.done
+
+
 def test_search_and_staircase_sessions_and_resume_from_the_file(lab, port):
     r = lab.post("/api/sessions", json={"protocol": "search", "participant": "p02", "seed": 9})
     sid = r.json()["id"]

@@ -20,7 +20,7 @@ COLUMNS = ("participant", "protocol", "session", "config_file", "seed", "n", "ti
            "trial", "answer", "reference", "played_pitch_db", "played_irregularity_db",
            "played_texel_samples", "played_quant_db", "option_played",
            "match_pitch_db", "match_irregularity_db", "confidence", "similarity",
-           "quant_db", "correct", "length_mm", "chosen")
+           "quant_db", "match_of", "correct", "length_mm", "chosen")
 
 
 def _texel(scene: dict[str, Any] | None) -> dict[str, Any]:
@@ -66,7 +66,8 @@ def rows(s: Session) -> list[dict[str, Any]]:
                        confidence=a["confidence"], reference=state.reference, trial=state.trial)
         elif proto == "quant":
             ref, level = state.current
-            row.update(similarity=a, quant_db=level, reference=ref, trial=state.trial)
+            row.update(similarity=a, quant_db=level, reference=ref, trial=state.trial,
+                       match_of=state.current_match)
         elif proto == "staircase":
             row.update(correct=a, length_mm=state.length_mm, trial=len(state.track))
         elif proto == "search" and "choose" in a:
@@ -117,6 +118,23 @@ def figure(s: Session, out: str | os.PathLike) -> Path:
         ax.set_ylabel("irregularity (dB re 1 decade)")
         ax.text(0.01, 0.99, "o: the matches (size: confidence)\nx: the references' spectral "
                 "positions", transform=ax.transAxes, va="top", fontsize=7)
+    elif h["protocol"] == "quant" and state.config.design == "matrix":
+        refs = list(state.config.references)
+        cells: dict[tuple[int, int], list[int]] = {}
+        for r in state.ratings:
+            cells.setdefault((refs.index(r["reference"]), refs.index(r["match_of"])),
+                             []).append(r["similarity"])
+        import numpy as np
+        grid = np.full((len(refs), len(refs)), np.nan)
+        for (i, j), v in cells.items():
+            grid[i, j] = sum(v) / len(v)
+        im = ax.imshow(grid, vmin=1, vmax=5, cmap="viridis")
+        for (i, j), v in cells.items():
+            ax.text(j, i, "%.1f" % grid[i, j], ha="center", va="center", color="w")
+        ax.set_xticks(range(len(refs)), ["%s's match" % r for r in refs], fontsize=8)
+        ax.set_yticks(range(len(refs)), refs, fontsize=8)
+        ax.set_ylabel("reference")
+        fig.colorbar(im, ax=ax, label="similarity (1..5)")
     elif h["protocol"] == "quant":
         by: dict[str, dict[float, list[int]]] = {}
         for r in state.ratings:

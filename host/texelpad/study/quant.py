@@ -12,6 +12,12 @@ the session's seed; the texture seed is the same for a reference's four levels
 (only the quantization differs) and is drawn from the session's seed; texel
 length 0.25 mm (47 samples) as in the free exploration.
 
+The same protocol rates seed 000's similarity matrix (after the guided
+exploration: "Then rate 3x3 similarity", SPEC §5; seed 000 Fig. 14c):
+design "matrix" pairs every reference with every reference's match (3 x 3
+trials at q = levels_db[0], normally 0), so a rendering is rated against the
+texture it was tuned to and against the others.
+
 Answers: the similarity rating, an int 1..5. Pure logic.
 """
 from __future__ import annotations
@@ -35,7 +41,8 @@ class Config:
     repeats: int = 1
     texel_samples: int = 47
     scale: tuple[int, int] = (1, 5)
-    match_source: str = "given"         # "given" or the free-exploration session's id
+    match_source: str = "given"         # "given" or the session id the matches came from
+    design: str = "levels"              # "levels": q per reference; "matrix": 3 x 3 pairs
 
     def __post_init__(self) -> None:
         check_references(self.references)
@@ -57,6 +64,8 @@ class Config:
                     or not (q == 0 or 0.001 <= q <= QUANT_DB_MAX):
                 raise ValueError("levels_db: each 0 (off) or 0.001 .. %g dB, got %r"
                                  % (QUANT_DB_MAX, q))
+        if self.design not in ("levels", "matrix"):
+            raise ValueError("design: expected 'levels' or 'matrix', got %r" % (self.design,))
         if isinstance(self.repeats, bool) or not isinstance(self.repeats, int) \
                 or not 1 <= self.repeats <= 10:
             raise ValueError("repeats: expected 1 .. 10, got %r" % (self.repeats,))
@@ -72,9 +81,18 @@ class Quant:
         rng = random.Random(self.seed)
         c = self.config
         self.texture_seeds = {r: rng.randrange(1 << 32) for r in c.references}
-        trials = [(r, float(q)) for r in c.references for q in c.levels_db] * c.repeats
+        if c.design == "levels":        # (reference, the match of, q)
+            trials = [(r, r, float(q)) for r in c.references for q in c.levels_db]
+        else:
+            trials = [(r, m, float(c.levels_db[0])) for r in c.references for m in c.references]
+        trials = trials * c.repeats
         rng.shuffle(trials)
-        self.trials = trials
+        self._trials = trials
+
+    @property
+    def trials(self) -> list[tuple[str, float]]:
+        """(reference, q) per trial, in order."""
+        return [(r, q) for r, _, q in self._trials]
 
     @property
     def trial(self) -> int:
@@ -86,16 +104,23 @@ class Quant:
 
     @property
     def current(self) -> tuple[str, float]:
+        """(the reference, q) of the current trial."""
         return self.trials[self.trial]
+
+    @property
+    def current_match(self) -> str:
+        """Whose match the current rendering is (the reference's own, or in
+        the matrix design another's)."""
+        return self._trials[self.trial][1]
 
     def texture(self) -> dict[str, Any]:
         """The current trial's rendering: the match, quantized (format 2)."""
-        ref, q = self.current
-        m = self.config.matches[ref]
+        ref, match, q = self._trials[self.trial]
+        m = self.config.matches[match]
         return {"pitch_db": round(float(m["pitch_db"]), 3),
                 "irregularity_db": round(float(m["irregularity_db"]), 3),
                 "quant_db": q, "texel_samples": self.config.texel_samples,
-                "seed": self.texture_seeds[ref], "v": 2}
+                "seed": self.texture_seeds[match], "v": 2}
 
     def answer(self, rating: Any) -> dict[str, Any]:
         if self.done:
@@ -103,7 +128,8 @@ class Quant:
         lo, hi = self.config.scale
         if isinstance(rating, bool) or not isinstance(rating, int) or not lo <= rating <= hi:
             raise ValueError("similarity: expected %d .. %d, got %r" % (lo, hi, rating))
-        ref, q = self.current
-        entry = {"trial": self.trial, "reference": ref, "quant_db": q, "similarity": rating}
+        ref, match, q = self._trials[self.trial]
+        entry = {"trial": self.trial, "reference": ref, "match_of": match, "quant_db": q,
+                 "similarity": rating}
         self.ratings.append(entry)
         return entry

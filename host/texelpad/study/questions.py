@@ -107,6 +107,20 @@ def _search(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Questio
                      "candidates": cands})
 
 
+def estimate(protocol: str, st: Any) -> dict[str, float]:
+    """Where a guided exploration (its centre) or a search (its mean) ended,
+    in dB (clamped to what the display plays: texelpad.study.space)."""
+    if protocol == "pursuit":
+        p = st.centre
+    elif protocol == "search":
+        p = Point(st.mean[0], st.mean[1])
+    else:
+        raise ValueError("estimate: %r has no end point" % (protocol,))
+    from .space import texel_params
+    t = texel_params(p)
+    return {"pitch_db": t["pitch_db"], "irregularity_db": t["irregularity_db"]}
+
+
 def _mean(st: Any) -> dict[str, Any]:
     m = st.mean
     return dict(_db(Point(m[0], m[1])), x=m)
@@ -145,8 +159,8 @@ def _quant(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question
                      "options": ["rendering"], "answers": list(range(lo, hi + 1))},
                     [S.split({"kind": "reference", "name": ref}, tex, display,
                              name="rendering")],
-                    {"reference": ref, "quant_db": level, "texture": tex,
-                     "match_source": st.config.match_source})
+                    {"reference": ref, "match_of": st.current_match, "quant_db": level,
+                     "texture": tex, "match_source": st.config.match_source})
 
 
 def normalise(protocol: str, q: Question, state: Any, answer: Any) -> Any:

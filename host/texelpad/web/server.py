@@ -179,23 +179,42 @@ class Lab:
         self._begin(lv)
         return self._view(key, lv)
 
-    def _matches_from(self, sid: Any, config: dict[str, Any]) -> tuple[dict, str]:
-        """The participant's own free-exploration matches (seed 000's
-        quantization test), from that session's file."""
-        if not isinstance(sid, str) or sid.count("/") != 1:
-            raise Refused("matches_from: expected a free-exploration session id P/NAME")
-        lv = self.get(*sid.split("/"))
-        if lv.protocol != "free":
-            raise Refused("matches_from: %s is a %s session, not a free exploration"
-                          % (sid, lv.protocol))
+    def _matches_from(self, sids: Any, config: dict[str, Any]) -> tuple[dict, str]:
+        """The participant's own matches for the quantization test or the
+        similarity matrix, from the sessions named: a free exploration's
+        matches, a finished guided exploration's end point or a stopped
+        search's mean (each for the reference it ran on). Later sessions in
+        the list win."""
+        if isinstance(sids, str):
+            sids = [sids]
+        if not isinstance(sids, list) or not 1 <= len(sids) <= 20 or \
+                any(not isinstance(x, str) or x.count("/") != 1 for x in sids):
+            raise Refused("matches_from: expected a session id P/NAME or a list of them")
+        found: dict[str, dict[str, float]] = {}
+        for sid in sids:
+            lv = self.get(*sid.split("/"))
+            if lv.protocol == "free":
+                for m in lv.state.matches:
+                    found[m["reference"]] = {"pitch_db": m["pitch_db"],
+                                             "irregularity_db": m["irregularity_db"]}
+                continue
+            if lv.protocol not in ("pursuit", "search"):
+                raise Refused("matches_from: %s is a %s session: matches come from a free "
+                              "exploration, a guided exploration or a search" % (sid, lv.protocol))
+            if not lv.state.done:
+                raise Refused("matches_from: %s is not finished" % sid)
+            ref = lv.session.header["config"].get("reference") or {}
+            if ref.get("kind") != "reference":
+                raise Refused("matches_from: %s did not run on a reference texture" % sid)
+            point = Q.estimate(lv.protocol, lv.state)
+            found[ref["name"]] = {"pitch_db": point["pitch_db"],
+                                  "irregularity_db": point["irregularity_db"]}
         refs = config.get("references") or EXEMPLARS
-        out = {}
-        for r in refs:
-            m = lv.state.match_of(r)
-            if m is None:
-                raise Refused("matches_from: %s has no match of %s yet" % (sid, r))
-            out[r] = m
-        return out, sid
+        missing = [r for r in refs if r not in found]
+        if missing:
+            raise Refused("matches_from: no match of %s in %s" % (", ".join(missing),
+                                                                  ", ".join(sids)))
+        return {r: found[r] for r in refs}, ", ".join(sids)
 
     def get(self, participant: Any, name: Any) -> Live:
         key = self._key(participant, name)

@@ -41,13 +41,15 @@ async function loadSessions() {
                        s.finished ? "" : "participant screen"));
     tr.appendChild(td2);
     body.appendChild(tr);
-    if (s.protocol === "free") frees.push(s.id);
+    // matches for a quantization test or a similarity matrix: a free
+    // exploration's, a finished guided exploration's or search's end point
+    if (s.protocol === "free" || (s.finished && (s.protocol === "pursuit" ||
+                                                 s.protocol === "search"))) frees.push(s);
   }
-  const m = $("matches"), keep = m.value;
+  const m = $("matches"), keep = [...m.selectedOptions].map((o) => o.value);
   m.innerHTML = "";
-  m.appendChild(el("option", {value: ""}, "the config's given (trained-rater) matches"));
-  frees.forEach((id) => m.appendChild(el("option", {value: id}, id + "'s free exploration")));
-  m.value = keep;
+  frees.forEach((s) => m.appendChild(el("option", {value: s.id}, s.id)));
+  [...m.options].forEach((o) => { o.selected = keep.includes(o.value); });
 }
 
 async function follow(id) {
@@ -94,7 +96,8 @@ $("start").onclick = async () => {
   const c = configs[$("config").value];
   if (!$("reference-box").hidden && (!c.reference || c.reference.name !== $("reference").value))
     body.reference = {kind: "reference", name: $("reference").value};
-  if (!$("matches-box").hidden && $("matches").value) body.matches_from = $("matches").value;
+  const picked = [...$("matches").selectedOptions].map((o) => o.value);
+  if (!$("matches-box").hidden && picked.length) body.matches_from = picked;
   const res = await call("POST", "/api/sessions", body);
   await loadSessions();
   await follow(res.id);
