@@ -106,3 +106,46 @@ class BoardOwner:
             if self._board is not None:
                 self._board.close()
                 self._board = None
+
+    # --- see and hear (web/strip.py, issue 11 point 5) ---------------------------------
+    # Whether the board is the virtual one, held per connection: (the Board
+    # it was asked of, the answer). A board's kind cannot change while the
+    # owner holds its port; a lost board is a new Board object, asked again.
+    _virtual_of: tuple[Board, bool] | None = None
+
+    def _virtual(self, b: Board) -> bool:
+        known = self._virtual_of
+        if known is not None and known[0] is b:
+            return known[1]
+        st = b.status()
+        if not st.get("running"):
+            self._running(b)
+            st = b.status()
+        # the board file's port "virtual" is texel.hw.virtual's VirtualHw, the
+        # only backend with a scripted finger (texel.app.finger)
+        v = st.get("port") == "virtual"
+        self._virtual_of = (b, v)
+        return v
+
+    def is_virtual(self) -> bool:
+        """Whether the board is the virtual board (its finger can be moved
+        from the host); started first when it is not running."""
+        return self._call(self._virtual)
+
+    def finger(self, position_mm: float | None) -> int:
+        """Put the virtual board's finger at position_mm (mm from the
+        display's start) from now on, or lift it (None); the board's
+        ticks_us at that moment. A real board has its own finger sensor:
+        ValueError (400), nothing sent."""
+        def go(b: Board) -> int:
+            if not self._virtual(b):
+                raise ValueError("this board has its own finger sensor: the finger is on the "
+                                 "glass, it cannot be moved from the page")
+            return b.finger([(0.0, position_mm)])
+        return self._call(go)
+
+    def telemetry(self, seconds: float, rate_hz: int = 125) -> list[tuple[int, int, int]]:
+        """The board's own record of what it played for `seconds`: (t_us,
+        position or -1, uint16 amplitude) samples taken by its refresh
+        (Board.monitor; the stream is turned off again at the end)."""
+        return self._call(lambda b: list(b.monitor(seconds, rate_hz)))
