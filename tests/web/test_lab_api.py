@@ -137,8 +137,9 @@ def test_free_exploration_then_the_quantization_test_with_its_matches(lab, port)
     assert tex.get("quant_db", 0.0) == level
     assert "quant" not in json.dumps(r.json()["question"])                 # blind
     _answer_all(lab, qid, sim, "quant")
-    assert [x["similarity"] for x in qs.state.ratings] == \
-        [int(round(5 - q / 2)) if q != 1 else 4 for _, q in qs.state.trials]
+    file = [x["answer"] for x in Session.open(qs.session.path).answers()]
+    assert [x["similarity"] for x in qs.state.ratings] == file and len(file) == 12
+    assert all(x in range(1, 6) for x in file)
 
 
 def test_the_similarity_matrix_rates_each_exemplar_against_each_pursuit_match(lab, port):
@@ -238,6 +239,20 @@ def test_a_refused_answer_changes_nothing(lab, port):
     assert _playing(lab) == before
     assert lab.get("/api/sessions/p03/pursuit-9").status_code == 400
     assert lab.get("/api/sessions/..%2F..%2Fx/pursuit-1").status_code in (400, 404)
+
+
+def test_a_cross_site_simple_post_is_refused_and_changes_nothing(lab, port):
+    """A page elsewhere can POST text/plain to 127.0.0.1 without asking: only
+    application/json bodies are taken (the browser asks before sending
+    those, and nothing here says yes)."""
+    before = _playing(lab)
+    body = json.dumps({"config": "staircase", "participant": "x1"})
+    for ctype in ("text/plain", "application/x-www-form-urlencoded", None):
+        r = lab.post("/api/sessions", content=body,
+                     headers={"content-type": ctype} if ctype else {})
+        assert r.status_code == 400 and "application/json" in r.json()["error"], r.text
+    assert _playing(lab) == before and not list(lab.lab.data.rglob("*.jsonl"))
+    assert "access-control-allow-origin" not in {k.lower() for k in r.headers}
 
 
 def test_only_localhost_names_are_served(lab):

@@ -4,5 +4,8 @@
     refresh   the cost of one refresh, scene memory, push/swap latency
     link      deploy time, push latency, bytes on the wire, a push soak
     opcount   the op-count model (a cross-check, labelled an estimate)
+    chip      the emulated RP2040's own clock: plan, push and refresh on the chip
+    lab       texelpad lab: slider change -> new scene playing on the virtual board
+    study_compare  guided exploration against preference search, answers to 1 dB
     device/   the scripts that run under MicroPython (package data, not modules)
 """

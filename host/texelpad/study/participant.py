@@ -11,9 +11,11 @@ when the two differ by less than `unsure_below`. The oddity task is a
 psychometric function of texel length: P(correct) = 1/3 + 2/3 / (1 +
 exp(-(length - threshold) / slope)) - chance (1/3) far below the threshold,
 certain far above. In the free exploration it sets the sliders on its target
-(plus the noise) with confidence 4; in the quantization test it rates
-similarity 5 - q/2 (q the quantization in dB; plus noise of SD noise*40,
-rounded to 1..5) - a model for driving the protocols, not a finding.
+(plus the noise) with confidence 4; in the quantization test (and the
+similarity matrix) it rates similarity 5 - d/4 - q/2, d the distance in dB
+between the reference's spectral position (texelpad.study.references) and
+the match rendered, q the quantization in dB, plus noise of SD noise*40,
+rounded to 1..5 - a model for driving the protocols, not a finding.
 """
 from __future__ import annotations
 
@@ -78,7 +80,12 @@ class SimulatedParticipant:
                                                irregularity_db(self.target.v + n())))
             return {"pitch_db": round(p, 3), "irregularity_db": round(s, 3), "confidence": 4}
         if protocol == "quant":
-            q = state.current[1]
-            r = 5.0 - q / 2.0 + (self._rng.gauss(0.0, self.noise * 40) if self.noise else 0.0)
+            from .references import position
+            ref, q = state.current
+            m = state.config.matches[state.current_match]
+            p, s = position(ref)
+            d = math.hypot(m["pitch_db"] - p, m["irregularity_db"] - s)
+            r = 5.0 - d / 4.0 - q / 2.0 + (self._rng.gauss(0.0, self.noise * 40)
+                                           if self.noise else 0.0)
             return int(min(5, max(1, round(r))))
         raise ValueError("protocol: unknown %r" % (protocol,))

@@ -23,7 +23,15 @@ class Refused(ValueError):
 
 
 async def body_of(request: Request) -> Any:
-    """The request's JSON body (at most BODY_MAX bytes; empty = {})."""
+    """The request's JSON body (at most BODY_MAX bytes; empty = {}), sent as
+    application/json only: a page of another site in the same browser can
+    send a "simple" POST (text/plain, no preflight) to 127.0.0.1, which the
+    host check cannot tell from ours; a JSON content type makes the browser
+    ask first, and nothing here answers yes (no CORS headers)."""
+    ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    if ctype != "application/json":
+        raise Refused("send the body as application/json (got %s)"
+                      % (json.dumps(ctype[:40]) if ctype else "no content type"))
     raw = await request.body()
     if len(raw) > BODY_MAX:
         raise Refused("request body over %d bytes" % BODY_MAX)

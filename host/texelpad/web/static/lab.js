@@ -39,7 +39,7 @@ function el(tag, attrs, text) {
 
 // the board line and, when the board is the virtual one (or ?strip=1), the
 // strip: see and hear the playing scene (strip.js)
-async function boardLine(showStrip) {
+async function boardLine(showStrip, stripOptions) {
   let st;
   try { st = await call("GET", "/api/status"); } catch (e) { return null; }
   $("status").textContent = "board " + (st.board || "?") + (st.running ? " playing" : " stopped");
@@ -47,7 +47,7 @@ async function boardLine(showStrip) {
                || st.board === "virtual";
   if (want && window.texelpadStrip && $("strip")) {
     $("strip-box").hidden = false;
-    return window.texelpadStrip($("strip"), {});
+    return window.texelpadStrip($("strip"), stripOptions || {});
   }
   return null;
 }

@@ -120,6 +120,6 @@ function show(res) {
 
 (async () => {
   if (!sid) { showError("no session: open this page from the experimenter's screen"); return; }
-  strip = await boardLine(false);
+  strip = await boardLine(false, {labels: false});     // blind: no region labels
   show(await call("GET", "/api/sessions/" + sid));
 })();
