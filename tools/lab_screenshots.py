@@ -54,7 +54,7 @@ def screens(data: Path) -> None:
                 exp.wait_for_selector("#participant-link[href*='%s-']" % proto)
                 sid = exp.get_attribute("#participant-link", "href").split("s=")[1]
                 exp.wait_for_selector("#detail")
-                page = b.new_page(viewport={"width": 900, "height": 560})
+                page = b.new_page(viewport={"width": 900, "height": 640})
                 page.goto(url + "participant?s=" + sid)
                 page.wait_for_selector("#question:not([hidden])")
                 if proto == "free":

@@ -2,12 +2,19 @@
 virtual board, through the lab's own board owner (texelpad.web.owner: the
 host-side check, the push, the board's validation, build and swap, its status
 back). Each step is what a pitch or irregularity slider of the free
-exploration sends: the reference on the left half, the texel rendering
-(format 2) on the right.
+exploration sends (study/questions.slider_scene): the reference on the left
+half, the texel rendering (format 2, 0.25 mm texels, a fresh seed per change)
+on the right.
 
     .venv/bin/python -m texelpad.bench.lab [--steps N] [--json PATH]
 
-Prints median, p95 and max in ms and writes the figures as JSON.
+Two paths, both measured: "owner" pushes through the lab's BoardOwner in
+this process (the board's part); "http" is what a participant's slider does -
+`texelpad lab` started as a process, a free exploration session from the
+shipped config, and POST /api/sessions/P/NAME/feel {pitch_db,
+irregularity_db} over HTTP, timed from the request to the reply, which comes
+once the board plays the new scene (the session file has the move by then:
+fsynced). Prints median, p95 and max in ms and writes the figures as JSON.
 """
 from __future__ import annotations
 
@@ -17,8 +24,8 @@ import statistics
 import time
 
 from ..link.virtual import open_virtual, stop_on_signals
-from ..study import scenes as S
-from ..study.space import Point
+from ..study.free import Free
+from ..study.questions import slider_scene
 from ..web.owner import BoardOwner
 
 
@@ -29,11 +36,16 @@ def run(steps: int = 200) -> dict:
             owner = BoardOwner(vb.port, "virtual", realtime=True)
             display = owner.display()
             times = []
+            free = Free(1)                  # the free exploration: its nine trials in turn
+            per = max(1, steps // len(free.order))
+            refs = []
             for k in range(steps):
-                # a slider sweep: pitch back and forth, irregularity slowly
-                u = 0.2 + 0.6 * abs((k % 40) - 20) / 20
-                v = 0.3 + 0.4 * (k % 97) / 97
-                scene = S.point_scene(S.DEFAULT_REFERENCE, Point(u, v), display)
+                free.trial = min(k // per, len(free.order) - 1)
+                refs.append(free.reference)
+                # the same slider sweep as run_http: pitch back and forth, irregularity up
+                pitch = round(-10 + 30 * abs((k % 40) - 20) / 20, 3)
+                irr = round(-30 + 30 * (k % 97) / 97, 3)
+                scene, _ = slider_scene(free, {}, display, pitch, irr, k)
                 t0 = time.perf_counter()
                 st, _ = owner.push(scene)
                 times.append((time.perf_counter() - t0) * 1e3)
@@ -41,11 +53,70 @@ def run(steps: int = 200) -> dict:
             owner.close()
         finally:
             vb.stop()
+    return dict(_figures(times, refs), overruns=last["overruns"],
+                refreshes=last["refreshes"], board="virtual (MicroPython unix port, real time)",
+                path="BoardOwner.push in this process")
+
+
+def _figures(times: list[float], refs: list[str]) -> dict:
     s = sorted(times)
-    return {"steps": steps, "median_ms": statistics.median(times),
+    by: dict[str, list[float]] = {}
+    for t, r in zip(times, refs):
+        by.setdefault(r, []).append(t)
+    return {"steps": len(times), "median_ms": statistics.median(times),
             "p95_ms": s[min(len(s) - 1, int(0.95 * (len(s) - 1) + 0.5))], "max_ms": s[-1],
-            "overruns": last["overruns"], "refreshes": last["refreshes"],
-            "board": "virtual (MicroPython unix port, real time)"}
+            "median_ms_by_reference": {r: statistics.median(v) for r, v in by.items()}}
+
+
+def run_http(steps: int = 200) -> dict:
+    import subprocess
+    import sys
+    import tempfile
+    import urllib.request
+
+    def call(url: str, body: dict | None = None) -> dict:
+        req = urllib.request.Request(url, data=None if body is None else json.dumps(body).encode(),
+                                     headers={"content-type": "application/json"},
+                                     method="GET" if body is None else "POST")
+        with urllib.request.urlopen(req, timeout=30) as r:
+            return json.loads(r.read())
+
+    with tempfile.TemporaryDirectory() as data:
+        p = subprocess.Popen([sys.executable, "-m", "texelpad", "lab", "--data", data],
+                             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+        try:
+            url = p.stdout.readline().strip()
+            for _ in range(300):
+                try:
+                    call(url + "api/status")
+                    break
+                except OSError:
+                    time.sleep(0.1)
+            sid = call(url + "api/sessions", {"config": "free-nine", "participant": "bench",
+                                              "seed": 1})["id"]
+            times, refs = [], []
+            per = max(1, steps // 9)
+            for k in range(steps):
+                if k and k % per == 0 and k // per < 9:      # the next trial: submit a match
+                    call(url + "api/sessions/%s/answer" % sid,
+                         {"answer": {"pitch_db": pitch, "irregularity_db": irr,
+                                     "confidence": 3}})
+                refs.append(call(url + "api/sessions/%s/monitor" % sid)["detail"]["reference"])
+                pitch = round(-10 + 30 * abs((k % 40) - 20) / 20, 3)
+                irr = round(-30 + 30 * (k % 97) / 97, 3)
+                t0 = time.perf_counter()
+                call(url + "api/sessions/%s/feel" % sid, {"pitch_db": pitch,
+                                                          "irregularity_db": irr})
+                times.append((time.perf_counter() - t0) * 1e3)
+            last = call(url + "api/scene")["scene"]["regions"][1]["texture"]
+            assert last["pitch_db"] == min(pitch, 19.747) and last["irregularity_db"] == irr
+            st = call(url + "api/status")
+        finally:
+            p.terminate()
+            p.wait(timeout=30)
+    return dict(_figures(times, refs), overruns=st["overruns"], refreshes=st["refreshes"],
+                board="virtual (MicroPython unix port, real time)",
+                path="HTTP POST .../feel to `texelpad lab` (uvicorn), reply once playing")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -53,14 +124,19 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--steps", type=int, default=200)
     p.add_argument("--json", metavar="PATH")
     a = p.parse_args(argv)
-    res = run(a.steps)
-    print("slider change -> new scene playing on the %s: median %.1f ms, p95 %.1f ms, "
-          "max %.1f ms over %d changes; %d overruns in %d refreshes"
-          % (res["board"], res["median_ms"], res["p95_ms"], res["max_ms"], res["steps"],
-             res["overruns"], res["refreshes"]))
+    out = {}
+    for name, fn in (("owner", run), ("http", run_http)):
+        res = out[name] = fn(a.steps)
+        print("slider change -> new scene playing on the %s, %s: median %.1f ms, p95 %.1f ms, "
+              "max %.1f ms over %d changes; %d overruns in %d refreshes"
+              % (res["board"], "through the lab's owner" if name == "owner" else
+                 "over HTTP from a page", res["median_ms"], res["p95_ms"], res["max_ms"],
+                 res["steps"], res["overruns"], res["refreshes"]), flush=True)
+        print("  median by reference (ms): " + ", ".join(
+            "%s %.1f" % kv for kv in res["median_ms_by_reference"].items()), flush=True)
     if a.json:
         with open(a.json, "w") as f:
-            json.dump(res, f, indent=1)
+            json.dump(out, f, indent=1)
     return 0
 
 
