@@ -309,3 +309,48 @@ def test_the_server_survives_a_board_that_disappears_and_says_so(tmp_path):
         finally:
             owner.close()
             vb2.stop()
+
+
+def test_browser_tabs_at_once_are_served_one_at_a_time(tmp_path):
+    """Six tabs (threads) feel and answer on their own sessions at once
+    against `texelpad lab`: every request is answered, every session file
+    holds exactly its tab's answers in order, and the board ends playing the
+    scene of one of the last requests - pushes are never interleaved."""
+    import threading
+    import urllib.request
+
+    def call(url, body=None):
+        req = urllib.request.Request(url, data=None if body is None else json.dumps(body).encode(),
+                                     headers={"content-type": "application/json"},
+                                     method="GET" if body is None else "POST")
+        with urllib.request.urlopen(req, timeout=60) as r:
+            return json.loads(r.read())
+
+    with lab_process(tmp_path) as (url, _):
+        sids = [call(url + "api/sessions", {"config": "pursuit-4sin", "participant": "t%d" % k,
+                                            "seed": k})["id"] for k in range(6)]
+        errors, sent = [], {sid: [] for sid in sids}
+
+        def tab(sid):
+            try:
+                for i in range(8):
+                    call(url + "api/sessions/%s/feel" % sid, {"option": i % 2})
+                    a = ["A", "B", "unsure"][(i + len(sid)) % 3]
+                    call(url + "api/sessions/%s/answer" % sid, {"answer": a})
+                    sent[sid].append(a)
+            except Exception as e:          # noqa: BLE001 - reported below
+                errors.append(repr(e))
+
+        threads = [threading.Thread(target=tab, args=(sid,)) for sid in sids]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        assert not errors
+        playing = call(url + "api/scene")["scene"]
+        # what each session last played (the lab's own record): the board plays one of them
+        lasts = [call(url + "api/sessions/%s/monitor" % sid)["playing_scene"] for sid in sids]
+    assert playing in lasts
+    for sid in sids:
+        s = Session.open(tmp_path / (sid + ".jsonl"))
+        assert [r["answer"] for r in s.answers()] == sent[sid]
