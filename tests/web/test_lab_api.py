@@ -17,26 +17,12 @@ from texelpad.web.owner import BoardOwner
 from texelpad.web.server import Lab, make_app
 
 from support.lab import lab_process
-from support.vboard import virtual_board
 
 pytestmark = pytest.mark.vboard
 BASE = "http://127.0.0.1"
 
 
-@pytest.fixture(scope="module")
-def port():
-    with virtual_board() as p:
-        yield p
-
-
-@pytest.fixture
-def lab(port, tmp_path):
-    owner = BoardOwner(port, "virtual", realtime=True)
-    lab = Lab(owner, tmp_path / "data")
-    with TestClient(make_app(lab), base_url=BASE) as c:
-        c.lab = lab
-        yield c
-    owner.close()
+# port and lab: tests/web/conftest.py
 
 
 def _playing(lab) -> dict:
