@@ -10,7 +10,6 @@ simulated participant (texelpad.study.participant) answered.
 Writes docs/img/lab-experimenter.png, lab-screen-PROTOCOL.png and
 lab-summary-NAME.png.
 """
-import json
 import shutil
 import signal
 import subprocess

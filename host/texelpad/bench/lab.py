@@ -95,6 +95,7 @@ def run_http(steps: int = 200) -> dict:
             sid = call(url + "api/sessions", {"config": "free-nine", "participant": "bench",
                                               "seed": 1})["id"]
             times, refs = [], []
+            pitch, irr = 5.0, -15.0              # the sliders start mid-range
             per = max(1, steps // 9)
             for k in range(steps):
                 if k and k % per == 0 and k // per < 9:      # the next trial: submit a match
