@@ -468,3 +468,143 @@ def demo_figure(path: str | Path, scene: Any, telemetry: Any, *, display: dict |
                        framealpha=0.9)
     fig.savefig(str(path), dpi=100)
     return out
+
+
+# --- the `texelpad encode` figure ---------------------------------------------------
+
+def encode_figure(path: str | Path, fmap: Any, result: dict, decoded: Any = None,
+                  title: str = "") -> None:
+    """One PNG (or .pdf/.svg) for an encoder result (texelpad.analysis.encoder.encode):
+    the map and its decoding (the texture rendered, as a board plays it) over
+    the same stretch, both spectra on a log-frequency axis, the felt
+    distributions the encoder compared, and the figures of the report.
+    decoded: the rendering (default: encoder.decode(result))."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from . import perception as P
+    from .encoder import decode
+
+    x = np.asarray(fmap, dtype=np.float64)
+    y = decode(result) if decoded is None else np.asarray(decoded, dtype=np.float64)
+    n = x.size
+    dx = texel.DX_MM
+    fig = Figure(figsize=(11, 12), layout="constrained")
+    FigureCanvasAgg(fig)
+    gs = fig.add_gridspec(4, 2, height_ratios=[1, 1, 1.25, 1.1])
+    ax_map = fig.add_subplot(gs[0, :])
+    ax_dec = fig.add_subplot(gs[1, :], sharex=ax_map)
+    ax_spec = fig.add_subplot(gs[2, :])
+    ax_felt = fig.add_subplot(gs[3, 0])
+    ax_text = fig.add_subplot(gs[3, 1])
+
+    tex = result["texture"]
+    src = result.get("source") or "map"
+    fig.suptitle("%s%s \u2192 pitch %.2f dB (%.3g c/mm), irregularity %.2f dB (%.3g decade), "
+                 "gain %.3g\nfelt-spectrum distance %.3f dB" % (
+                     (title + ": ") if title else "", src, tex["pitch_db"],
+                     10 ** (tex["pitch_db"] / 10), tex["irregularity_db"],
+                     10 ** (tex["irregularity_db"] / 10), tex["gain"], result["distance_db"]))
+
+    # 1-2. the map and its decoding over the same stretch: 6 mm (seed 000's Fig. 4
+    # shows 6-mm samples), or the whole map when shorter
+    nz = int(min(n, round(6.0 / dx)))
+    xs = np.arange(nz) * dx
+    ax_map.plot(xs, x[:nz], lw=0.8, color="C0")
+    ax_dec.plot(xs, y[:nz], lw=0.8, color="C1")
+    L = tex["texel_samples"]
+    if nz // max(L, 1) <= 40:
+        for k in range(L, nz, L):
+            ax_dec.axvline(k * dx, color="0.85", lw=0.6, zorder=0)
+    for ax, what in ((ax_map, "the map"), (ax_dec, "encode \u2192 render: the texture as a "
+                                                   "board plays it (seed %d%s)"
+                                                   % (tex["seed"], ", texel borders in grey"
+                                                      if nz // max(L, 1) <= 40 else ""))):
+        ax.set_ylim(-0.03, 1.03)
+        ax.set_ylabel("friction reduction")
+        ax.set_title("%s, first %.3g mm of %.4g mm" % (what, nz * dx, n * dx), fontsize="medium")
+    ax_dec.set_xlabel("position (mm)")
+    ax_map.set_xlim(0, max(xs[-1], dx))
+
+    # 3. spectra: band power on the log-frequency axis (the encoder's), and the
+    # decoded rendering's own spectrum, and where a finger at the model's speed feels them
+    sp = result["spectrum"]
+    f = np.asarray(sp["f_cpmm"])
+    ax_spec.semilogx(f, sp["map_db"], color="C0", lw=1.6, label="the map")
+    ax_spec.semilogx(f, sp["rendering_db"], color="C1", lw=1.6,
+                     label="the texture (expected over seeds)")
+    fd, Pd = P.periodogram(y)
+    pat = P.pattern_of_spectrum(Pd, P.segment_length(y.size))
+    keep = (P.GRID >= math.log10(max(fd[1], 1e-9))) & (P.GRID <= math.log10(texel.NYQUIST_CPMM))
+    ax_spec.semilogx(10 ** P.GRID[keep], 10 * np.log10(np.maximum(pat.band_power[keep], 1e-15)
+                                                      / P.FULL_SCALE_POWER),
+                     color="C1", lw=0.7, ls=":", label="this rendering (seed %d)" % tex["seed"])
+    speed = result["model"]["speed_mm_s"]
+    thr = P.threshold_db(speed * f) - result["model"]["full_scale_sl_db"]
+    ax_spec.semilogx(f, thr, color="0.4", lw=1, ls="--",
+                     label="detection threshold at %g mm/s (model)" % speed)
+    ax_spec.axvline(texel.NYQUIST_CPMM, color="C3", ls="--", lw=1,
+                    label="Nyquist %.1f c/mm" % texel.NYQUIST_CPMM)
+    ax_spec.axvline(10 ** (tex["pitch_db"] / 10), color="C2", ls=":", lw=1.2,
+                    label="central pitch %.3g c/mm" % 10 ** (tex["pitch_db"] / 10))
+    top = max(max(sp["map_db"]), max(sp["rendering_db"]))
+    ax_spec.set_ylim(top - 70, top + 8)
+    ax_spec.set_xlim(f[0], texel.NYQUIST_CPMM * 1.05)
+    ax_spec.set_xlabel("spatial frequency (cycles/mm); felt at \u00d7%g Hz" % speed)
+    ax_spec.set_ylabel("band power (dB re full-scale sine)")
+    ax_spec.set_title("spectra on a log-frequency axis: power within \u00b11 dB (0.1 decade) "
+                      "bands", fontsize="medium")
+    ax_spec.legend(loc="lower left", fontsize="small", ncol=2, framealpha=0.9)
+    ax_spec.grid(True, which="both", alpha=0.25)
+
+    # 4. what the encoder compared: the felt distributions over pitch (dB)
+    lf = np.asarray(sp["log10_f"]) * 10.0
+    ax_felt.fill_between(lf, sp["map_felt"], step="mid", alpha=0.35, color="C0", label="the map")
+    ax_felt.step(lf, sp["rendering_felt"], where="mid", color="C1", lw=1.4, label="the texture")
+    ax_felt.axvline(tex["pitch_db"], color="C2", ls=":", lw=1.2)
+    ax_felt.set_xlabel("pitch (dB re 1 c/mm)")
+    ax_felt.set_ylabel("share of the felt power")
+    ax_felt.set_title("felt spectra compared (distance %.3f dB)" % result["distance_db"],
+                      fontsize="medium")
+    ax_felt.legend(loc="upper left", fontsize="small")
+
+    # 5. the report's figures in words
+    ax_text.axis("off")
+    lines = ["texture: %s" % _short_texture(tex)]
+    rg = result.get("ranges")
+    if rg:
+        lines.append("feels the same (within %.2g dB): pitch %.2f .. %.2f dB, irregularity "
+                     "%.2f .. %.2f dB" % (rg["equivalent_db"], rg["pitch_db"][0],
+                                          rg["pitch_db"][1], rg["irregularity_db"][0],
+                                          rg["irregularity_db"][1]))
+    fm, fr = result["felt"]["map"], result["felt"]["rendering"]
+    lines.append("felt pitch %.2f / %.2f dB, spread %.2f / %.2f dB (map / texture)"
+                 % (fm["pitch_db"], fr["pitch_db"], fm["spread_db"], fr["spread_db"]))
+    c = result["compression"]
+    lines.append("compression: %s bytes of map (uint16) \u2192 %d bytes of texture: %gx"
+                 % (format(c["map_bytes"], ","), c["texture_bytes"], c["ratio"]))
+    a = result["aliasing"]
+    lines.append("aliased texels (above Nyquist): %.1f %% expected, %d of %d drawn"
+                 % (100 * a["expected_fraction"], a["drawn_texels"], a["texels"]))
+    qz = result.get("quantization")
+    if qz:
+        lines.append("distance with pitch quantization: " + ", ".join(
+            "%s dB: %.2f" % (k, v) for k, v in qz["cost_db"].items()))
+    m = result["model"]
+    lines.append("model: %g mm/s, full scale %g dB above threshold, masking %s, resolution "
+                 "%g decade" % (m["speed_mm_s"], m["full_scale_sl_db"],
+                                "off" if m["masking_db"] is None else "%g dB" % m["masking_db"],
+                                m["resolution_decades"]))
+    for note in result.get("notes", [])[:3]:
+        lines.append("note: " + note)
+    import textwrap
+    ax_text.text(0.0, 1.0, "\n".join(textwrap.fill(s, 62, subsequent_indent="   ")
+                                     for s in lines),
+                 transform=ax_text.transAxes, va="top", ha="left", fontsize="small",
+                 family="monospace")
+    fig.savefig(str(path), dpi=100)
+
+
+def _short_texture(tex: dict) -> str:
+    return "{" + ", ".join("%r: %s" % (k, ("%g" % v) if isinstance(v, float) else v)
+                           for k, v in tex.items()) + "}"

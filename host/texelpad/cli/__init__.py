@@ -41,6 +41,8 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
                                           "push soak, on the virtual board"),
     "bench": ("bench", "bench", "speed against error of every render engine on every runtime"),
     "render": ("render", "render", "render a texel texture on the host, summarise it, save it"),
+    "encode": ("encode", "encode", "a friction map (file, reference, scene region) -> the texel "
+                                   "parameters that feel the same, with the reasoning"),
     "lab": ("lab", "lab", "the papers' study protocols in the browser, on a board or the "
                           "virtual one (127.0.0.1 only)"),
     "tank": ("tank", "tank",
