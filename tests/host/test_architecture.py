@@ -94,10 +94,11 @@ def test_pure_host_logic_never_imports_the_link_or_a_command():
                        "serial", "mpremote")) == {}
 
 
-def test_study_and_search_are_pure_logic():
-    """The protocols, sessions and the search never touch the link or a web
-    framework: only the lab's web server will own a Board (issue 11)."""
-    pure = modules(HOST, "study") + modules(HOST, "search")
+def test_study_search_and_brush_are_pure_logic():
+    """The protocols, sessions, the search and the paintbrush's analysis
+    never touch the link or a web framework: only the lab's web server will
+    own a Board (issue 11)."""
+    pure = modules(HOST, "study") + modules(HOST, "search") + modules(HOST, "brush")
     assert pure
     assert _bad(pure, ("texelpad.link", "texelpad.cli", "texelpad.deploy", "serial", "mpremote",
                        "starlette", "fastapi", "flask", "aiohttp", "uvicorn", "http")) == {}

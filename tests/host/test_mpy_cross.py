@@ -32,6 +32,7 @@ VIPER_FILES = mpy.viper_files()
 # added here on purpose (and guarded the same way).
 NATIVE_ONLY = {DEVICE / "texel" / "gen" / "engine_int_viper.py",
                DEVICE / "texel" / "gen" / "plan_int_viper.py",
+               DEVICE / "texel" / "gen" / "brush_viper.py",
                DEVICE / "texel" / "runtime" / "refresh_viper.py"}
 
 # mpy header byte 2 holds the native architecture in its upper 6 bits
@@ -55,6 +56,8 @@ def test_device_tree_and_native_files():
     assert 'native("texel.gen.engine_int_viper", "fill") or _fill_py' in src
     src = (DEVICE / "texel" / "gen" / "plan_int.py").read_text()
     assert 'native("texel.gen.plan_int_viper", "texels") or texels_py' in src
+    src = (DEVICE / "texel" / "gen" / "brush.py").read_text()
+    assert 'if native("texel.gen.brush_viper", "frame") is None:' in src
     src = (DEVICE / "texel" / "compat.py").read_text()
     assert "except (ImportError, SyntaxError, MemoryError, AttributeError)" in src
     app = (DEVICE / "texel" / "app.py").read_text()

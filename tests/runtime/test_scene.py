@@ -78,7 +78,7 @@ SPLIT = _H["split"]()
 TEXEL_RIGHT = {"pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7}
 
 TEXEL_ALLOWED = "kind, pitch_db, irregularity_db, texel_samples, quant_db, seed, gain, v, band_limit_cpmm"
-KINDS = "texel, reference, constant, samples"
+KINDS = "texel, reference, constant, samples, brush"
 REF_NAMES = ", ".join(texel.reference_names())
 
 # (id, scene expression, display expression or None (= D), exact message)
@@ -1292,8 +1292,31 @@ print(json.dumps({"nbytes": new.nbytes, "plans": len(new.plans()), "free": gc.me
         assert res["nbytes"] == 8 * 384 + 32 and res["plans"] == 1, (kb, res)
 
 
-def test_pico_heap_split_screen_builds():
-    """The study's split screen on a Pico-sized heap (180 KB)."""
+def _bytecode_tree(tmp_path):
+    """device/texel compiled by mpy-cross as a board's image holds it
+    (bytecode: no source compiled at import, whose garbage would fragment a
+    small heap as no board's does); native (viper) modules left out, as for
+    a port without the emitter."""
+    out = tmp_path / "img"
+    for src in (mpy.DEVICE / "texel").rglob("*.py"):
+        if src in mpy.viper_files() or src.name == "main.py":
+            continue
+        dst = out / src.relative_to(mpy.DEVICE).with_suffix(".mpy")
+        dst.parent.mkdir(parents=True, exist_ok=True)
+        p = mpy.mpy_cross(src, dst)
+        assert p.returncode == 0, p.stdout + p.stderr
+    for data in (mpy.DEVICE / "texel").rglob("*.bin"):
+        (out / data.relative_to(mpy.DEVICE)).write_bytes(data.read_bytes())
+    for data in (mpy.DEVICE / "texel" / "boards.d").glob("*.json"):
+        d = out / data.relative_to(mpy.DEVICE)
+        d.parent.mkdir(parents=True, exist_ok=True)
+        d.write_bytes(data.read_bytes())
+    return out
+
+
+def test_pico_heap_split_screen_builds(tmp_path):
+    """The study's split screen on a Pico-sized heap (180 KB), the modules as
+    a board has them (bytecode)."""
     code = HELPERS + r"""
 import json, gc
 from texel.runtime import scene as S
@@ -1302,7 +1325,7 @@ sc = S.build(S.validate(split(), D), D)
 gc.collect()
 print(json.dumps({"nbytes": sc.nbytes, "free": gc.mem_free()}))
 """
-    res = mpy.run_json(code, heapsize="180k")
+    res = mpy.run_json(code, heapsize="180k", path=_bytecode_tree(tmp_path))
     print("\nsplit screen on a 180k heap:", json.dumps(res))
     assert res["nbytes"] == 20784
 

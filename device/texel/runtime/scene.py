@@ -74,7 +74,7 @@ from ..gen.params import LENGTH_MAX
 MAX_REGIONS = 16            # regions per scene (amp() cost grows with the count)
 MAX_SAMPLES = 19200         # values per samples region (one full TPaD screen)
 U16_MAX = 65535
-KINDS = ("texel", "reference", "constant", "samples")
+KINDS = ("texel", "reference", "constant", "samples", "brush")
 FITS = ("tile", "stretch")
 SCENE_KEYS = ("regions", "idle_amplitude", "name", "notes")
 # A scene's own words: "name" (shown by status, listed by `texelpad scenes`)
@@ -89,6 +89,7 @@ TEXTURE_KEYS = {
     "reference": ("kind", "name"),
     "constant": ("kind", "level"),
     "samples": ("kind", "values", "u16", "fit"),
+    "brush": ("kind", "brush", "seed"),
 }
 
 # Region table: STRIDE ints per region, (start, end, kind, value), sorted by
@@ -389,6 +390,9 @@ def _texture(path, tex, n):
         return _reference(path, tex)
     if kind == "constant":
         return _constant(path, tex)
+    if kind == "brush":                 # (gen/brush.py checks it: scene.py stays small)
+        from ..gen.brush import region_texture
+        return region_texture(path, tex)
     return _samples(path, tex)
 
 
@@ -572,6 +576,7 @@ def _make(c, spans, positions, dx_um, idle, engine):
     # leaves garbage behind: plans, boxed floats)
     bufs = []
     plans = []
+    painted = []                            # (region, Chunks) of brush regions
     for k in range(count):
         s, e = spans[k]
         j = STRIDE * k
@@ -585,6 +590,18 @@ def _make(c, spans, positions, dx_um, idle, engine):
             table[j + 2] = K_PLAN
             table[j + 3] = len(plans)
             plans.append(_plan_of(tex, e - s))
+        elif tex["kind"] == "brush":
+            # painted into 1 KB chunks (upload.Chunks), played as an upload is:
+            # no block over 1 KB, so a heap the brush's numbers fragmented
+            # still takes a full screen; the painter's tables first, while
+            # the heap has blocks their size (gen/brush.py prepare)
+            from .upload import Chunks
+            from ..gen.brush import prepare
+            prepare()
+            table[j + 2] = K_CHUNK
+            table[j + 3] = len(bufs)
+            painted.append((k, Chunks(e - s)))
+            bufs.append(painted[-1][1].chunks)
         else:
             table[j + 2] = K_BUF
             table[j + 3] = len(bufs)
@@ -594,6 +611,10 @@ def _make(c, spans, positions, dx_um, idle, engine):
             else:
                 bufs.append(_u16(e - s))        # exactly region-long
     # 2. render into them
+    for k, ch in painted:                   # the board got ~200 numbers, paints here
+        from ..gen.brush import paint
+        tex = regions[k]["texture"]
+        paint(tex["brush"], tex["seed"], len(ch), ch)
     for k in range(count):
         j = STRIDE * k
         if table[j + 2] != K_BUF:           # constants, plans and uploads as they are
@@ -818,6 +839,8 @@ class Scene:
                 d["v"] = tex["v"]
             elif kind == "constant":
                 d["amplitude"] = t[j + 3]
+            elif kind == "brush":
+                d["seed"] = tex["seed"]
             else:
                 d["values"] = len(tex["u16"])
                 d["fit"] = tex["fit"]

@@ -82,6 +82,10 @@ class Chunks:
             raise IndexError("upload index out of range")
         return self.chunks[i >> CHUNK_BITS][i & CHUNK_MASK]
 
+    def __setitem__(self, i, v):
+        """One value (a brush painting into its region: gen/brush.py)."""
+        self.chunks[i >> CHUNK_BITS][i & CHUNK_MASK] = v
+
     def put(self, offset, data):
         """Little-endian uint16 bytes for values offset..; returns how many."""
         k = len(data) // 2

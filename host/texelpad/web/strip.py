@@ -71,7 +71,9 @@ def render(canonical: dict[str, Any] | None, display: dict[str, Any],
             out[s:e] = np.frombuffer(bufs[value], dtype=np.uint16)   # array('H'): native order
         elif kind == _scene.K_CONST:            # one table entry: value is the amplitude
             out[s:e] = value
-        else:                                   # a plan (K_PLAN; K_CHUNK only on a board)
+        elif kind == _scene.K_CHUNK:            # 1 KB chunks: a brush painted here
+            out[s:e] = np.concatenate([np.frombuffer(c, dtype=np.uint16) for c in bufs[value]])
+        else:                                   # a plan (K_PLAN)
             amp = sc.amp
             out[s:e] = np.fromiter((amp(p) for p in range(s, e)), dtype=np.uint16,
                                    count=e - s)

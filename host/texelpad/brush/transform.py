@@ -1,0 +1,231 @@
+"""The space-frequency transform of the Tactile Paintbrush (seed 002 §III-A:
+"each Fourier analysis is conducted within a window of 1mm, and the texture
+is sampled in space with a resolution of 0.25mm"), on the display's 5.3 um
+sample (texel.gen.params.DX_MM).
+
+Geometry, fixed in device/texel/gen/brush.py and imported from there (the
+painting on host and board uses the same constants):
+
+    WINDOW = 188 samples = 0.9964 mm   (the paper's 1 mm)
+    HOP    =  47 samples = 0.2491 mm   (the paper's 0.25 mm; 4 windows overlap)
+    K      =  95 wavenumbers 0 .. 94   (k cycles per window: wavelength
+                                        0.9964 mm / k; 94 = 10.6 um, the
+                                        display's Nyquist; the paper's 101 on
+                                        5 um went to 10 um)
+
+Window: the periodic Hann w[n] = 0.5 - 0.5 cos(2 pi n / WINDOW), n = 0 ..
+WINDOW-1 (periodic, not symmetric, so that the four windows overlapping at a
+sample add to exactly 2: the synthesis' overlap-add has no ripple);
+W = sum w = WINDOW / 2 = 94.
+
+Magnitudes (brush.py): X_k = sum_n x[n] w[n] e^(-2 pi i k n / WINDOW) (numpy's
+rfft of the windowed samples: exactly K = WINDOW/2 + 1 = 95 bins), and
+
+    m_0 = |X_0| / W          the window's (Hann-weighted) mean friction
+    m_k = 2 |X_k| / W        k = 1 .. 94
+
+so a constant c gives m_0 = |c| and a sinusoid A sin(2 pi k n / WINDOW + phi)
+at a whole wavenumber 1 <= k <= 93 gives m_k = A. The exception is k = 94,
+the Nyquist bin: there the sampled sinusoid is A cos(phi) (-1)^n, the bin is
+real and has no negative-frequency twin, so m_94 = 2 A |cos phi| (anything
+from 0 to 2A); a painter that draws m_94 and a random phase must halve it
+(or draw the sign only) to get amplitude m_94 / 2 back. A wavenumber between
+bins leaks into its neighbours by the Hann main lobe (4 bins wide).
+
+Windows start at samples 0, HOP, 2 HOP, ... while a whole window fits: a map
+of N >= WINDOW samples gives 1 + (N - WINDOW) // HOP windows, and its last
+(N - WINDOW) % HOP samples (fewer than HOP = 0.25 mm) are not analysed -
+never padded, since zero padding would put a false step into the last window.
+
+Recordings (a tribometer's CSV, position in mm then friction, any step, as
+the paper recorded at 3.86 um and resampled to 5 um): `read_recording` reads
+one, `resample` puts it on the display's 5.3 um grid.
+
+Pure logic: numpy and texel only (docs/architecture.md).
+"""
+from __future__ import annotations
+
+import csv
+import math
+import os
+from typing import Sequence
+
+import numpy as np
+
+from texel.gen.brush import HOP, K, WINDOW
+from texel.gen.params import DX_MM, LENGTH_MAX
+
+DX_UM = round(DX_MM * 1000.0, 9)        # 5.3 um: the display's map sample
+WINDOW_MM = WINDOW * DX_MM              # 0.9964 mm
+HOP_MM = HOP * DX_MM                    # 0.2491 mm
+# Sanity of the imported geometry: rfft of WINDOW samples has WINDOW/2 + 1 bins,
+# and that is the brush's K (brush.py: 0 = mean .. 94 = Nyquist).
+assert K == WINDOW // 2 + 1 and WINDOW % 4 == 0 and HOP * 4 == WINDOW, (WINDOW, HOP, K)
+
+
+def window() -> np.ndarray:
+    """The periodic Hann window, WINDOW samples: 0.5 - 0.5 cos(2 pi n / WINDOW)."""
+    n = np.arange(WINDOW)
+    return 0.5 - 0.5 * np.cos(2.0 * math.pi * n / WINDOW)
+
+
+_W = window()
+_WSUM = float(_W.sum())                 # = WINDOW / 2 = 94 (to rounding)
+# m_0 = |X_0| / W, m_k = 2 |X_k| / W: one scale per bin
+_SCALE = np.full(K, 2.0 / _WSUM)
+_SCALE[0] = 1.0 / _WSUM
+
+
+def wavelengths_mm() -> np.ndarray:
+    """Wavelength of each wavenumber in mm (inf for k = 0): WINDOW_MM / k."""
+    k = np.arange(K, dtype=float)
+    with np.errstate(divide="ignore"):
+        return np.where(k > 0, WINDOW_MM / np.maximum(k, 1.0), np.inf)
+
+
+def n_windows(n_samples: int) -> int:
+    """Windows a map of n_samples gives (0 when shorter than one window)."""
+    return 0 if n_samples < WINDOW else 1 + (n_samples - WINDOW) // HOP
+
+
+def stft_magnitudes(x, demean: bool = False) -> np.ndarray:
+    """The magnitudes m[window, k] of a friction map sampled every 5.3 um:
+    shape (n_windows, K), windows at samples 0, HOP, 2 HOP ... (module
+    docstring: the tail of fewer than HOP samples after the last whole window
+    is not analysed). Raises ValueError for anything but a 1-D array of
+    finite numbers at least WINDOW (188 samples = 0.9964 mm) long.
+
+    demean: the k >= 1 magnitudes of each window minus its own m_0 (the
+    Hann-weighted mean), so the mean does not leak into k = 1. The paper's
+    comparison (compare.py) uses the plain transform, where k = 1 carries the
+    mean as in seed 002; a brush is fitted on the de-meaned one
+    (host/texelpad/brush/document.py), because the painter draws the mean and
+    the k = 1 wave apart (device/texel/gen/brush.py)."""
+    a = np.asarray(x, dtype=float)
+    if a.ndim != 1:
+        raise ValueError("map: expected a 1-D array of friction samples, got shape %r"
+                         % (a.shape,))
+    if a.size < WINDOW:
+        raise ValueError("map: %d samples is less than one window (%d samples = %.4f mm at "
+                         "%.1f um)" % (a.size, WINDOW, WINDOW_MM, DX_UM))
+    bad = np.flatnonzero(~np.isfinite(a))
+    if bad.size:
+        raise ValueError("map: sample %d is %r (%d non-finite samples); the transform needs "
+                         "finite friction values" % (bad[0], float(a[bad[0]]), bad.size))
+    frames = np.lib.stride_tricks.sliding_window_view(a, WINDOW)[::HOP]
+    if demean:
+        m0 = (frames * _W).sum(axis=1, keepdims=True) / _WSUM
+        out = np.abs(np.fft.rfft((frames - m0) * _W, axis=1)) * _SCALE
+        out[:, 0] = np.abs(m0[:, 0])
+        return out
+    return np.abs(np.fft.rfft(frames * _W, axis=1)) * _SCALE
+
+
+def resample(positions_mm: Sequence[float], friction: Sequence[float],
+             dx_um: float = DX_UM) -> np.ndarray:
+    """A recording (friction at positions in mm, any step, in any order,
+    repeats allowed) on a regular grid of dx_um: sorted by position (stable),
+    the friction of repeated positions averaged, then linearly interpolated
+    at p0 + i * dx for i = 0, 1, ... while <= the last position (p0 = the
+    smallest position; a gap is bridged by the straight line across it).
+    Returns the friction samples; sample i sits at p0 + i * dx_um / 1000 mm.
+
+    The transform's geometry assumes the display's 5.3 um (the default):
+    another dx_um is for other uses. Raises ValueError when the inputs are
+    not two 1-D sequences of the same length, hold a NaN or an infinity, or
+    span less than one window (188 samples of dx) or more than LENGTH_MAX
+    (texel.gen.params) samples."""
+    p = np.asarray(positions_mm, dtype=float)
+    f = np.asarray(friction, dtype=float)
+    if p.ndim != 1 or f.ndim != 1 or p.size != f.size:
+        raise ValueError("recording: positions and friction must be 1-D and of one length, "
+                         "got shapes %r and %r" % (p.shape, f.shape))
+    if not (isinstance(dx_um, (int, float)) and math.isfinite(dx_um) and dx_um > 0):
+        raise ValueError("dx_um: expected a positive finite step in um, got %r" % (dx_um,))
+    for name, v in (("position", p), ("friction", f)):
+        bad = np.flatnonzero(~np.isfinite(v))
+        if bad.size:
+            raise ValueError("recording: %s of row %d is %r; every position and friction must "
+                             "be a finite number" % (name, bad[0], float(v[bad[0]])))
+    dx_mm = dx_um / 1000.0
+    need_mm = (WINDOW - 1) * dx_mm
+    if p.size == 0:
+        raise ValueError("recording: no rows")
+    order = np.argsort(p, kind="stable")
+    p, f = p[order], f[order]
+    # repeated positions (an encoder standing still while the force is sampled): one
+    # point, their mean friction
+    uniq, start = np.unique(p, return_index=True)
+    counts = np.diff(np.append(start, p.size))
+    fm = np.add.reduceat(f, start) / counts
+    span = float(uniq[-1] - uniq[0])
+    if not span >= need_mm:
+        raise ValueError("recording: spans %.6g mm (%d distinct positions); one window needs "
+                         "%.4f mm (%d samples of %.4g um)"
+                         % (span, uniq.size, need_mm, WINDOW, dx_um))
+    n = int(math.floor(span / dx_mm * (1.0 + 1e-12))) + 1
+    if n > LENGTH_MAX:
+        raise ValueError("recording: spans %.6g mm = %d samples of %.4g um, more than the "
+                         "longest map (%d samples)" % (span, n, dx_um, LENGTH_MAX))
+    # positions so large that float64 cannot place a grid point to 1/1000 of a step
+    # (beyond ~2e10 mm for 5.3 um): the grid would be uneven or stand still
+    if float(np.spacing(max(abs(uniq[0]), abs(uniq[-1])))) > dx_mm * 1e-3:
+        raise ValueError("recording: positions near %.6g mm are too large for a %.4g um grid "
+                         "in floating point" % (uniq[0], dx_um))
+    grid = uniq[0] + np.arange(n) * dx_mm
+    grid[-1] = min(grid[-1], uniq[-1])      # rounding must not step past the last point
+    return np.interp(grid, uniq, fm)
+
+
+def _cell(text: str) -> float:
+    v = float(text)                         # ValueError for words; "nan", "inf" parse
+    if not math.isfinite(v):
+        raise ValueError("not finite")
+    return v
+
+
+def read_recording(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
+    """(positions_mm, friction) of a CSV recording: a header row first (the
+    column names, e.g. "position_mm,friction"; its text is not checked, but
+    it must not be two numbers), then one row per sample: position in mm,
+    friction. Blank lines and lines starting with '#' are skipped; a row must
+    have as many fields as the header (2, or more: columns after the second
+    are ignored). Errors name the file and line: a missing header, a short
+    row, a cell that is not a finite number, no data rows."""
+    name = os.fspath(path)
+    pos: list[float] = []
+    fri: list[float] = []
+    header: list[str] | None = None
+    with open(name, newline="", encoding="utf-8-sig") as fh:
+        for line_no, row in enumerate(csv.reader(fh), start=1):
+            if not row or all(not c.strip() for c in row) or row[0].lstrip().startswith("#"):
+                continue
+            if header is None:
+                try:
+                    [float(c) for c in row[:2]]
+                    numeric = len(row) >= 2
+                except ValueError:
+                    numeric = False
+                if numeric:
+                    raise ValueError("%s line %d: expected a header (position in mm, then "
+                                     "friction), got a row of numbers %r" % (name, line_no, row))
+                if len(row) < 2:
+                    raise ValueError("%s line %d: the header has %d column(s); expected "
+                                     "position in mm, then friction" % (name, line_no, len(row)))
+                header = row
+                continue
+            if len(row) != len(header):
+                raise ValueError("%s line %d: %d field(s), the header has %d (position in mm, "
+                                 "friction)" % (name, line_no, len(row), len(header)))
+            for col, what, out in ((0, "position", pos), (1, "friction", fri)):
+                try:
+                    out.append(_cell(row[col]))
+                except ValueError:
+                    raise ValueError("%s line %d: %s %r is not a finite number"
+                                     % (name, line_no, what, row[col].strip())) from None
+    if header is None:
+        raise ValueError("%s: empty (expected a header, then rows of position in mm, "
+                         "friction)" % name)
+    if not pos:
+        raise ValueError("%s: a header and no data rows" % name)
+    return np.asarray(pos), np.asarray(fri)
