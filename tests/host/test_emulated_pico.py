@@ -11,6 +11,7 @@ Nothing here asserts on a time: figures (refresh rate, worst refresh,
 memory, upload time) are printed (pytest -s shows them)."""
 from __future__ import annotations
 
+import ast
 import json
 import random
 import re
@@ -523,3 +524,49 @@ def test_format2_plan_bit_for_bit_on_the_chip_and_a_refused_push_changes_nothing
         st2 = b.status()
         assert st2["scene"]["regions"][0]["seed"] == 11 and st2["pushes"] == st["pushes"]
         assert st2["refreshes"] > n0 and st2["overruns"] == st["overruns"]
+
+
+_BRUSH = {"k": [8.0] + [1.5 + 0.1 * (i % 20) for i in range(94)],
+          "lam": [0.5] + [0.05 / (1 + 0.04 * i) for i in range(94)], "range": [0.0, 1.0]}
+
+
+def test_a_brush_region_paints_on_the_chip_as_on_the_host(capsys, port):
+    """A Tactile Paintbrush region (seed 002) sent as its ~200 numbers is
+    painted by the RP2040 (every per-window loop in armv6m viper) into the
+    map CPython paints: the per-window integers are the same, only the
+    painting's float setup (texel.gen.brush.compensated, float32 here) can
+    round a constant the other way - within one PWM step (8 u16 = 0.45
+    step, measured); the build's cost on the chip's own clock; a bad brush
+    is refused by key path and the brush keeps playing."""
+    from texel.gen import brush as B
+    region = {"start_mm": 0, "end_mm": 50.88,
+              "texture": {"kind": "brush", "brush": _BRUSH, "seed": 12}}
+    host = B.paint(B.validate(_BRUSH), 12, 9600)
+    _playing(port)
+    with texelpad.connect(port, timeout=120) as b:
+        # from a small scene: the new scene is built beside the playing one
+        b.push({"regions": [{"start_mm": 0, "end_mm": 101.76,
+                             "texture": {"kind": "constant", "level": 0.5}}]})
+        st = b.push({"regions": [region]})
+        lp = st["last_push"]
+        assert st["scene"]["regions"][0]["kind"] == "brush" and st["faults"] == 0
+        _say(capsys, "\nbrush half screen (9,600 samples, 207 windows) on the chip: validate "
+             "%.1f + build %.1f + swap %.1f ms (its own clock); mem_free %d"
+             % (lp["validate_us"] / 1e3, lp["build_us"] / 1e3, lp["swap_us"] / 1e3,
+                st["mem_free"]))
+        out = b.link.exec("from texel.gen import brush as _B\nimport texel.app as _A\n"
+                          "print(repr((_B._viper() is not None, [_A._rt.refresh.scene.amp(p) "
+                          "for p in range(0, 9600, 37)])))", timeout=60)
+        viper, got = ast.literal_eval(out.strip().splitlines()[-1])
+        want = [host[p] for p in range(0, 9600, 37)]
+        diff = [abs(a - w) for a, w in zip(got, want)]
+        _say(capsys, "brush on the chip against CPython: %d of %d samples equal, worst %d u16"
+             % (diff.count(0), len(diff), max(diff)))
+        assert viper is True and len(got) == len(want) and max(diff) <= 65535 // 3676
+        assert diff.count(0) >= 0.9 * len(diff)
+        bad = dict(_BRUSH, lam=_BRUSH["lam"][:-1] + [float("nan")])
+        with pytest.raises(ValueError, match=r"brush.lam\[94\]: nan is not finite"):
+            b.push({"regions": [dict(region, texture=dict(region["texture"], brush=bad))]})
+        st2 = b.status()
+        assert st2["pushes"] == st["pushes"] and st2["scene"]["regions"][0]["kind"] == "brush"
+        assert st2["refreshes"] > st["refreshes"] and st2["overruns"] == st["overruns"]
