@@ -87,13 +87,16 @@ def load(path: str | os.PathLike) -> dict[str, Any]:
     """A brush from its JSON file or its binary form (by the magic)."""
     p = Path(path)
     data = p.read_bytes()
-    if data[:4] == MAGIC:
-        return from_bytes(data, str(p))
     try:
-        doc = json.loads(data.decode("utf-8"))
-    except (UnicodeDecodeError, ValueError) as e:
-        raise ValueError("%s: not a brush (JSON or %r binary): %s" % (p, MAGIC, e)) from None
-    return check(doc, str(p))
+        if data[:4] == MAGIC:
+            return from_bytes(data)
+        try:
+            doc = json.loads(data.decode("utf-8"))
+        except (UnicodeDecodeError, ValueError) as e:
+            raise ValueError("not a brush (JSON or %r binary): %s" % (MAGIC, e)) from None
+        return check(doc)
+    except ValueError as e:
+        raise ValueError("%s: %s" % (p, e)) from None
 
 
 def save(doc: dict[str, Any], path: str | os.PathLike) -> Path:

@@ -43,6 +43,8 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "render": ("render", "render", "render a texel texture on the host, summarise it, save it"),
     "encode": ("encode", "encode", "a friction map (file, reference, scene region) -> the texel "
                                    "parameters that feel the same, with the reasoning"),
+    "brush": ("brush", "brush", "the Tactile Paintbrush: fit a brush from a recording, design, "
+                                "paint (a map or a scene), show, compare"),
     "lab": ("lab", "lab", "the papers' study protocols in the browser, on a board or the "
                           "virtual one (127.0.0.1 only)"),
     "tank": ("tank", "tank",

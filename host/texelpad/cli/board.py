@@ -31,6 +31,8 @@ def describe_scene(desc: dict[str, Any] | None) -> str:
             what = "reference %s" % r["name"]
         elif what == "constant":
             what = "constant %.4f" % (r["amplitude"] / 65535)
+        elif what == "brush":
+            what = "brush, seed %s" % r["seed"]
         else:
             what = "samples (%d values, %s)" % (r["values"], r["fit"])
         lines.append("  %7.2f .. %7.2f mm  %-52s %s, %d B" % (
