@@ -412,3 +412,21 @@ def test_dragging_the_strip_in_chromium_moves_the_finger_and_sounds_at_f_times_v
             assert max(abs(v) for v in still) == 0
             page.screenshot(path=str(tmp_path / "strip.png"))
             browser.close()
+
+
+def test_the_strip_labels_a_brush_region(lab, port):
+    """A brush scene playing: /api/strip answers (a region label for every
+    kind) and its amplitude is the brush painted (texel.gen.brush)."""
+    from texel.gen import brush as B
+    from texelpad.brush import document as D
+    doc = D.design("pink", 0.04)
+    lab.lab.owner.push({"regions": [D.region(doc, 5, 0, 20)]})
+    r = lab.get("/api/strip")
+    assert r.status_code == 200, r.text
+    j = r.json()
+    assert j["regions"][0]["label"] == "brush, seed 5"
+    amp = np.frombuffer(base64.b64decode(j["amplitude"]), dtype=np.uint8)
+    n = round(20 / 0.0053)
+    want = np.frombuffer(B.paint(B.validate({k: doc[k] for k in ("k", "lam", "range")}), 5, n),
+                         dtype=np.uint16)
+    assert np.array_equal(amp[:n], (want.astype(int) + 128) // 257)

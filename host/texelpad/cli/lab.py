@@ -29,6 +29,8 @@ def add_lab(p: argparse.ArgumentParser) -> None:
                    help="the sessions folder (default: ./lab-data)")
     p.add_argument("--configs", metavar="DIR",
                    help="a folder of your own study configs (*.json) beside the shipped ones")
+    p.add_argument("--brushes", metavar="DIR",
+                   help="the scene editor's brush files (default: DATA/brushes)")
     p.add_argument("--http-port", type=int, default=0, metavar="N",
                    help="the web server's port on 127.0.0.1 (default: a free one)")
     p.add_argument("--open", action="store_true", help="open the page in the browser")
@@ -66,6 +68,8 @@ def cmd_lab(args: argparse.Namespace) -> int:
                 owner = BoardOwner(args.port, args.board)
             try:
                 lab = Lab(owner, args.data, args.configs)
+                if args.brushes:
+                    lab.brushes = args.brushes
             except ValueError as e:
                 raise CliError("--configs", str(e)) from None
             app = make_app(lab)

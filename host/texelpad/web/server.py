@@ -52,6 +52,7 @@ from ..study import scenes as S
 from ..study.quant import EXEMPLARS
 from ..study.session import Session, SessionError, check_name, sessions
 from . import strip
+from . import editor
 from .api import Refused, body_of, handle, keys
 from .owner import BoardLost, BoardOwner
 
@@ -376,6 +377,7 @@ def make_app(lab: Lab, allowed_hosts: list[str] | None = None) -> Starlette:
               Route(s + "/answer", h(session_route(Lab.answer)), methods=["POST"]),
               Route(s + "/replay", h(session_route(Lab.replay)), methods=["POST"])]
     routes += strip.routes(lab)
+    routes += editor.routes(lab)
     routes.append(Mount("/static", StaticFiles(directory=STATIC), name="static"))
     return Starlette(routes=routes, middleware=[
         # localhost only, also by name: a page elsewhere cannot reach it by

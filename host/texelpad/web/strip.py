@@ -96,6 +96,8 @@ def _label(tex: dict[str, Any]) -> str:
         return tex["name"]
     if kind == "constant":
         return "constant %.2f" % tex["level"]
+    if kind == "brush":
+        return "brush, seed %d" % tex["seed"]
     return "samples (%d, %s)" % (len(tex["u16"]), tex["fit"])
 
 

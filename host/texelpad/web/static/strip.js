@@ -8,10 +8,20 @@
 //     pollMs: refresh every pollMs while not dragging (0/absent: never)
 //     muted: start muted; labels: false hides the region labels (a blind screen)
 //     autoRefresh: false skips the first refresh() the strip does by itself
-//   await strip.refresh();             // GET /api/strip, redraw
+//     path: the GET that answers the strip (default "/api/strip"; the scene editor's
+//           "/api/editor/strip" labels brush regions)
+//     onSelect(startMm, endMm): span selection (the scene editor, static/editor.js): a
+//           drag selects a span instead of moving the finger (a drag with Shift held,
+//           or setMode("feel"), still feels); a click selects the region (or the gap)
+//           under it. The ends snap to region boundaries and the display's ends within
+//           SNAP_PX, and to the display's positions (the board rounds to them anyway).
+//           Without onSelect nothing of this exists: a drag feels, as before.
+//   await strip.refresh();             // GET /api/strip (options.path), redraw
 //   strip.synth(x0_mm, x1_mm, seconds, sampleRate[, state]) -> Float32Array
 //   strip.show(answer)               // draw a strip answer got elsewhere (POST /api/strip/texel)
 //   strip.setMuted(bool); strip.audioState(); strip.muted; strip.data; strip.finger_mm; strip.sent; strip.scheduled
+//   strip.select(startMm, endMm) / strip.select(null); strip.selection ({start_mm, end_mm} or
+//   null); strip.setMode("select" | "feel"); strip.mode    (with options.onSelect)
 //
 // The strip (host/texelpad/web/strip.py, GET /api/strip) is the amplitude the
 // board plays at each display position (one uint8 each, 0..255 = 0..1), from
@@ -36,6 +46,8 @@
   var TAIL_S = 0.06;              // still-finger tail after a pause or a release: the
                                   // high-pass rings down instead of a click
   var PAUSE_MS = 40;              // no pointer event for this long: the finger stands
+  var SNAP_PX = 6;                // selection: an end this near a boundary (CSS px) snaps to it
+  var CLICK_PX = 3;               // selection: a drag shorter than this is a click
 
   function decode(b64) {
     var s = atob(b64), a = new Uint8Array(s.length);
@@ -109,9 +121,11 @@
   window.texelpadStrip = function (canvas, options) {
     options = options || {};
     var base = options.base || "";
+    var path = options.path || "/api/strip";
     // sent: finger requests made; scheduled: sound buffers queued (for tests and curiosity)
     var self = {data: null, finger_mm: null, muted: !!options.muted, sent: 0, scheduled: 0,
-                error: null};
+                error: null, selection: null, mode: options.onSelect ? "select" : "feel"};
+    var selecting = null;                    // a selection drag: {x0 (mm), px0 (client x)}
     var m = null, sized = false;
 
     // A canvas sized by its width/height attributes alone (no CSS size) would
@@ -188,6 +202,16 @@
           g.fillText(label, xs + 5 * dpr, 3 * dpr);
         }
       });
+      // the selected span (options.onSelect)
+      if (self.selection) {
+        var ss = self.selection.start_mm / m.lengthMm * w, se = self.selection.end_mm / m.lengthMm * w;
+        g.fillStyle = "rgba(30,110,255,0.28)";
+        g.fillRect(ss, 0, Math.max(1, se - ss), h);
+        g.fillStyle = "#15f";
+        g.fillRect(Math.round(ss), 0, Math.max(2, Math.round(2 * dpr)), h);
+        g.fillRect(Math.round(se) - Math.max(2, Math.round(2 * dpr)), 0,
+                   Math.max(2, Math.round(2 * dpr)), h);
+      }
       // the finger
       if (self.finger_mm !== null) {
         var fx = self.finger_mm / m.lengthMm * w;
@@ -197,7 +221,7 @@
     }
 
     function refresh() {
-      return api("GET", "/api/strip").then(function (d) {
+      return api("GET", path).then(function (d) {
         if (!self.data || d.scene_id !== self.data.scene_id) m = model(d);
         else m.data = d;
         self.data = d;
@@ -212,6 +236,7 @@
     // a strip answer from elsewhere (POST /api/strip/texel answers with one)
     function show(d) {
       if (!self.data || d.scene_id !== self.data.scene_id) m = model(d);
+      else m.data = d;                      // (as refresh: the same scene, its labels anew)
       self.data = d;
       draw();
       if (options.onChange) options.onChange(self);
@@ -324,8 +349,50 @@
       pauseTimer = setTimeout(function () { if (dragging && last) stillTail(last.x); }, PAUSE_MS);
     }
 
+    // --- span selection (options.onSelect) ----------------------------------------
+    // x mm on the display's positions, snapped to a region boundary or an end
+    // of the display within SNAP_PX CSS pixels
+    function snap(x) {
+      var rect = canvas.getBoundingClientRect(), mmPerPx = m.lengthMm / Math.max(1, rect.width);
+      var best = null, bestD = SNAP_PX * mmPerPx;
+      var edges = [0, m.lengthMm];
+      m.data.regions.forEach(function (r) { edges.push(r.start_mm, r.end_mm); });
+      edges.forEach(function (c) {
+        var d = Math.abs(c - x);
+        if (d <= bestD) { best = c; bestD = d; }
+      });
+      if (best !== null) return best;
+      return Math.round(Math.round(x * m.perMm) / m.perMm * 1e4) / 1e4;
+    }
+
+    // a click: the region under x, else the gap around it (between its neighbours)
+    function spanAt(x) {
+      var lo = 0, hi = m.lengthMm;
+      for (var i = 0; i < m.data.regions.length; i++) {
+        var r = m.data.regions[i];
+        if (x >= r.start_mm && x < r.end_mm) return [r.start_mm, r.end_mm];
+        if (r.end_mm <= x && r.end_mm > lo) lo = r.end_mm;
+        if (r.start_mm > x && r.start_mm < hi) hi = r.start_mm;
+      }
+      return [lo, hi];
+    }
+
+    function select(a, b) {
+      if (a === null || a === undefined) self.selection = null;
+      else self.selection = {start_mm: Math.min(a, b), end_mm: Math.max(a, b)};
+      draw();
+    }
+
     canvas.addEventListener("pointerdown", function (e) {
       if (!m) return;
+      if (options.onSelect && self.mode === "select" && !e.shiftKey) {
+        e.preventDefault();
+        try { canvas.setPointerCapture(e.pointerId); } catch (err) { /* synthetic events */ }
+        var x0 = snap(mmOf(e));
+        selecting = {x0: x0, px0: e.clientX};
+        select(x0, x0);
+        return;
+      }
       e.preventDefault();
       ensureAudio();                        // a user gesture: audio may start now
       dragging = true;
@@ -336,6 +403,10 @@
       move(last.x);
     });
     canvas.addEventListener("pointermove", function (e) {
+      if (selecting) {
+        select(selecting.x0, snap(mmOf(e)));
+        return;
+      }
       if (!dragging) return;
       // every pointer sample of this frame for the sound, one redraw and request
       var evs = e.getCoalescedEvents ? e.getCoalescedEvents() : [];
@@ -343,7 +414,22 @@
       else step(mmOf(e), e.timeStamp);
       move(last.x);
     });
-    function release() {
+    function endSelect(e) {
+      var sel = selecting;
+      selecting = null;
+      if (Math.abs(e.clientX - sel.px0) < CLICK_PX) {
+        var span = spanAt(mmOf(e));
+        select(span[0], span[1]);
+      } else {
+        select(sel.x0, snap(mmOf(e)));
+      }
+      if (self.selection.end_mm > self.selection.start_mm) {
+        options.onSelect(self.selection.start_mm, self.selection.end_mm);
+      }
+    }
+
+    function release(e) {
+      if (selecting) { endSelect(e); return; }
       if (!dragging) return;
       dragging = false;
       clearTimeout(pauseTimer);
@@ -396,6 +482,8 @@
     self.show = show;
     self.draw = draw;
     self.setMuted = setMuted;
+    self.select = select;
+    self.setMode = function (mode) { self.mode = mode === "feel" ? "feel" : "select"; };
     self.audioState = function () { return audio ? audio.state : "none"; };
     // drawn at once (options.autoRefresh false: only when refresh() is called)
     if (options.autoRefresh !== false) refresh().catch(function () {});
