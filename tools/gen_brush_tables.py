@@ -112,8 +112,8 @@ def block():
             + "COMP_GRID = %d\nCOMP_K_LO = %r\nCOMP_K_HI = %r\n" % (GRID, K_LO, K_HI)
             + literal("COMP_K", ks, f) + literal("COMP_LAM", lams, f)
             + "# LOG2[i] = round(log2(1 + i/256) 2^24), i = 0 .. 256 (the Weibull draws'\n"
-            "# logarithms in Q24 octaves: magnitudes(); linear between entries, error\n"
-            "# <= 2.8e-6 octave); LOG2_LN2 = round(log2(ln 2) 2^24).\n"
+            "# logarithms in Q24 octaves: magnitudes(); linear between entries, with the\n"
+            "# 12-bit weight: within 4.1e-6 octave); LOG2_LN2 = round(log2(ln 2) 2^24).\n"
             + literal("LOG2", log2_table()) + "LOG2_LN2 = %d\n" % LOG2_LN2_Q24
             + "# --- end of tables\n")
 

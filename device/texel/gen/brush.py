@@ -91,8 +91,8 @@ COMP_LAM = (
     1.00181967, 1.0015269, 1.00128093, 1.00107437, 1.00090097, 1.00075546, 1.00063337,
     1.00053097)
 # LOG2[i] = round(log2(1 + i/256) 2^24), i = 0 .. 256 (the Weibull draws'
-# logarithms in Q24 octaves: magnitudes(); linear between entries, error
-# <= 2.8e-6 octave); LOG2_LN2 = round(log2(ln 2) 2^24).
+# logarithms in Q24 octaves: magnitudes(); linear between entries, with the
+# 12-bit weight: within 4.1e-6 octave); LOG2_LN2 = round(log2(ln 2) 2^24).
 LOG2 = (
     0, 94364, 188362, 281996, 375270, 468185, 560745, 652952, 744810, 836320, 927485, 1018309,
     1108793, 1198939, 1288752, 1378232, 1467383, 1556207, 1644705, 1732882, 1820738, 1908277,
@@ -322,8 +322,9 @@ LL_NONE = -(1 << 29)        # log2 of a zero scale: every draw rounds to 0
 
 def log2_q24(v):
     """round-ish(log2(v) * 2^24) for 1 <= v < 2^30: the top bit's position,
-    then LOG2 between the 256 points of [1, 2) (12-bit weight): within 2.8e-6
-    octave (45 Q24 units). Small ints only."""
+    then LOG2 between the 256 points of [1, 2) (12-bit weight): within 4.1e-6
+    octave (measured over every v < 5,000 and 20,000 random ones: 68 Q24
+    units; tests/brush/test_paint.py). Small ints only."""
     n = 0
     w = v
     if w >= 65536:

@@ -93,7 +93,10 @@ def exp2r(z: int, emax: int, tab: ptr32) -> int:
 def magnitudes(st: ptr16, invk: ptr32, llo: ptr32, mag: ptr32, tab: ptr32, t: ptr32,
                sign: int, off: int):
     """gen/brush.py magnitudes: one window's K draws (the texture generator
-    in 16-bit halves, gen/rng.py; its state in st[0..7], written back), the
+    in 16-bit halves, gen/rng.py; its state in st[0..7], written back: the
+    step is plan_int_viper.texels' statement for statement - viper cannot
+    call a shared step that updates eight words without a Python call per
+    draw), the
     Weibull quantile in integers (weibull_q) and round_exp2. llo holds ll +
     2^29; mag[0] is written + MBIAS (65536) for frame()."""
     a_hi = int(st[0]); a_lo = int(st[1]); b_hi = int(st[2]); b_lo = int(st[3])
