@@ -20,7 +20,8 @@ import json
 import time
 from pathlib import Path
 
-from .common import EXIT_OK, CliError, _stderr, check_output, write_output
+from .common import EXIT_OK, CliError, _stderr, check_output, scene_json, write_atomic, \
+    write_output
 
 METRICS = ("euclidean", "canberra", "braycurtis")
 
@@ -197,7 +198,6 @@ def cmd_brush_paint(args: argparse.Namespace) -> int:
             host_check(scene)                   # the board's own validation
         except ValueError as e:
             raise CliError("--scene", str(e)) from None
-        from .scene import scene_json, write_atomic
         write_output("--scene", args.scene, lambda: write_atomic(args.scene, scene_json(scene)))
         print("wrote %s: a %.2f mm brush region (%d bytes of scene for %d bytes of map); play "
               "it with texelpad push --scene %s" % (args.scene, args.length_mm,
@@ -210,7 +210,6 @@ def cmd_brush_paint(args: argparse.Namespace) -> int:
         pos = np.arange(n) * 0.0053
 
         def write() -> None:
-            from .scene import write_atomic
             lines = ["position_mm,friction"] + ["%.4f,%.6g" % (p, v) for p, v in zip(pos, vals)]
             write_atomic(args.out, "\n".join(lines) + "\n")
         write_output("--out", args.out, write)

@@ -386,3 +386,60 @@ def not_running(port: str, hint: str = "texelpad push --board NAME starts it") -
     """texelpad is not running on the board: a state of the world, not a
     bad flag (exit 1), in the same words from every command."""
     return CliError("", "texelpad is not running on %s (%s)" % (port, hint), EXIT_FAIL)
+
+
+# key order in a written scene (the board's dicts have no order of their own)
+_FIRST = ("kind", "name", "notes", "idle_amplitude", "regions", "start_mm", "end_mm", "texture")
+
+
+def _ordered(v: Any) -> Any:
+    if isinstance(v, dict):
+        keys = [k for k in _FIRST if k in v] + sorted(k for k in v if k not in _FIRST)
+        return {k: _ordered(v[k]) for k in keys}
+    if isinstance(v, (list, tuple)):
+        return [_ordered(x) for x in v]
+    return v
+
+
+def scene_json(scene: dict[str, Any]) -> str:
+    """A scene as JSON a person reads: one key a line, but each list of
+    numbers (a samples region's values) on one line."""
+    def fmt(v: Any, ind: str) -> str:
+        if isinstance(v, dict) and v:
+            inner = ind + "  "
+            return "{\n%s\n%s}" % (",\n".join("%s%s: %s" % (inner, json.dumps(k), fmt(x, inner))
+                                              for k, x in v.items()), ind)
+        if isinstance(v, list) and v and any(isinstance(x, (dict, list)) for x in v):
+            inner = ind + "  "
+            return "[\n%s\n%s]" % (",\n".join(inner + fmt(x, inner) for x in v), ind)
+        return json.dumps(v, allow_nan=False)
+    return fmt(_ordered(scene), "") + "\n"
+
+
+def write_atomic(path: str, text: str) -> None:
+    """Write text to path through a temporary file beside it, renamed over
+    it: readers see the old file or the new one, never half of one. A
+    special file (/dev/stdout, a FIFO) is written as it is."""
+    out = Path(path)
+    if out.exists() and not out.is_file():
+        with open(out, "w", encoding="utf-8") as f:
+            f.write(text)
+        return
+    parent = out.parent if str(out.parent) else Path(".")
+    fd, tmp = tempfile.mkstemp(prefix="." + out.name + ".", suffix=".tmp", dir=parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        # mkstemp makes 0600: give the file the mode a plain open() would
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
+        os.replace(tmp, out)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
