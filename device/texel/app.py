@@ -236,7 +236,7 @@ def _install(canonical, validate_us=0, checked=None):
     clock = getattr(rt.hw, "cost_ticks", rt.ticks)
     t0 = clock()
     sc = _scene.build(canonical, disp, idle_default=rt.board["carrier"].get("idle_amplitude", 0),
-                      checked=checked)
+                      checked=checked, reuse=rt.refresh.scene)
     t1 = clock()
     old = rt.refresh.swap(sc)
     t2 = clock()

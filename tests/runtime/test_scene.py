@@ -1352,3 +1352,31 @@ def test_scene_name_and_notes_kept_and_bounded():
                      ({"notes": "a" * 2001}, "notes: expected a string of at most 2000 characters")]:
         with pytest.raises(ValueError, match=re.escape(msg)):
             S.validate(dict(bad, regions=reg), D)
+
+
+def test_a_push_shares_the_playing_scenes_unchanged_reference_and_brush():
+    """build(reuse=the playing scene): a reference or brush region of the
+    same texture and length shares the playing scene's buffer (not rendered
+    again: a slider on the right half of a split screen re-renders the right
+    half only), and the scene plays exactly what a fresh build plays."""
+    from texel.gen import brush as Bm
+    brush = {"k": [2.0] * Bm.K, "lam": [0.5] + [0.03] * (Bm.K - 1)}
+
+    def split(right_pitch, left):
+        return S.validate({"regions": [
+            {"start_mm": 0, "end_mm": 50.88, "texture": left},
+            {"start_mm": 50.88, "end_mm": 101.76,
+             "texture": {"kind": "texel", "pitch_db": right_pitch, "irregularity_db": -12.9,
+                         "texel_samples": 3, "seed": 7}}]}, D)
+    for left in ({"kind": "reference", "name": "4sin"},
+                 {"kind": "brush", "brush": brush, "seed": 5}):
+        a = S.build(split(6.3, left), D)
+        b = S.build(split(9.0, left), D, reuse=a)
+        fresh = S.build(split(9.0, left), D)
+        assert b.buffers()[0] is a.buffers()[0]                  # shared, not rendered again
+        assert b.buffers()[1] is not a.buffers()[1]
+        assert [b.amp(p) for p in range(0, 19200, 7)] == [fresh.amp(p) for p in range(0, 19200, 7)]
+        # another length or texture: its own buffer
+        other = dict(left, seed=6) if left["kind"] == "brush" else dict(left, name="pink")
+        c = S.build(split(9.0, other), D, reuse=a)
+        assert c.buffers()[0] is not a.buffers()[0]

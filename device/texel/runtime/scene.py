@@ -501,7 +501,8 @@ def _need(c, spans, engine=None):
     return bufs + table, bufs, table
 
 
-def build(canonical, display, engine=None, idle_default=0, max_bytes=None, checked=None):
+def build(canonical, display, engine=None, idle_default=0, max_bytes=None, checked=None,
+          reuse=None):
     """Allocate and render what the scene's regions use and return a Scene.
 
     canonical: a scene (validated again here: build never trusts its input,
@@ -510,6 +511,11 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
     idle_default: the board's idle amplitude (uint16) when the scene gives
     none. max_bytes: refuse (ValueError) before allocating anything when the
     scene would hold more. A MemoryError while building becomes a ValueError.
+    reuse: the Scene playing now; a reference or brush region of the same
+    texture and length as one of its regions shares that region's buffer
+    instead of rendering it again (buffers are never written after build:
+    sharing is safe while both play) - a slider that changes only the right
+    half of a split screen re-renders only the right half.
     Touches no global state: the caller's current scene is unaffected."""
     if checked is not None and checked[0] is canonical:
         c, spans, positions, dx_um = checked
@@ -536,7 +542,7 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
                 break
     sc = None
     try:
-        sc = _make(c, spans, positions, dx_um, idle, engine)
+        sc = _make(c, spans, positions, dx_um, idle, engine, reuse)
     except MemoryError:
         pass
     if sc is None:
@@ -566,7 +572,22 @@ def _u16(n):
     return array("H", bytes(2 * n))
 
 
-def _make(c, spans, positions, dx_um, idle, engine):
+def _shared(reuse, tex, n):
+    """The buffer of reuse's region playing tex over n positions (a reference
+    or a brush: what they paint depends on the texture and the length
+    alone), or None."""
+    if reuse is None or tex["kind"] not in ("reference", "brush"):
+        return None
+    src = reuse.source["regions"]
+    t = reuse._t
+    for k in range(reuse.count):
+        j = STRIDE * k
+        if t[j + 1] - t[j] == n and t[j + 2] in (K_BUF, K_CHUNK) and src[k]["texture"] == tex:
+            return t[j + 2], reuse._bufs[t[j + 3]]
+    return None
+
+
+def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
     regions = c["regions"]
     count = len(regions)
     table = array("i", [0] * (STRIDE * (count + 1)))
@@ -590,6 +611,11 @@ def _make(c, spans, positions, dx_um, idle, engine):
             table[j + 2] = K_PLAN
             table[j + 3] = len(plans)
             plans.append(_plan_of(tex, e - s))
+        elif _shared(reuse, tex, e - s) is not None:     # the playing scene's, as it is
+            kind, buf = _shared(reuse, tex, e - s)
+            table[j + 2] = kind
+            table[j + 3] = len(bufs)
+            bufs.append(buf)
         elif tex["kind"] == "brush":
             # painted into 1 KB chunks (upload.Chunks), played as an upload is:
             # no block over 1 KB, so a heap the brush's numbers fragmented
@@ -619,6 +645,8 @@ def _make(c, spans, positions, dx_um, idle, engine):
         j = STRIDE * k
         if table[j + 2] != K_BUF:           # constants, plans and uploads as they are
             continue
+        if reuse is not None and any(bufs[table[j + 3]] is b for b in reuse._bufs):
+            continue                        # shared with the playing scene: rendered
         n = table[j + 1] - table[j]
         buf = bufs[table[j + 3]]
         tex = regions[k]["texture"]
