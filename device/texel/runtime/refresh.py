@@ -114,4 +114,14 @@ class Refresh:
         for k in range(n):
             i = ((tail + k) & _WRAP) % TELEMETRY_SLOTS
             out.append((self.tel_t[i], self.tel_pos[i], self.tel_amp[i]))
+        # the refresh runs on while this copies (an IRQ, or the virtual
+        # board's thread): if it came round to the slots copied first, those
+        # may hold newer samples (time would go backwards) or half-written
+        # ones - drop them, counted as lost, and one more for the slot it
+        # may have been writing
+        over = ((self.tel_head - tail) & _WRAP) - TELEMETRY_SLOTS
+        if over >= 0:
+            drop = over + 1 if over + 1 < n else n
+            out = out[drop:]
+            lost += drop
         return out, head, lost
