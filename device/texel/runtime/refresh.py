@@ -119,9 +119,11 @@ class Refresh:
         # may hold newer samples (time would go backwards) or half-written
         # ones - drop them, counted as lost, and one more for the slot it
         # may have been writing
-        over = ((self.tel_head - tail) & _WRAP) - TELEMETRY_SLOTS
-        if over >= 0:
-            drop = over + 1 if over + 1 < n else n
-            out = out[drop:]
-            lost += drop
+        w = (self.tel_head - head) & _WRAP             # written during the copy
+        if w:
+            over = n + w - TELEMETRY_SLOTS
+            if over >= 0:
+                drop = over + 1 if over + 1 < n else n
+                out = out[drop:]
+                lost += drop
         return out, head, lost
