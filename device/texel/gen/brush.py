@@ -18,6 +18,8 @@
 # WINDOW / 2, m_0 = |sum x w| / W and m_k = 2 |sum x w e^(-2 pi i k n / WINDOW)| / W
 # for k >= 1, so a sinusoid of amplitude A at wavenumber k >= 1 gives m_k = A
 # and a constant c gives m_0 = c.
+import math
+
 from .plan_int import exp2_m
 from .plan_int_tables import table
 
@@ -238,7 +240,6 @@ def compensated(brush):
       ll[k]    round(log2(lam' * |scale|) * 2^24) - the compensated scale in
                Q13 amplitude, as Q24 octaves (LL_NONE: scale 0)
     and (sign of the range, the mean's offset -a0 * scale in Q13)."""
-    import math
     lo = math.log(COMP_K_LO)
     step = (math.log(COMP_K_HI) - lo) / (COMP_GRID - 1)
     a0, a1 = brush["range"]
@@ -298,16 +299,11 @@ def leakage(lams):
     for i in range(n):
         lam = lams[i + 1]
         if lam > 0.0:
-            out[i + 1] = math_sqrt(a[i]) / lam
+            out[i + 1] = math.sqrt(a[i]) / lam
     return out
 
 
 LEAK_SWEEPS = 16
-
-
-def math_sqrt(x):
-    import math
-    return math.sqrt(x)
 
 
 def array_i(n):

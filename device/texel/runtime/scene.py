@@ -598,12 +598,14 @@ def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
     bufs = []
     plans = []
     painted = []                            # (region, Chunks) of brush regions
+    shared = []                             # regions playing the playing scene's buffer
     for k in range(count):
         s, e = spans[k]
         j = STRIDE * k
         table[j] = s
         table[j + 1] = e
         tex = regions[k]["texture"]
+        old = _shared(reuse, tex, e - s)
         if tex["kind"] == "constant":
             table[j + 2] = K_CONST
             table[j + 3] = int(tex["level"] * 65535.0 + 0.5)
@@ -611,11 +613,11 @@ def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
             table[j + 2] = K_PLAN
             table[j + 3] = len(plans)
             plans.append(_plan_of(tex, e - s))
-        elif _shared(reuse, tex, e - s) is not None:     # the playing scene's, as it is
-            kind, buf = _shared(reuse, tex, e - s)
-            table[j + 2] = kind
+        elif old is not None:               # the playing scene's, as it is
+            table[j + 2] = old[0]
             table[j + 3] = len(bufs)
-            bufs.append(buf)
+            bufs.append(old[1])
+            shared.append(k)
         elif tex["kind"] == "brush":
             # painted into 1 KB chunks (upload.Chunks), played as an upload is:
             # no block over 1 KB, so a heap the brush's numbers fragmented
@@ -643,10 +645,8 @@ def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
         paint(tex["brush"], tex["seed"], len(ch), ch)
     for k in range(count):
         j = STRIDE * k
-        if table[j + 2] != K_BUF:           # constants, plans and uploads as they are
-            continue
-        if reuse is not None and any(bufs[table[j + 3]] is b for b in reuse._bufs):
-            continue                        # shared with the playing scene: rendered
+        if table[j + 2] != K_BUF or k in shared:   # constants, plans, uploads and the
+            continue                                # playing scene's buffers as they are
         n = table[j + 1] - table[j]
         buf = bufs[table[j + 3]]
         tex = regions[k]["texture"]
