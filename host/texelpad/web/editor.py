@@ -487,24 +487,15 @@ def strip_answer(renders: Renders, memory: Memory, st: dict[str, Any],
     """GET /api/strip's answer (web/strip.strip_answer) with the editor's
     labels: a brush region names its file or design."""
     display = {"positions": st["display"]["positions"], "dx_um": st["display"]["dx_um"]}
-    idle = _idle(st)
+    idle = _strip.idle_of(st)
     sid, u16, spans = renders.get(canonical, display, idle)
     dx = display["dx_um"]
-    pos = st.get("position", -1)
-    return {"positions": display["positions"], "dx_um": dx,
-            "length_mm": round(display["positions"] * dx / 1000.0, 6),
-            "amplitude": base64.b64encode(_strip.to_u8(u16).tobytes()).decode("ascii"),
-            "regions": [{"start_mm": round(s * dx / 1000.0, 4), "end_mm": round(e * dx / 1000.0, 4),
-                         "label": label_of(tex, memory, dx)} for s, e, tex in spans],
-            "name": canonical.get("name") if canonical else None, "scene_id": sid,
-            "idle": idle, "virtual": st.get("port") == "virtual",
-            "finger_mm": None if not isinstance(pos, int) or pos < 0
-            else round(pos * dx / 1000.0, 4)}
-
-
-def _idle(st: dict[str, Any]) -> int:
-    sc = st.get("scene")
-    return sc["idle"] if isinstance(sc, dict) and isinstance(sc.get("idle"), int) else 0
+    return dict(_strip.status_fields(st, display, idle),
+                amplitude=base64.b64encode(_strip.to_u8(u16).tobytes()).decode("ascii"),
+                regions=[{"start_mm": round(s * dx / 1000.0, 4),
+                          "end_mm": round(e * dx / 1000.0, 4),
+                          "label": label_of(tex, memory, dx)} for s, e, tex in spans],
+                name=canonical.get("name") if canonical else None, scene_id=sid)
 
 
 def blank(display: dict[str, Any], idle: int, name: str | None) -> dict[str, Any]:
@@ -596,7 +587,7 @@ def routes(lab: Any) -> list[Route]:
     async def get_scene(request: Request) -> dict[str, Any]:
         no_query(request)
         st, canonical, display = playing()
-        idle = _idle(st)
+        idle = _strip.idle_of(st)
         strip = strip_answer(renders, memory, st, canonical)
         return {"regions": editor_regions(canonical, display, idle, memory),
                 "name": canonical.get("name") if canonical else None,
@@ -655,7 +646,7 @@ def routes(lab: Any) -> list[Route]:
                           % (len(pieces), _scene.MAX_REGIONS))
         st0 = lab.owner.status() if base is not None or not pieces else None
         if base is not None:
-            now = scene_id(lab.owner.scene_source(), display, _idle(st0))
+            now = scene_id(lab.owner.scene_source(), display, _strip.idle_of(st0))
             if now != base:
                 raise Refused("base: the board's scene changed since this page loaded it "
                               "(another page pushed one): reload the editor to edit what "
@@ -666,7 +657,7 @@ def routes(lab: Any) -> list[Route]:
             if name is not None:
                 scene["name"] = name
         else:
-            scene = blank(display, _idle(st0), name)
+            scene = blank(display, _strip.idle_of(st0), name)
         # 2. the board's own validation here, then the board's on push
         try:
             scene = host_check(scene, display)

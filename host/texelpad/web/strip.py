@@ -152,23 +152,33 @@ def _length_mm(display: dict[str, Any]) -> float:
     return display["positions"] * display["dx_um"] / 1000.0
 
 
+def idle_of(st: dict[str, Any]) -> int:
+    """The idle amplitude (uint16) the board's status says its scene plays in gaps."""
+    sc = st.get("scene")
+    return sc["idle"] if isinstance(sc, dict) and isinstance(sc.get("idle"), int) else 0
+
+
+def status_fields(st: dict[str, Any], display: dict[str, Any], idle: int) -> dict[str, Any]:
+    """What every strip answer takes from the board's status: the display,
+    the idle amplitude, whether it is the virtual board, the finger."""
+    pos = st.get("position", -1)
+    return {"positions": display["positions"], "dx_um": display["dx_um"],
+            "length_mm": round(_length_mm(display), 6), "idle": idle,
+            "virtual": st.get("port") == "virtual",
+            # the finger where the board's sensor has it now (None: lifted)
+            "finger_mm": None if not isinstance(pos, int) or pos < 0
+            else round(pos * display["dx_um"] / 1000.0, 4)}
+
+
 def strip_answer(cache: StripCache, st: dict[str, Any],
                  canonical: dict[str, Any] | None) -> dict[str, Any]:
     """The /api/strip answer from the board's status (display, idle,
     finger, port) and the canonical scene it plays."""
     display = {"positions": st["display"]["positions"], "dx_um": st["display"]["dx_um"]}
-    sc = st.get("scene")
-    idle = sc["idle"] if isinstance(sc, dict) and isinstance(sc.get("idle"), int) else 0
+    idle = idle_of(st)
     item = cache.get(canonical, display, idle)
-    pos = st.get("position", -1)
-    return {"positions": display["positions"], "dx_um": display["dx_um"],
-            "length_mm": round(_length_mm(display), 6),
-            "amplitude": item["amplitude"], "regions": item["regions"],
-            "name": item["name"], "scene_id": item["scene_id"], "idle": idle,
-            "virtual": st.get("port") == "virtual",
-            # the finger where the board's sensor has it now (None: lifted)
-            "finger_mm": None if not isinstance(pos, int) or pos < 0
-            else round(pos * display["dx_um"] / 1000.0, 4)}
+    return dict(status_fields(st, display, idle), amplitude=item["amplitude"],
+                regions=item["regions"], name=item["name"], scene_id=item["scene_id"])
 
 
 def _status_running(owner: Any) -> dict[str, Any]:
