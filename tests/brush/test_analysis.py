@@ -216,6 +216,16 @@ def test_read_recording(tmp_path):
     # extra columns after the second are ignored when the header has them too
     (tmp_path / "wide.csv").write_text("pos,mu,normal_N\n0,0.5,1.0\n1,0.6,1.1\n")
     assert T.read_recording(tmp_path / "wide.csv")[1].tolist() == [0.5, 0.6]
+    # by name, in any order and with texelpad render's sample number first
+    (tmp_path / "render.csv").write_text("sample,x_mm,friction\n0,0.0000,0.25\n1,0.0053,0.5\n")
+    p, f = T.read_recording(tmp_path / "render.csv")
+    assert p.tolist() == [0.0, 0.0053] and f.tolist() == [0.25, 0.5]
+    (tmp_path / "tabs.csv").write_text("Friction\tnormal_N\tPosition_mm\n0.5\t1\t0\n0.6\t1\t2\n")
+    p, f = T.read_recording(tmp_path / "tabs.csv")
+    assert p.tolist() == [0.0, 2.0] and f.tolist() == [0.5, 0.6]
+    (tmp_path / "latin1.csv").write_bytes(b"position_mm,friction\n0,0.5\xff\n")
+    with pytest.raises(ValueError, match="latin1.csv is not UTF-8"):
+        T.read_recording(tmp_path / "latin1.csv")
 
 
 @pytest.mark.parametrize("text, match", [
@@ -228,6 +238,10 @@ def test_read_recording(tmp_path):
     ("position_mm,friction\n0,0.5\nx,0.5\n", "line 3: position 'x'"),
     ("position_mm,friction\n0,0.5\n0.1,nan\n", "line 3: friction 'nan'"),
     ("position_mm,friction\n0,0.5\n\n0.1\n", "line 4: 1 field"),
+    # columns by name (issue 24): a sample number or a position in um is no mm position
+    ("sample,friction\n0,0.5\n1,0.6\n", "no position column in its header \\('sample'"),
+    ("x_um,friction\n0,0.5\n5,0.6\n", "no position column"),
+    ("temp_C,x_mm\n20,0\n20,0.1\n", "no friction column"),
 ])
 def test_read_recording_errors_name_the_line(tmp_path, text, match):
     path = tmp_path / "bad.csv"

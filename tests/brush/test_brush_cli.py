@@ -74,15 +74,40 @@ def test_fit_design_paint_show_compare(capsys, tmp_path):
     (["brush", "paint", "OUT/none.json", "--out", "OUT/m.csv"], "cannot read"),
     (["brush", "design", "--shape", "green", "--out", "OUT/b.json"], "--shape"),
     (["brush"], "say what to do"),
+    # issue 24: no position column by name is an error, not a sample number read as mm
+    (["brush", "fit", "NOPOS.csv", "--out", "OUT/b.json"], "no position column"),
+    (["brush", "show", "DEEP.json", "--out", "OUT/b.png"], "nested too deeply"),
+    (["brush", "paint", "DEEP.json", "--out", "OUT/m.csv"], "not a brush"),
+    (["brush", "paint", "GOOD.json", "--length-mm", "nan", "--out", "OUT/m.csv"],
+     "--length-mm: must be a finite number"),
+    (["brush", "paint", "GOOD.json", "--length-mm", "inf", "--out", "OUT/m.csv"],
+     "--length-mm: must be a finite number"),
+    (["brush", "paint", "GOOD.json", "--start-mm", "nan", "--scene", "OUT/s.json"],
+     "--start-mm: must be a finite number"),
+    (["brush", "design", "--level", "nan", "--out", "OUT/b.json"], "--level: must be a finite number"),
+    (["brush", "design", "--level", "-1", "--out", "OUT/b.json"], "--level: brush.lam[1]"),
+    (["brush", "design", "--shape", "pink", "--level", "600", "--out", "OUT/b.json"],
+     "--level: brush.lam[1]"),
+    (["brush", "design", "--mean", "nan", "--out", "OUT/b.json"], "--mean: must be a finite number"),
+    (["brush", "design", "--mean", "-2", "--out", "OUT/b.json"], "--mean: brush.lam[0]"),
+    (["brush", "design", "--k", "0.001", "--out", "OUT/b.json"], "--k: brush.k[1]"),
+    (["brush", "design", "--shape", "nan", "--out", "OUT/b.json"], "--shape: a slope"),
+    (["brush", "design", "--shape", "400", "--out", "OUT/b.json"], "--shape: brush.lam[5]"),
+    (["brush", "design", "--band", "0", "3", "--out", "OUT/b.json"], "--band: band"),
 ])
 def test_bad_input_is_one_line_and_writes_nothing(capsys, tmp_path, argv, fragment):
     (tmp_path / "BAD.csv").write_text("position_mm,friction\n0,0.5\n0.1,abc\n")
+    (tmp_path / "NOPOS.csv").write_text("sample,friction\n" + "".join(
+        "%d,%.3f\n" % (i, 0.5 + 0.1 * (i % 7)) for i in range(400)))
+    (tmp_path / "DEEP.json").write_text("[" * 50000 + "]" * 50000)
+    D.save(D.design("white"), tmp_path / "GOOD.json")
     good = D.design("white")
     broken = dict(good, lam=good["lam"][:3] + [float("nan")] + good["lam"][4:])
     (tmp_path / "BROKEN.json").write_text(json.dumps(broken))
     (tmp_path / "OUT").mkdir()
     argv = [a.replace("OUT/", str(tmp_path / "OUT") + "/") for a in argv]
-    argv = [str(tmp_path / a) if a in ("BAD.csv", "BROKEN.json") else a for a in argv]
+    argv = [str(tmp_path / a) if a in ("BAD.csv", "BROKEN.json", "NOPOS.csv", "DEEP.json",
+                                       "GOOD.json") else a for a in argv]
     code, o, e = run_cli(capsys, *argv)
     assert code == 2 and fragment in e and len(e.strip().splitlines()) == 1, (code, e)
     assert not list((tmp_path / "OUT").iterdir())
@@ -105,3 +130,33 @@ def test_a_painted_scene_plays_on_the_virtual_board(capsys, tmp_path):
             src = b.scene_source()
     assert st["scene"]["regions"][0]["kind"] == "brush" and st["faults"] == 0
     assert src["regions"][0]["texture"]["seed"] == 9
+
+
+def test_fit_reads_texelpad_render_csv_by_column_name(capsys, tmp_path):
+    """issue 24: `texelpad render --out m.csv` writes sample,x_mm,friction; brush
+    fit read the sample number as mm (a map 1/0.0053 times too long, garbage,
+    exit 0). Now the columns are found by name: the brush is the map's own."""
+    args = ["render", "--pitch-db", "6.3", "--irregularity-db", "-12.9", "--length-samples",
+            "3000"]
+    assert run_cli(capsys, *args, "--out", str(tmp_path / "m.csv"))[0] == 0
+    assert run_cli(capsys, *args, "--out", str(tmp_path / "m.npy"))[0] == 0
+    assert (tmp_path / "m.csv").read_text().startswith("sample,x_mm,friction\n")
+    code, o, e = run_cli(capsys, "brush", "fit", str(tmp_path / "m.csv"), "--out",
+                         str(tmp_path / "b.json"))
+    assert code == 0, e
+    got = D.load(tmp_path / "b.json")
+    want = D.fit([np.load(tmp_path / "m.npy")], "friction")
+    assert got["fit"]["windows"] == want["fit"]["windows"] == 60   # 3000 samples, not 565,000
+    assert np.allclose(got["lam"], want["lam"], rtol=1e-4, atol=1e-7)
+    assert np.allclose(got["k"], want["k"], rtol=1e-3)
+    # brush paint's own CSV (position_mm,friction) reads back by name too, and a
+    # column order of the reader's choosing does not matter
+    m = tmp_path / "p.csv"
+    assert run_cli(capsys, "brush", "paint", str(tmp_path / "b.json"), "--length-mm", "5",
+                   "--out", str(m))[0] == 0
+    rows = [r.split(",") for r in m.read_text().splitlines()]
+    (tmp_path / "swapped.csv").write_text("\n".join("%s;%s" % (f, p) for p, f in rows) + "\n")
+    from texelpad.brush.transform import read_recording
+    p1, f1 = read_recording(m)
+    p2, f2 = read_recording(tmp_path / "swapped.csv")
+    assert np.array_equal(p1, p2) and np.array_equal(f1, f2) and p1[1] == 0.0053

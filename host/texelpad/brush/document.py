@@ -94,6 +94,11 @@ def load(path: str | os.PathLike) -> dict[str, Any]:
             doc = json.loads(data.decode("utf-8"))
         except (UnicodeDecodeError, ValueError) as e:
             raise ValueError("not a brush (JSON or %r binary): %s" % (MAGIC, e)) from None
+        except RecursionError:
+            # json.loads recurses per level: a file nested thousands deep is no brush
+            # (a brush is two levels deep: {"k": [...], ...})
+            raise ValueError("not a brush: its JSON is nested too deeply (a brush document "
+                             "is an object of lists of numbers)") from None
         return check(doc)
     except ValueError as e:
         raise ValueError("%s: %s" % (p, e)) from None

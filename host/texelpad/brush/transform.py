@@ -37,9 +37,10 @@ of N >= WINDOW samples gives 1 + (N - WINDOW) // HOP windows, and its last
 (N - WINDOW) % HOP samples (fewer than HOP = 0.25 mm) are not analysed -
 never padded, since zero padding would put a false step into the last window.
 
-Recordings (a tribometer's CSV, position in mm then friction, any step, as
+Recordings (a tribometer's CSV, position in mm and friction, any step, as
 the paper recorded at 3.86 um and resampled to 5 um): `read_recording` reads
-one, `resample` puts it on the display's 5.3 um grid.
+one, its columns found by header name (`recording_columns`), `resample` puts
+it on the display's 5.3 um grid.
 
 Pure logic: numpy and texel only (docs/architecture.md).
 """
@@ -184,48 +185,119 @@ def _cell(text: str) -> float:
     return v
 
 
-def read_recording(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
-    """(positions_mm, friction) of a CSV recording: a header row first (the
-    column names, e.g. "position_mm,friction"; its text is not checked, but
-    it must not be two numbers), then one row per sample: position in mm,
-    friction. Blank lines and lines starting with '#' are skipped; a row must
-    have as many fields as the header (2, or more: columns after the second
-    are ignored). Errors name the file and line: a missing header, a short
-    row, a cell that is not a finite number, no data rows."""
+# Columns are found by their header names (case and spaces ignored), as
+# `texelpad encode` finds its friction column: `texelpad render --out m.csv`
+# writes "sample,x_mm,friction", `texelpad brush paint --out` writes
+# "position_mm,friction", a tribometer export "position_mm,friction,normal_N".
+# The position must be in millimetres: a column named in mm, or "position" /
+# "x" (taken as mm). A sample number is never a position.
+POSITION_NAMES = ("position_mm", "x_mm", "pos_mm", "distance_mm", "displacement_mm", "mm",
+                  "position", "x", "pos", "distance", "displacement")
+# friction by name (the names texelpad encode takes, and a tribometer's mu or
+# cof); without one, the column right after the position (the old
+# "position, then friction" order)
+FRICTION_NAMES = ("friction", "mu", "cof", "coefficient_of_friction", "friction_coefficient",
+                  "map", "value", "amplitude")
+_DELIMITERS = (",", ";", "\t")
+
+
+def _name(cell: str) -> str:
+    return cell.strip().strip('"').strip().lower().replace(" ", "_")
+
+
+def read_csv_table(path: str | os.PathLike, min_columns: int = 1,
+                   columns: str = "") -> tuple[list[str], list[tuple[int, list[str]]]]:
+    """A CSV file with a header row: (the header's cells, [(line number,
+    cells)] of the data rows). The delimiter is the header's (a comma, else
+    a semicolon or a tab); blank lines and lines starting with '#' are
+    skipped; the header has at least min_columns cells (`columns` says
+    which) and every row as many fields as the header. Errors
+    (ValueError) name the file and line: no header (the first row is numbers),
+    a short row, an empty file, no data rows. OSError when it cannot be read;
+    a file that is not UTF-8 text is a ValueError."""
     name = os.fspath(path)
-    pos: list[float] = []
-    fri: list[float] = []
     header: list[str] | None = None
-    with open(name, newline="", encoding="utf-8-sig") as fh:
-        for line_no, row in enumerate(csv.reader(fh), start=1):
-            if not row or all(not c.strip() for c in row) or row[0].lstrip().startswith("#"):
-                continue
-            if header is None:
-                try:
-                    [float(c) for c in row[:2]]
-                    numeric = len(row) >= 2
-                except ValueError:
-                    numeric = False
-                if numeric:
-                    raise ValueError("%s line %d: expected a header (position in mm, then "
-                                     "friction), got a row of numbers %r" % (name, line_no, row))
-                if len(row) < 2:
-                    raise ValueError("%s line %d: the header has %d column(s); expected "
-                                     "position in mm, then friction" % (name, line_no, len(row)))
-                header = row
-                continue
-            if len(row) != len(header):
-                raise ValueError("%s line %d: %d field(s), the header has %d (position in mm, "
-                                 "friction)" % (name, line_no, len(row), len(header)))
-            for col, what, out in ((0, "position", pos), (1, "friction", fri)):
-                try:
-                    out.append(_cell(row[col]))
-                except ValueError:
-                    raise ValueError("%s line %d: %s %r is not a finite number"
-                                     % (name, line_no, what, row[col].strip())) from None
+    rows: list[tuple[int, list[str]]] = []
+    try:
+        with open(name, newline="", encoding="utf-8-sig") as fh:
+            lines = fh.read().splitlines()
+    except UnicodeDecodeError:
+        raise ValueError("%s is not UTF-8 text (expected a CSV file with a header)"
+                         % name) from None
+    delimiter = ","
+    for line_no, line in enumerate(lines, start=1):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        if header is None:
+            delimiter = next((d for d in _DELIMITERS if d in line), ",")
+        row = next(csv.reader([line], delimiter=delimiter))
+        if header is None:
+            try:
+                [float(c) for c in row[:2]]
+                numeric = True
+            except ValueError:
+                numeric = False
+            if numeric:
+                raise ValueError("%s line %d: expected a header (the column names, e.g. "
+                                 "position_mm,friction), got a row of numbers %r"
+                                 % (name, line_no, row[:4]))
+            if len(row) < min_columns:
+                raise ValueError("%s line %d: the header has %d column(s); expected %s"
+                                 % (name, line_no, len(row), columns or "%d" % min_columns))
+            header = row
+            continue
+        if len(row) != len(header):
+            raise ValueError("%s line %d: %d field(s), the header has %d (%s)"
+                             % (name, line_no, len(row), len(header), ",".join(header)))
+        rows.append((line_no, row))
     if header is None:
         raise ValueError("%s: empty (expected a header, then rows of position in mm, "
                          "friction)" % name)
-    if not pos:
+    if not rows:
         raise ValueError("%s: a header and no data rows" % name)
+    return header, rows
+
+
+def recording_columns(header: Sequence[str], where: str = "recording") -> tuple[int, int]:
+    """(position column, friction column) of a recording's header, by name
+    (POSITION_NAMES, FRICTION_NAMES); ValueError when there is no position
+    column in mm, or no friction column."""
+    names = [_name(c) for c in header]
+    shown = ", ".join(repr(c.strip()[:40]) for c in header[:8]) + (", ..." if len(header) > 8
+                                                                   else "")
+    pos = next((names.index(n) for n in POSITION_NAMES if n in names), None)
+    if pos is None:
+        raise ValueError("%s: no position column in its header (%s); name the position in mm "
+                         "position_mm or x_mm (a sample number is not a position)"
+                         % (where, shown))
+    fri = next((names.index(n) for n in FRICTION_NAMES if n in names), None)
+    if fri is None:
+        if pos + 1 >= len(names):
+            raise ValueError("%s: no friction column in its header (%s); name it friction"
+                             % (where, shown))
+        fri = pos + 1
+    return pos, fri
+
+
+def read_recording(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
+    """(positions_mm, friction) of a CSV recording (read_csv_table): a
+    header row first naming the columns, then one row per sample. The
+    position and friction columns are found by name (recording_columns:
+    "x_mm" of `texelpad render --out m.csv`, "position_mm", ...; never by
+    place, so "sample,x_mm,friction" reads x_mm as the position); other
+    columns are ignored. Errors name the file (and line): a missing header or
+    position column, a short row, a cell that is not a finite number, no data
+    rows."""
+    name = os.fspath(path)
+    header, rows = read_csv_table(name, 2, "position in mm, then friction")
+    pcol, fcol = recording_columns(header, name)
+    pos: list[float] = []
+    fri: list[float] = []
+    for line_no, row in rows:
+        for col, what, out in ((pcol, "position", pos), (fcol, "friction", fri)):
+            try:
+                out.append(_cell(row[col]))
+            except ValueError:
+                raise ValueError("%s line %d: %s %r is not a finite number"
+                                 % (name, line_no, what, row[col].strip()[:40])) from None
     return np.asarray(pos), np.asarray(fri)

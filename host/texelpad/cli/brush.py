@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import time
 from pathlib import Path
 
@@ -38,7 +39,8 @@ def add_brush(p: argparse.ArgumentParser) -> None:
                                    "recording (resampled to the display's 5.3 um), Weibull by "
                                    "maximum likelihood per wavenumber over all their windows.")
     s.add_argument("recordings", nargs="*", metavar="REC.csv",
-                   help="CSV with a header: position in mm, then friction")
+                   help="CSV with a header naming the columns: the position in mm "
+                        "(position_mm or x_mm, as texelpad render writes it) and friction")
     s.add_argument("--reference", metavar="NAME", help="fit a reference texture's map instead")
     s.add_argument("--kind", choices=("friction", "amplitude"),
                    help="friction (default for recordings: high friction plays as low "
@@ -161,14 +163,40 @@ def cmd_brush_design(args: argparse.Namespace) -> int:
     except ValueError:
         raise CliError("--shape", "expected white, pink, brown, blue or dB per octave, got %r"
                        % args.shape) from None
+    if not math.isfinite(shape if isinstance(shape, float) else 0.0):
+        raise CliError("--shape", "a slope must be a finite number of dB per octave, got %s"
+                       % args.shape)
+    for flag, v in (("--level", args.level), ("--mean", args.mean), ("--k", args.k)):
+        if not math.isfinite(v):
+            raise CliError(flag, "must be a finite number, got %s" % v)
     try:
         doc = design(shape, args.level, args.mean, args.k, band=tuple(args.band),
                      name=args.name)
     except ValueError as e:
-        raise CliError("--shape", str(e)) from None
+        raise CliError(_design_flag(str(e), args), str(e)) from None
     _save("--out", doc, args.out)
     print("wrote %s (%s)" % (args.out, doc["source"]))
     return EXIT_OK
+
+
+def _design_flag(message: str, args: argparse.Namespace) -> str:
+    """The flag a refused design came from, by the key path the brush's own
+    validation names: brush.k[n] is --k, brush.lam[0] the mean's scale
+    (--mean), brush.lam[n] the scale at wavenumber n: --level, unless the
+    level is within range and a slope in dB per octave took it out (--shape)."""
+    path = message.partition(": ")[0]
+    if path.startswith("band"):
+        return "--band"
+    if path.startswith("brush.k["):
+        return "--k"
+    if path == "brush.lam[0]":
+        return "--mean"
+    if path.startswith("brush.lam["):
+        from texel.gen.brush import LAM_MAX
+        level_ok = 0 <= args.level <= LAM_MAX
+        sloped = args.shape not in ("white", "pink", "brown", "blue")
+        return "--shape" if level_ok and sloped else "--level"
+    return "--shape"
 
 
 def cmd_brush_paint(args: argparse.Namespace) -> int:
@@ -184,6 +212,9 @@ def cmd_brush_paint(args: argparse.Namespace) -> int:
         check_output("--scene", args.scene, (".json",))
     if not 0 <= args.seed <= 0xFFFFFFFF:
         raise CliError("--seed", "expected 0 .. 4294967295, got %d" % args.seed)
+    for flag, v in (("--length-mm", args.length_mm), ("--start-mm", args.start_mm)):
+        if not math.isfinite(v):
+            raise CliError(flag, "must be a finite number of mm, got %s" % v)
     n = int(round(args.length_mm / 0.0053))
     if not 1 <= n <= 19200 * 8:
         raise CliError("--length-mm", "expected 0.0053 .. %g mm, got %g"
