@@ -198,6 +198,25 @@ def test_deploy_writes_only_what_changed(capsys, tmp_path):
             assert st["running"]
 
 
+def test_deploy_without_port_finds_the_running_virtual_board(capsys, tmp_path, monkeypatch):
+    """issue 24: ports, push and status without --port find a running
+    `texelpad virtual` (its registry entry); deploy found none."""
+    monkeypatch.setenv("TEXELPAD_RUNTIME_DIR", str(tmp_path / "run"))
+    flash = tmp_path / "flash"
+    with VirtualBoard(flash, image=None) as vb:
+        vb.announce()                                  # as `texelpad virtual` does
+        code, out, err = run_cli(capsys, "status")     # status found it (no image yet) ...
+        assert code == 1 and "not texelpad's device image" in err and vb.port in err, err
+        code, out, err = run_cli(capsys, "deploy", "--dry-run")
+        assert code == 0, err                          # ... and so does deploy
+        assert out.startswith("would deploy to %s:" % vb.port), out
+        code, out, err = run_cli(capsys, "deploy")
+        assert code == 0 and out.startswith("deployed to %s:" % vb.port), err
+        code, out, err = run_cli(capsys, "status")
+        assert code == 0 and out.startswith("texelpad is not running"), (out, err)
+    assert (flash / "lib" / "texel" / "app.mpy").is_file()
+
+
 def test_deploy_refuses_an_image_that_does_not_fit(capsys, tmp_path, monkeypatch):
     from texelpad.deploy import install as deploy_mod
     real = deploy_mod.survey

@@ -4,8 +4,8 @@ from __future__ import annotations
 import argparse
 
 from ..link.transport import LinkError
-from .common import EXIT_FAIL, EXIT_OK, CliError, ProgressBar, _connect, _fail, _port_arg, \
-    _stderr
+from .common import EXIT_FAIL, EXIT_OK, CliError, ProgressBar, _connect, _fail, _one_board, \
+    _port_arg, _stderr
 
 
 def add_deploy(p: argparse.ArgumentParser) -> None:
@@ -36,6 +36,7 @@ def cmd_deploy(args: argparse.Namespace) -> int:
     from ..deploy.install import deploy
     from ..deploy.image import ImageError
     bar = ProgressBar()
+    _one_board(args)        # no --port: the one board there is, a texelpad virtual included
     with _connect(args, check=False, import_image=False) as b:
         try:
             rep = deploy(b, source=args.source, include_main=not args.no_main,
