@@ -5,6 +5,7 @@
 
 FORMAT_VERSION = 1     # what a parameter set without "v" means (saved files keep their texture)
 FORMAT_LATEST = 2      # texture format 2: the integer plan (gen/plan_int.py)
+FORMAT_NEW = 2         # what the host writes into every texture it makes (CLI, push_texel, scenes, the lab)
 
 # Geometry of the TPaD display (docs/background.md §1): 5.3 um per map sample.
 DX_MM = 0.0053

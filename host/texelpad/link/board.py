@@ -23,6 +23,7 @@ from typing import Any, Callable, Iterator
 import texel
 import texel.app
 import texel.runtime.scene
+from texel.gen.params import FORMAT_NEW
 
 from .. import __version__
 from . import protocol
@@ -250,9 +251,14 @@ class Board:
         return self._push(scene, self._running_status(), progress)
 
     def push_texel(self, params: dict[str, Any]) -> dict[str, Any]:
-        """Play one texel parameter set over the whole display."""
+        """Play one texel parameter set over the whole display. A set without
+        "v" is made format 2 (texel.gen.params.FORMAT_NEW: the same map on
+        every board); say "v": 1 for the lab's float generator. (texel.render
+        and render_u16 read a set without "v" as format 1, as saved files are.)"""
         if not isinstance(params, dict):
             raise ValueError("texel parameters: expected a dict, got %s" % type(params).__name__)
+        if "v" not in params:
+            params = dict(params, v=FORMAT_NEW)
         st = self._running_status()
         return self._push(full_screen_texel(params, st["display"]), st)
 
