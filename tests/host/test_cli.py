@@ -449,7 +449,7 @@ def _main_exit(argv):
 
 
 def test_render_summary(capsys):
-    p = {"pitch_db": 17.0, "irregularity_db": 0.0, "seed": 6, "length_samples": 19200}
+    p = {"pitch_db": 17.0, "irregularity_db": 0.0, "seed": 6, "length_samples": 19200, "v": 2}
     rc = cli.main(["render", "--pitch-db", "17", "--irregularity-db", "0", "--seed", "6",
                    "--length-samples", "19200", "--engine", "int"])
     out = capsys.readouterr().out
@@ -469,10 +469,15 @@ def test_render_npy_is_the_map(tmp_path, capsys):
     f = tmp_path / "m.npy"
     assert cli.main(BASE + ["--out", str(f)]) == 0
     m = np.load(f)
-    ref = texel.render({"pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7}, engine="numpy")
+    ref = texel.render({"pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7, "v": 2},
+                       engine="numpy")                  # a new texture is format 2
     assert m.dtype == np.float64 and m.shape == (9600,)
     assert np.array_equal(m, ref)
     assert ("wrote %s" % f) in capsys.readouterr().out
+    # --format 1: the lab's float generator, as a parameter set without "v" reads
+    assert cli.main(BASE + ["--format", "1", "--out", str(f)]) == 0
+    ref1 = texel.render({"pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7}, engine="numpy")
+    assert np.array_equal(np.load(f), ref1) and not np.array_equal(ref1, ref)
 
 
 def test_render_csv(tmp_path):
@@ -486,7 +491,8 @@ def test_render_csv(tmp_path):
     assert np.array_equal(data[:, 0], np.arange(1000))
     assert data[:, 1] == pytest.approx(np.arange(1000) * 0.0053, abs=1e-4)
     ref = np.asarray(texel.render({"pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7,
-                                   "length_samples": 1000, "gain": 0.5}, engine="int"))
+                                   "length_samples": 1000, "gain": 0.5, "v": 2},
+                                  engine="int"))
     assert data[:, 2] == pytest.approx(ref, abs=1e-9)
     assert data[:, 2].max() <= 0.5 + 1e-4 and data[:, 2].min() >= 0
 

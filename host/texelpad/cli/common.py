@@ -19,7 +19,7 @@ import tempfile
 from pathlib import Path
 from typing import Any, NoReturn
 
-from texel.gen.params import KEYS as TEXEL_SPEC_KEYS, QUANT_DB_MIN, SPEC as TEXEL_SPEC
+from texel.gen.params import FORMAT_NEW, KEYS as TEXEL_SPEC_KEYS, QUANT_DB_MIN, SPEC as TEXEL_SPEC
 
 from ..link.transport import DeviceError, LinkError
 
@@ -86,10 +86,10 @@ TEXEL_KEYS = tuple(k for k in TEXEL_SPEC_KEYS if k != "v")
 PARAM_FLAGS = {k: "--" + k.replace("_", "-") for k in TEXEL_KEYS}
 PARAM_FLAGS["engine"] = "--engine"
 PARAM_FLAGS["v"] = "--format"
-FORMAT_HELP = ("texture format: 1 = the lab's float plan (default; reproduces the original), "
-               "2 = the integer plan, the same texture bit for bit on every board and ~25x "
-               "faster to start on an RP2040 (pitch, irregularity and quantization on a "
-               "0.001 dB grid); docs/generator.md")
+FORMAT_HELP = ("texture format: 2 = the integer plan (default), the same texture bit for bit "
+               "on every board and ~25x faster to start on an RP2040 (pitch, irregularity and "
+               "quantization on a 0.001 dB grid); 1 = the lab's float plan, its exact "
+               "generator (a texture saved without a format is format 1); docs/generator.md")
 
 
 def _range_text(key: str) -> str:
@@ -128,6 +128,8 @@ def render_params(args: argparse.Namespace) -> dict[str, Any]:
         v = getattr(args, key, None)
         if v is not None:
             params[key] = v
+    if params and "v" not in params:
+        params["v"] = FORMAT_NEW        # a new texture: format 2 unless --format says
     return params
 
 
