@@ -42,8 +42,8 @@ from typing import Any, Mapping
 import numpy as np
 
 import texel
-from texel.gen.params import (DX_MM, IRREG_DB_MAX, IRREG_DB_MIN, LENGTH_MAX, NYQUIST_CPMM,
-                              PITCH_DB_MAX, PITCH_DB_MIN)
+from texel.gen.params import (DX_MM, FORMAT_NEW, IRREG_DB_MAX, IRREG_DB_MIN, LENGTH_MAX,
+                              NYQUIST_CPMM, PITCH_DB_MAX, PITCH_DB_MIN)
 
 from . import perception as P
 
@@ -244,13 +244,13 @@ def _texture(pitch: float, irr: float, *, texel_samples: int, quant_db: float, g
              seed: int, v: int) -> dict[str, Any]:
     """The texture dict the board plays (a texel region's keys; texel.validate
     and texel.runtime.scene accept it): defaults left out but for the ones
-    that say what was chosen."""
+    that say what was chosen; the format always: a texture without one would
+    read as format 1)."""
     t: dict[str, Any] = {"pitch_db": pitch, "irregularity_db": irr,
                          "texel_samples": texel_samples, "gain": gain, "seed": seed}
     if quant_db > 0:
         t["quant_db"] = quant_db
-    if v != 1:
-        t["v"] = v
+    t["v"] = v
     return t
 
 
@@ -261,14 +261,15 @@ def _round_db(x: float) -> float:
 
 
 def encode(fmap: Any, *, texel_samples: int = 50, quant_db: float = 0.0, seed: int = 0,
-           v: int = 1, model: P.Model | None = None, intervals: bool = True,
+           v: int = FORMAT_NEW, model: P.Model | None = None, intervals: bool = True,
            source: str | None = None) -> dict[str, Any]:
     """Encode a friction map (1-D, values ~0..1, DX_MM = 5.3 um per sample) as
     texel parameters that feel the same, with the report (docs/encoder.md).
 
     texel_samples, quant_db, seed, v: the texture's texel length, pitch
-    quantization (dB; 0 = none), seed and format - fixed, not fitted; the
-    candidates are rendered with them. model: the perceptual model (default
+    quantization (dB; 0 = none), seed and format (default 2; 1 = the lab's
+    float generator) - fixed, not fitted; the candidates are rendered with
+    them. model: the perceptual model (default
     perception.DEFAULT_MODEL). intervals: also scan each parameter for the
     range that feels the same (~40 more candidates). source: a label kept in
     the result.

@@ -7,8 +7,8 @@ import json
 import math
 from typing import Any
 
-from .common import (EXIT_OK, FORMAT_HELP, PARAM_FLAGS, CliError, check_output, positive_float,
-                     positive_int, read_scene_file, write_output)
+from .common import (EXIT_OK, FORMAT_HELP, FORMAT_NEW, PARAM_FLAGS, CliError, check_output,
+                     positive_float, positive_int, read_scene_file, write_output)
 
 FIGURE_TYPES = (".png", ".pdf", ".svg")
 # EncodeError messages start with what they are about; the flag it came from
@@ -46,7 +46,7 @@ def add_encode(p: argparse.ArgumentParser) -> None:
     tex.add_argument("--quant-db", type=float, default=0.0, metavar="DB",
                      help="quantize the texture's log pitch to this grid, dB (default 0 = off)")
     tex.add_argument("--seed", type=int, default=0, metavar="N", help="the texture's seed")
-    tex.add_argument("--format", dest="v", type=int, choices=(1, 2), default=1,
+    tex.add_argument("--format", dest="v", type=int, choices=(1, 2), default=FORMAT_NEW,
                      help=FORMAT_HELP)
     p.add_argument("--speed", type=positive_float, metavar="MM_S",
                    help="the finger's sliding speed in the perceptual model (default 86 mm/s)")
