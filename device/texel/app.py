@@ -27,11 +27,13 @@ from .runtime.sensor import make_sensor
 PROTOCOL = 1          # host <-> device contract version (the host checks it)
 
 # The study's split screen (docs/background.md §5): a reference texture left, a texel
-# rendering right. Played when start() gets no scene.
+# rendering right. Played when start() gets no scene. Its texel texture is
+# format 2 (the same map on every board, and a fast start on an RP2040).
 DEFAULT_SCENE = {"regions": [
     {"start_mm": 0, "end_mm": 50.88, "texture": {"kind": "reference", "name": "4sin"}},
     {"start_mm": 50.88, "end_mm": 101.76,
-     "texture": {"kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7}}]}
+     "texture": {"kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7,
+                 "v": 2}}]}
 
 _rt = None            # the running runtime (one per board)
 
