@@ -28,6 +28,17 @@ def _config():
         return {}
 
 
+def _firmware_board():
+    """The board the texelpad firmware was built for (/rom/firmware.json,
+    written by texelpad.firmware.build), or None on stock firmware."""
+    try:
+        import json
+        with open("/rom/firmware.json") as f:
+            return json.load(f).get("board")
+    except (OSError, ValueError, AttributeError):
+        return None
+
+
 def _board_for_platform():
     p = sys.platform
     if sys.implementation.name == "circuitpython":
@@ -41,7 +52,7 @@ def _board_for_platform():
 
 def main():
     cfg = _config()
-    board = cfg.get("board") or _board_for_platform()
+    board = cfg.get("board") or _firmware_board() or _board_for_platform()
     if sys.platform == "rp2":
         try:                        # a refresh interrupt a soft reset left armed
             from texel.hw.rp2 import clear_stale_tick

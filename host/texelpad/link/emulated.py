@@ -29,6 +29,10 @@ from typing import Any, Callable
 
 from .. import toolchain
 
+# rp2emu's flash file: the 2 MB flash from FS_OFFSET (the stock Pico's littlefs)
+# to its end (rp2emu/README.md, --flash); firmware must end below FS_OFFSET.
+FS_OFFSET = 0xA0000
+FS_BYTES = 0x200000 - FS_OFFSET
 BOOT_TIMEOUT = 120.0        # s: the first use may install rp2040js (npm ci); ~1.5 s after
 STOP_GRACE = 30.0           # s: pty_host.py gives the emulator 20 s after the signal
 CHIPS = ("rp2040",)
@@ -92,13 +96,17 @@ class EmulatedPico:
     chip = "rp2040"
 
     def __init__(self, flash: str | os.PathLike | None = None, instant_flash: bool = True,
-                 extra_args: tuple[str, ...] = ()) -> None:
+                 extra_args: tuple[str, ...] = (),
+                 firmware: str | os.PathLike | None = None) -> None:
         why = why_not()
         if why:
             raise RuntimeError(why)
         self.dir = Path(tempfile.mkdtemp(prefix="texelpad-pico-"))
         self.temporary = flash is None
         self.flash = self.dir / "flash.img" if flash is None else Path(flash).resolve()
+        self.firmware = Path(firmware).resolve() if firmware else None
+        if self.firmware is not None:
+            extra_args = ("--firmware", str(self._flash_uf2(self.firmware))) + tuple(extra_args)
         self.port: str | None = None
         self.failure: str | None = None
         self._out_path = self.dir / "stdout"
@@ -114,6 +122,34 @@ class EmulatedPico:
         self.pgid = self.proc.pid
         self._registry: Path | None = None
         self._stopped = False
+
+    def _flash_uf2(self, uf2: Path) -> Path:
+        """A .uf2 as if dragged onto the Pico: rp2emu loads firmware blocks
+        below its filesystem area (FS_OFFSET) from --firmware and keeps the
+        area itself in the flash file; so blocks at or above it (the texelpad
+        firmware's ROMFS partition) go into the flash file (a new one, erased
+        elsewhere: 0xFF) and the rest into a firmware-only .uf2."""
+        from ..firmware import romfs
+        try:
+            blocks = romfs.read_uf2(uf2.read_bytes())
+        except (OSError, ValueError) as e:
+            raise RuntimeError("%s: %s" % (uf2, e)) from None
+        low = [b for b in blocks if b[0] - romfs.XIP_BASE < FS_OFFSET]
+        high = [b for b in blocks if b[0] - romfs.XIP_BASE >= FS_OFFSET]
+        if high:
+            if self.flash.exists():
+                raise RuntimeError("%s already holds a filesystem: flashing a .uf2 with a ROMFS "
+                                   "partition takes a new flash file" % self.flash)
+            area = bytearray(b"\xff" * FS_BYTES)
+            for addr, payload, _ in high:
+                off = addr - romfs.XIP_BASE - FS_OFFSET
+                if off + len(payload) > FS_BYTES:
+                    raise RuntimeError("%s: a block at 0x%08x is past the 2 MB flash" % (uf2, addr))
+                area[off:off + len(payload)] = payload
+            self.flash.write_bytes(bytes(area))
+        out = self.dir / "firmware.uf2"
+        out.write_bytes(romfs.write_uf2(low))
+        return out
 
     def __enter__(self) -> "EmulatedPico":
         return self

@@ -1,0 +1,230 @@
+"""Build the texelpad firmware for a board folder (boards/<name>/): `texelpad firmware`.
+
+    build_firmware(board_dir, out_dir, micropython=None, ulab=None, progress=None) -> Built
+
+What it makes, in out_dir:
+    texelpad-<name>.uf2      the firmware and texelpad's ROMFS partition in one file: drag it
+                             onto a Pico in BOOTSEL mode and it boots playing its power-up scene
+    texelpad-<name>.romfs    the ROMFS partition alone (what `texelpad deploy` writes)
+    texelpad-<name>.elf      the firmware's symbols (rp2emu --profile, arm-none-eabi-nm)
+    build/                   CMake's folder (kept: a rebuild only relinks)
+
+The MicroPython build is the rp2 port of MicroPython v1.28.0 with ulab 6.12 as a user C module:
+by default the offline kit in ../shared/instruments/mpfirmware (build.sh), or a MicroPython
+checkout of the user's (micropython=DIR: `git clone -b v1.28.0
+https://github.com/micropython/micropython`, `make -C mpy-cross`, `make -C ports/rp2 submodules`;
+ulab=DIR: ulab 6.12's checkout). Needs Debian's gcc-arm-none-eabi libnewlib-arm-none-eabi cmake.
+
+The board folder holds a MicroPython board definition (mpconfigboard.h, mpconfigboard.cmake,
+pins.csv, manifest.py) and texelpad's board file (board.json); the build copies it, adds the
+frozen power-up (frozen_main.py as main.py) and never writes into the board folder.
+"""
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from .. import __version__, toolchain
+from ..deploy import image
+from . import romfs
+
+MICROPYTHON_VERSION = "1.28.0"
+BOARD_FILES = ("mpconfigboard.h", "mpconfigboard.cmake", "pins.csv", "manifest.py", "board.json")
+FLASH_BYTES = 2 * 1024 * 1024         # a Pico's W25Q16 (PICO_FLASH_SIZE_BYTES for "pico")
+FROZEN_MAIN = Path(__file__).with_name("frozen_main.py")
+FIRMWARE_INFO = "firmware.json"       # at the ROMFS root: /rom/firmware.json on the board
+
+
+class FirmwareError(Exception):
+    """One line: what is wrong and what to do."""
+
+
+@dataclass
+class Built:
+    uf2: Path
+    romfs: Path
+    elf: Path
+    board: str
+    firmware_bytes: int               # the MicroPython part (.bin)
+    romfs_bytes: int                  # texelpad's image in the partition
+    romfs_capacity: int
+    romfs_base: int                   # flash offset of the partition
+    storage_bytes: int                # the littlefs left for the user's files
+    seconds: float
+
+
+def repo_boards_dir() -> Path | None:
+    """boards/ of the checkout this package runs from (None from a wheel)."""
+    d = Path(__file__).resolve().parents[3] / "boards"
+    return d if d.is_dir() else None
+
+
+def _macro(text: str, name: str) -> int | None:
+    """The value of #define NAME (an int expression of +, *, (), digits) in a header."""
+    m = re.search(r"^\s*#define\s+%s\s+(.+?)\s*(//.*)?$" % name, text, re.M)
+    if not m:
+        return None
+    expr = m.group(1)
+    if not re.fullmatch(r"[\d\s()*+]+", expr):
+        raise FirmwareError("mpconfigboard.h: %s = %s: use a number like (640 * 1024)" % (name, expr))
+    return int(eval(expr, {"__builtins__": {}}))   # digits, spaces, * + ( ) only
+
+
+def layout(board_dir: Path) -> tuple[int, int, int]:
+    """(ROMFS base offset, ROMFS bytes, littlefs bytes) of a board definition."""
+    text = (board_dir / "mpconfigboard.h").read_text()
+    storage = _macro(text, "MICROPY_HW_FLASH_STORAGE_BYTES")
+    rom = _macro(text, "MICROPY_HW_ROMFS_BYTES")
+    if not rom:
+        raise FirmwareError("%s/mpconfigboard.h: MICROPY_HW_ROMFS_BYTES is missing or 0: texelpad "
+                            "runs from a ROMFS partition (e.g. #define MICROPY_HW_ROMFS_BYTES "
+                            "(640 * 1024))" % board_dir)
+    if storage is None:
+        raise FirmwareError("%s/mpconfigboard.h: MICROPY_HW_FLASH_STORAGE_BYTES is missing" % board_dir)
+    if rom % 4096 or storage % 4096:
+        raise FirmwareError("%s/mpconfigboard.h: the ROMFS and storage sizes must be multiples "
+                            "of 4096" % board_dir)
+    return FLASH_BYTES - storage - rom, rom, storage
+
+
+def check_board_dir(board_dir: Path) -> dict:
+    """The board file (board.json) of a board folder, after checking the folder is one."""
+    if not board_dir.is_dir():
+        raise FirmwareError("%s: no such board folder" % board_dir)
+    missing = [f for f in BOARD_FILES if not (board_dir / f).is_file()]
+    if missing:
+        raise FirmwareError("%s: not a texelpad board folder: %s missing (boards/pico is an "
+                            "example)" % (board_dir, ", ".join(missing)))
+    from texel.runtime import boards
+    real = str(board_dir / "board.json")
+    # the board file's name is the folder's (boards/pico/board.json is board "pico")
+    as_named = str(board_dir / (board_dir.name + ".json"))
+    try:
+        doc = json.loads((board_dir / "board.json").read_text())
+        if isinstance(doc, dict) and doc.get("name") != board_dir.name:
+            raise ValueError("%s: name: %r: must be the board folder's name (%r)"
+                             % (real, doc.get("name"), board_dir.name))
+        board = boards.validate(doc, as_named)
+    except RecursionError:
+        raise FirmwareError("%s: not a board file (nested too deep)" % real) from None
+    except ValueError as e:
+        raise FirmwareError(str(e).replace(as_named, real).splitlines()[0][:400]) from None
+    if board["port"] != "rp2":
+        raise FirmwareError("%s/board.json: port %r: the texelpad firmware is built for RP2040 "
+                            "boards (port rp2); other ports take `texelpad deploy` on their "
+                            "stock firmware" % (board_dir, board["port"]))
+    layout(board_dir)
+    return board
+
+
+def romfs_payload(board_dir: Path, board: dict) -> tuple[dict[str, bytes], bytes]:
+    """(files, image) of the ROMFS partition for a board folder: texelpad's rp2
+    image, the folder's board file among the shipped boards, firmware.json."""
+    files = romfs.romfs_files(image.TARGETS["rp2"])
+    files["lib/texel/boards.d/%s.json" % board["name"]] = (board_dir / "board.json").read_bytes()
+    info = {"board": board["name"], "texelpad": __version__, "micropython": MICROPYTHON_VERSION,
+            "image_sha256": image.hashlib.sha256(
+                b"".join(k.encode() + v for k, v in sorted(files.items()))).hexdigest()}
+    files[FIRMWARE_INFO] = (json.dumps(info, sort_keys=True) + "\n").encode()
+    return files, romfs.romfs_image(files)
+
+
+def _kit() -> Path | None:
+    d = toolchain.instruments_dir()
+    return d / "mpfirmware" if d and (d / "mpfirmware" / "build.sh").is_file() else None
+
+
+def _needs() -> None:
+    missing = [t for t in ("arm-none-eabi-gcc", "cmake", "make") if not shutil.which(t)]
+    if missing:
+        raise FirmwareError("%s not found: install Debian's gcc-arm-none-eabi "
+                            "libnewlib-arm-none-eabi cmake build-essential" % ", ".join(missing))
+
+
+def _run(args: list[str], log: Path, env: dict | None = None) -> None:
+    with open(log, "ab") as f:
+        p = subprocess.run(args, stdout=f, stderr=subprocess.STDOUT, env=env)
+    if p.returncode:
+        tail = log.read_text(errors="replace").strip().splitlines()[-12:]
+        raise FirmwareError("the MicroPython build failed (exit %d); the end of %s:\n  %s"
+                            % (p.returncode, log, "\n  ".join(tail)))
+
+
+def build_firmware(board_dir: str | os.PathLike, out_dir: str | os.PathLike,
+                   micropython: str | os.PathLike | None = None,
+                   ulab: str | os.PathLike | None = None,
+                   progress: Callable[[str], None] | None = None) -> Built:
+    say = progress or (lambda m: None)
+    t0 = time.monotonic()
+    board_dir = Path(board_dir).resolve()
+    board = check_board_dir(board_dir)
+    name = board["name"]
+    base, capacity, storage = layout(board_dir)
+    out = Path(out_dir).resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    say("texelpad's image for the ROMFS partition (armv6m .mpy)")
+    files, img = romfs_payload(board_dir, board)
+    if len(img) > capacity:
+        raise FirmwareError("texelpad's image (%s bytes) does not fit the ROMFS partition (%s "
+                            "bytes): raise MICROPY_HW_ROMFS_BYTES in %s/mpconfigboard.h"
+                            % (format(len(img), ","), format(capacity, ","), board_dir))
+    # the definition the build reads: a copy of the folder with the frozen power-up in it
+    stage = out / "board" / ("TEXELPAD_" + re.sub(r"[^A-Za-z0-9]", "_", name).upper())
+    shutil.rmtree(stage, ignore_errors=True)
+    shutil.copytree(board_dir, stage)
+    shutil.copyfile(FROZEN_MAIN, stage / "main.py")
+    _needs()
+    log = out / "build.log"
+    log.write_text("")
+    fw = out / "build"
+    if micropython is None:
+        kit = _kit()
+        if kit is None:
+            raise FirmwareError("no MicroPython source tree: give --micropython DIR (MicroPython "
+                                "v%s, see docs/firmware.md), or put the offline kit at "
+                                "../shared/instruments/mpfirmware" % MICROPYTHON_VERSION)
+        say("building MicroPython v%s + ulab with the offline kit (about 2 min the first time; "
+            "log: %s)" % (MICROPYTHON_VERSION, log))
+        _run(["bash", str(kit / "build.sh"), str(stage), str(fw)], log)
+        bin_, uf2, elf = fw / "firmware.bin", fw / "firmware.uf2", fw / "firmware.elf"
+    else:
+        mp = Path(micropython).resolve()
+        port = mp / "ports" / "rp2"
+        if not (port / "Makefile").is_file():
+            raise FirmwareError("%s: not a MicroPython source tree (no ports/rp2/Makefile)" % mp)
+        mods = []
+        if ulab is not None:
+            cm = Path(ulab).resolve() / "code" / "micropython.cmake"
+            if not cm.is_file():
+                raise FirmwareError("%s: not a ulab checkout (no code/micropython.cmake)" % ulab)
+            mods = ["USER_C_MODULES=%s" % cm]
+        say("building MicroPython from %s (log: %s)" % (mp, log))
+        jobs = "-j%d" % (os.cpu_count() or 2)
+        _run(["make", "-C", str(mp / "mpy-cross"), jobs], log)
+        _run(["make", "-C", str(port), "BOARD_DIR=%s" % stage, "BUILD=%s" % (fw / "build"), jobs]
+             + mods, log)
+        bin_, uf2, elf = (fw / "build" / n for n in ("firmware.bin", "firmware.uf2", "firmware.elf"))
+    fw_bytes = bin_.stat().st_size
+    if fw_bytes > base:
+        raise FirmwareError("the firmware (%s bytes) runs into the ROMFS partition at %s: lower "
+                            "MICROPY_HW_ROMFS_BYTES or MICROPY_HW_FLASH_STORAGE_BYTES"
+                            % (format(fw_bytes, ","), format(base, ",")))
+    say("joining the firmware and the ROMFS partition into one .uf2")
+    joined = romfs.join_uf2(uf2.read_bytes(), romfs.uf2_blocks(img, romfs.XIP_BASE + base))
+    dst = out / ("texelpad-%s.uf2" % name)
+    tmp = dst.with_suffix(".uf2.tmp")
+    tmp.write_bytes(joined)
+    os.replace(tmp, dst)
+    rom = out / ("texelpad-%s.romfs" % name)
+    rom.write_bytes(img)
+    elf_dst = out / ("texelpad-%s.elf" % name)
+    shutil.copyfile(elf, elf_dst)
+    return Built(dst, rom, elf_dst, name, fw_bytes, len(img), capacity, base, storage,
+                 time.monotonic() - t0)
