@@ -26,7 +26,7 @@ from typing import Any
 import cma
 import numpy as np
 
-from texel.gen.params import DX_MM
+from texel.gen.params import DX_MM, FORMAT_NEW
 
 from ..study.space import Point, texel_params
 
@@ -37,10 +37,12 @@ TEXEL_MM = (0.05, 2.0)          # texel_length 0..1, log scale
 LEVEL = (0.2, 1.0)              # gain
 
 
-def candidate_params(x: list[float], dims: tuple[str, ...], seed: int = 0) -> dict[str, Any]:
-    """The format-2 texel parameter set of a point of the search space."""
+def candidate_params(x: list[float], dims: tuple[str, ...], seed: int = 0,
+                     v: int = FORMAT_NEW) -> dict[str, Any]:
+    """The texel parameter set of a point of the search space, in format v
+    (2 unless the study config's texture_format says 1)."""
     d = dict(zip(dims, x))
-    extra: dict[str, Any] = {"seed": seed, "v": 2}
+    extra: dict[str, Any] = {"seed": seed, "v": v}
     if "texel_length" in d:
         lo, hi = TEXEL_MM
         mm = lo * (hi / lo) ** min(1.0, max(0.0, d["texel_length"]))
@@ -60,6 +62,7 @@ class PreferenceSearch:
     x0: tuple[float, ...] | None = None
     sigma0: float = SIGMA0
     texture_seed: int = 7           # the texel generator's seed of every candidate
+    texture_format: int = FORMAT_NEW    # and their format (the config's texture_format)
     saved: list[dict] = field(default_factory=list)
     history: list[dict] = field(default_factory=list)
     stopped: bool = False           # the participant was satisfied
@@ -107,7 +110,8 @@ class PreferenceSearch:
 
     def candidates(self) -> list[dict[str, Any]]:
         """ask() as texel parameter sets."""
-        return [candidate_params(x, self.dims, self.texture_seed) for x in self.ask()]
+        return [candidate_params(x, self.dims, self.texture_seed, self.texture_format)
+                for x in self.ask()]
 
     @property
     def done(self) -> bool:
@@ -151,7 +155,8 @@ class PreferenceSearch:
         if isinstance(k, bool) or not isinstance(k, int) or not 0 <= k < len(xs):
             raise ValueError("save: expected 0 .. %d, got %r" % (len(xs) - 1, k))
         entry = {"iteration": self.iteration, "x": xs[k],
-                 "params": candidate_params(xs[k], self.dims, self.texture_seed)}
+                 "params": candidate_params(xs[k], self.dims, self.texture_seed,
+                                            self.texture_format)}
         self.saved.append(entry)
         return entry
 

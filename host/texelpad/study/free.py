@@ -29,7 +29,7 @@ import random
 from dataclasses import dataclass, field
 from typing import Any
 
-from texel.gen.params import PITCH_DB_MAX
+from texel.gen.params import FORMAT_NEW, PITCH_DB_MAX
 from texel.gen.reference import STUDY_NAMES as NINE     # the nine, in the golden data's order
 
 
@@ -93,13 +93,15 @@ class Free:
         return (_number("pitch_db", pitch_db, *c.pitch_db),
                 _number("irregularity_db", irregularity_db, *c.irregularity_db))
 
-    def texture(self, pitch_db: float, irregularity_db: float, move: int) -> dict[str, Any]:
+    def texture(self, pitch_db: float, irregularity_db: float, move: int,
+                v: int = FORMAT_NEW) -> dict[str, Any]:
         """The texel rendering of the sliders at the trial's move-th change: a
-        format-2 parameter set with its own seed (each change re-draws)."""
+        parameter set of format v (the config's texture_format: 2 unless it
+        says 1) with its own seed (each change re-draws)."""
         rng = random.Random((self.seed * 1000003 + self.trial) * 1000003 + move)
         return {"pitch_db": min(PITCH_DB_MAX, pitch_db), "irregularity_db": irregularity_db,
                 "texel_samples": self.config.texel_samples,
-                "seed": rng.randrange(1 << 32), "v": 2}
+                "seed": rng.randrange(1 << 32), "v": v}
 
     def checked_answer(self, a: Any) -> dict[str, Any]:
         """The answer checked and on the grid (ValueError says why)."""

@@ -19,6 +19,7 @@ from ..search.preference import PreferenceSearch
 from . import free as _free
 from . import pursuit as _pursuit
 from . import quant as _quant
+from . import scenes as _scenes
 from . import staircase as _staircase
 from .session import Session, SessionError
 
@@ -29,14 +30,17 @@ TITLES = {"free": "free exploration (seed 000)",
           "staircase": "texel-length oddity staircase (seed 001)",
           "search": "preference-driven search: CMA-ES (seed 003)"}
 # config keys that are not the state's: the scenes' business (the texture
-# compared against, the staircase's texel texture) and the config file's name
-SCENE_KEYS = ("reference", "distribution", "config_file")
+# compared against, the staircase's texel texture, the texel textures' format)
+# and the config file's name
+SCENE_KEYS = ("reference", "distribution", "texture_format", "config_file")
 
 
 def start(protocol: str, config: dict[str, Any], seed: int) -> Any:
     """The protocol's state before any answer. config: its Config's fields
     (JSON); "reference" (the texture compared against: the scenes' business)
-    and "distribution" (the staircase's texel texture) are not the state's."""
+    and "distribution" (the staircase's texel texture) are not the state's,
+    nor "texture_format" (1 or 2, default 2: checked here, played by scenes)."""
+    fmt = _scenes.texture_format(config)
     config = {k: v for k, v in config.items() if k not in SCENE_KEYS}
     if protocol == "free":
         return _free.Free(seed, _free.Config(**_tuples(config)))
@@ -47,7 +51,7 @@ def start(protocol: str, config: dict[str, Any], seed: int) -> Any:
     if protocol == "staircase":
         return _staircase.Staircase(_staircase.Config(**config))
     if protocol == "search":
-        return PreferenceSearch(seed, **_tuples(config))
+        return PreferenceSearch(seed, texture_format=fmt, **_tuples(config))
     raise SessionError("protocol: unknown %r (known: %s)" % (protocol, ", ".join(PROTOCOLS)))
 
 

@@ -28,7 +28,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from .free import check_references
-from texel.gen.params import IRREG_DB_MAX, IRREG_DB_MIN, PITCH_DB_MAX, PITCH_DB_MIN, QUANT_DB_MAX
+from texel.gen.params import FORMAT_NEW, IRREG_DB_MAX, IRREG_DB_MIN, PITCH_DB_MAX, PITCH_DB_MIN, \
+    QUANT_DB_MAX
 
 EXEMPLARS = ("4sin", "pink", "sawtooth")
 
@@ -113,14 +114,15 @@ class Quant:
         the matrix design another's)."""
         return self._trials[self.trial][1]
 
-    def texture(self) -> dict[str, Any]:
-        """The current trial's rendering: the match, quantized (format 2)."""
+    def texture(self, v: int = FORMAT_NEW) -> dict[str, Any]:
+        """The current trial's rendering: the match, quantized, in format v
+        (the config's texture_format: 2 unless it says 1)."""
         ref, match, q = self._trials[self.trial]
         m = self.config.matches[match]
         return {"pitch_db": round(float(m["pitch_db"]), 3),
                 "irregularity_db": round(float(m["irregularity_db"]), 3),
                 "quant_db": q, "texel_samples": self.config.texel_samples,
-                "seed": self.texture_seeds[match], "v": 2}
+                "seed": self.texture_seeds[match], "v": v}
 
     def answer(self, rating: Any) -> dict[str, Any]:
         if self.done:

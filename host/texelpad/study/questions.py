@@ -41,6 +41,12 @@ def reference_of(header: dict[str, Any]) -> dict[str, Any]:
     return header["config"].get("reference") or S.DEFAULT_REFERENCE
 
 
+def format_of(header: dict[str, Any]) -> int:
+    """The texel textures' format: the config's texture_format (2 unless it
+    says 1; a header from before the field played format 2)."""
+    return S.texture_format(header.get("config"))
+
+
 def _db(p: Point) -> dict[str, float]:
     return {"pitch_db": round(pitch_db(p.u), 3), "irregularity_db": round(irregularity_db(p.v), 3)}
 
@@ -65,8 +71,9 @@ def _pursuit(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Questi
         return Question({"done": True}, detail={"centre": _db(st.centre),
                                                  "trials": len(st.history)})
     ref = reference_of(header)
-    options = [S.point_scene(ref, q.a, display, name="A"),
-               S.point_scene(ref, q.b, display, name="B")]
+    v = format_of(header)
+    options = [S.point_scene(ref, q.a, display, name="A", v=v),
+               S.point_scene(ref, q.b, display, name="B", v=v)]
     return Question({"done": False, "kind": "pair", "trial": q.trial, "index": q.index,
                      "of": [5, 4], "options": ["A", "B"], "answers": ["A", "B", "unsure"]},
                     options,
@@ -80,7 +87,8 @@ def _staircase(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Ques
         return Question({"done": True}, detail={"threshold_mm": st.threshold_mm(),
                                                  "reversals": st.reversals})
     options, odd = S.staircase_scenes(st.texel_samples(), len(st.track), header["seed"],
-                                      display, header["config"].get("distribution"))
+                                      display, header["config"].get("distribution"),
+                                      format_of(header))
     return Question({"done": False, "kind": "three", "trial": len(st.track),
                      "options": ["1", "2", "3"], "answers": [0, 1, 2],
                      "seconds": st.config.trial_seconds},
@@ -94,7 +102,8 @@ def _search(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Questio
         return Question({"done": True}, detail={"mean": _mean(st), "saved": st.saved,
                                                  "iterations": st.iteration})
     ref = reference_of(header)
-    cands = [candidate_params(x, st.dims, st.texture_seed) for x in st.ask()]
+    cands = [candidate_params(x, st.dims, st.texture_seed, format_of(header))
+             for x in st.ask()]
     options = [S.split(ref, c, display, name="candidate %d" % (k + 1))
                for k, c in enumerate(cands)]
     answers: list[Any] = [{"choose": k} for k in range(3)] + [{"save": k} for k in range(3)]
@@ -146,7 +155,8 @@ def slider_scene(st: Any, header: dict[str, Any], display: dict[str, Any], pitch
     for a value off the sliders) and the setting as kept (0.001 dB)."""
     p, s = st.check(pitch, irregularity)
     ref = {"kind": "reference", "name": st.reference}
-    return S.split(ref, st.texture(p, s, move), display, name="rendering"), (p, s)
+    return S.split(ref, st.texture(p, s, move, format_of(header)), display,
+                   name="rendering"), (p, s)
 
 
 def _quant(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
@@ -154,7 +164,7 @@ def _quant(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question
         return Question({"done": True}, detail={"ratings": st.ratings})
     ref, level = st.current
     lo, hi = st.config.scale
-    tex = st.texture()
+    tex = st.texture(format_of(header))
     return Question({"done": False, "kind": "rate", "trial": st.trial, "of": len(st.trials),
                      "options": ["rendering"], "answers": list(range(lo, hi + 1))},
                     [S.split({"kind": "reference", "name": ref}, tex, display,

@@ -6,17 +6,34 @@ display, the option's texel rendering on the right (SPEC §5: "reference on the
 left half, texel rendering on the right"); each option is one scene, and the
 participant switches between them. Staircase (seed 001): each of the three
 textures fills the display with texels of the trial's length; two of them
-share a seed. Texel textures are format 2 (the same texture on every board).
+share a seed. Texel textures are the config's "texture_format": 2 (the
+integer plan: the same texture on every board) unless the config says 1 (the
+lab's float generator, the exact original); a session's header records it,
+and a header without one (sessions before the field) played format 2.
 """
 from __future__ import annotations
 
 import random
 from typing import Any
 
+from texel.gen.params import FORMAT_NEW
+
 from .space import Point, texel_params
 
 DEFAULT_REFERENCE = {"kind": "reference", "name": "4sin"}
 STAIRCASE_TEXTURE = {"pitch_db": 10.0, "irregularity_db": -10.0}   # config: "distribution"
+
+
+def texture_format(config: dict[str, Any] | None) -> int:
+    """The texture format a study config (a session header's "config") asks
+    for: its "texture_format", 2 when it has none. ValueError for anything but
+    1 or 2."""
+    v = (config or {}).get("texture_format", FORMAT_NEW)
+    if isinstance(v, bool) or v not in (1, 2):
+        raise ValueError("texture_format: expected 1 (the lab's float generator, the exact "
+                         "original) or 2 (the integer plan, the same texture on every "
+                         "board), got %r" % (v,))
+    return v
 
 
 def _total_mm(display: dict[str, Any]) -> float:
@@ -37,12 +54,12 @@ def split(reference: dict[str, Any], texel: dict[str, Any], display: dict[str, A
 
 
 def point_scene(reference: dict[str, Any], p: Point, display: dict[str, Any],
-                seed: int = 7, name: str = "") -> dict[str, Any]:
-    return split(reference, texel_params(p, seed=seed, v=2), display, name)
+                seed: int = 7, name: str = "", v: int = FORMAT_NEW) -> dict[str, Any]:
+    return split(reference, texel_params(p, seed=seed, v=v), display, name)
 
 
 def staircase_scenes(length_samples: int, trial: int, seed: int, display: dict[str, Any],
-                     distribution: dict[str, float] | None = None
+                     distribution: dict[str, float] | None = None, v: int = FORMAT_NEW
                      ) -> tuple[list[dict[str, Any]], int]:
     """The three textures of a trial and the index of the odd one: two seeds,
     one shown twice, in an order drawn from (seed, trial)."""
@@ -54,6 +71,6 @@ def staircase_scenes(length_samples: int, trial: int, seed: int, display: dict[s
     total = _total_mm(display)
     scenes = [{"regions": [{"start_mm": 0, "end_mm": total,
                             "texture": dict(dist, kind="texel", texel_samples=length_samples,
-                                            seed=s, v=2)}],
+                                            seed=s, v=v)}],
                "name": "texture %d" % (k + 1)} for k, s in enumerate(seeds)]
     return scenes, seeds.index(odd)
