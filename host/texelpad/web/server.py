@@ -168,6 +168,7 @@ class Lab:
             state = protocols.start(proto, config, seed)
         except (TypeError, ValueError) as e:
             raise Refused("config: %s" % e) from None
+        config["texture_format"] = S.texture_format(config)    # the header says it: 2 unless asked
         display = self.owner.display()
         if "reference" in config:   # the board's own validation, before any file is made
             host_check(S.split(config["reference"],
