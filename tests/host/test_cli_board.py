@@ -60,6 +60,32 @@ def test_texelpad_virtual_prints_its_port_first_and_mpremote_drives_it(tmp_path)
         assert proc.wait(timeout=20) == 0
 
 
+@pytest.mark.parametrize("chip, what, fragment, code", [
+    ([], "file", "is a file, not a folder: the virtual board's flash is a folder", 2),
+    (["--chip", "rp2040"], "file", "is not an emulated RP2040's flash image (10 bytes; an "
+                                   "image is 1,441,792", 2),
+    (["--chip", "rp2040"], "dir", "is a folder: the emulated RP2040's flash is an image file",
+     2),
+    ([], "under-file", "cannot make the flash folder", 1),
+    (["--chip", "rp2040"], "nowhere", "cannot make", 1),
+])
+def test_virtual_flash_that_cannot_be_one_is_one_line(capsys, tmp_path, chip, what, fragment,
+                                                      code):
+    """issue 24: `texelpad virtual --flash FILE` (a file, not a folder; with
+    --chip not a flash image) was a FileExistsError traceback (or the
+    emulator's own refusal, blamed on --chip). Checked before anything
+    starts; the file is left as it was."""
+    f = tmp_path / "notes.txt"
+    f.write_text("not flash\n")
+    flash = {"file": f, "dir": tmp_path, "under-file": f / "flash",
+             "nowhere": tmp_path / "no" / "such" / "pico.img"}[what]
+    got, out, err = run_cli(capsys, "virtual", "--flash", str(flash), "--seconds", "1", *chip)
+    assert got == code and err.startswith("texelpad virtual: error: --flash: "), (got, err)
+    assert fragment in err and err.count("\n") == 1 and out == "", err
+    assert f.read_text() == "not flash\n" and sorted(p.name for p in tmp_path.iterdir()) == [
+        "notes.txt"]
+
+
 # --- push -------------------------------------------------------------------------
 
 def test_push_flags_then_status(capsys, port):

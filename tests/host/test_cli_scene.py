@@ -466,3 +466,71 @@ def test_boot_when_not_running_needs_a_board_name(capsys, flash_board):
     assert json.loads((flash / "texelpad.json").read_text())["board"] == "virtual"
     printed, st, src = _power_up(port)
     assert st["running"] and st["scene"]["name"] == "constant 0.5"
+
+
+class _Virtual:
+    """`texelpad virtual --flash FLASH --source` as a user runs it (a process
+    of its own, its registry kept apart from the user's); .port, and on exit
+    its stderr in .err after a Ctrl-C (SIGINT), which must end it with 0."""
+
+    def __init__(self, flash, registry):
+        self.flash, self.registry = flash, registry
+
+    def __enter__(self):
+        env = dict(os.environ, TEXELPAD_RUNTIME_DIR=str(self.registry))
+        self.proc = subprocess.Popen([sys.executable, "-m", "texelpad.cli", "virtual", "--flash",
+                                      str(self.flash), "--source"], stdout=subprocess.PIPE,
+                                     stderr=subprocess.PIPE, text=True, env=env)
+        self.port = self.proc.stdout.readline().strip()
+        assert self.port.startswith("/dev/pts/"), self.proc.stderr.read()
+        return self
+
+    def __exit__(self, *exc):
+        import signal
+        self.proc.send_signal(signal.SIGINT)
+        try:
+            code = self.proc.wait(timeout=30)
+        finally:
+            if self.proc.poll() is None:
+                self.proc.kill()
+                self.proc.wait()
+        self.err = self.proc.stderr.read()
+        if exc[0] is None:
+            assert code == 0, self.err
+
+
+@pytest.mark.vboard
+def test_texelpad_virtual_plays_its_power_up_scene(capsys, tmp_path):
+    """issue 24: `texelpad scene boot FILE` had no effect on the virtual board -
+    `texelpad virtual` started the default scene whatever its flash held. Now it
+    starts what the board's main.py starts at power-up: the power-up file's
+    board and scene; a file the board refuses leaves it stopped (main.py's "not
+    started"), said on stderr; without one, the default."""
+    flash, reg = tmp_path / "flash", tmp_path / "run"
+    with _Virtual(flash, reg) as v:
+        code, out, err = run_cli(capsys, "scene", "boot", "texel-sweep", "--port", v.port)
+        assert code == 0, err
+        with texelpad.connect(v.port) as b:             # this run plays on: the default
+            assert b.status()["scene"].get("name") != "texel sweep 0 .. 10 dB"
+    cfg = json.loads((flash / "texelpad.json").read_text())
+    with _Virtual(flash, reg) as v:                     # the next run starts it
+        with texelpad.connect(v.port) as b:
+            st = b.status()
+            src = b.scene_source()
+    assert st["running"] and st["board"] == "virtual" and st["refresh_hz"] > 1000
+    assert st["scene"].get("name") == "texel sweep 0 .. 10 dB" and _plain(src) == cfg["scene"]
+    assert "playing the power-up scene of %s" % (flash / "texelpad.json") in v.err, v.err
+    # a power-up file the board refuses: stopped, as main.py leaves a board
+    (flash / "texelpad.json").write_text(json.dumps({"board": "pico", "scene": None}))
+    with _Virtual(flash, reg) as v:
+        code, out, err = run_cli(capsys, "status", "--port", v.port)
+        assert code == 0 and out.startswith("texelpad is not running"), (out, err)
+        # --clear removes it: the next run plays the default
+        code, out, err = run_cli(capsys, "scene", "boot", "--clear", "--port", v.port)
+        assert code == 0, err
+    assert "not started: the power-up file" in v.err and "board file 'pico'" in v.err, v.err
+    with _Virtual(flash, reg) as v:
+        with texelpad.connect(v.port) as b:
+            src = b.scene_source()
+    assert _plain(src) == _plain(scene_mod.validate(texel.app.DEFAULT_SCENE, TPAD))
+    assert "power-up" not in v.err

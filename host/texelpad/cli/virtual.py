@@ -4,7 +4,9 @@ emulated Raspberry Pi Pico (link/emulated.py: the real firmware on rp2040js)."""
 from __future__ import annotations
 
 import argparse
+import os
 import time
+from pathlib import Path
 
 from ..link.transport import LinkError
 from ..link.virtual import open_virtual, stop_on_signals
@@ -39,6 +41,56 @@ def add_virtual(p: argparse.ArgumentParser) -> None:
     p.set_defaults(func=cmd_virtual)
 
 
+def check_flash(flash: str | None, chip: str | None) -> None:
+    """--flash before anything starts: the unix-port board's flash is a
+    folder (made when missing), the emulated chip's a flash image file of
+    FS_BYTES (or a new one). Not that: one line naming --flash, exit
+    2; a place that cannot be made or written: exit 1."""
+    if flash is None:
+        return
+    # the emulated Pico's flash file: its 2 MB flash from the filesystem area on,
+    # 1,441,792 bytes (rp2emu refuses a file of another size: its README, --flash)
+    from ..link.emulated import FS_BYTES
+    p = Path(flash)
+    if not chip:
+        if p.exists() and not p.is_dir():
+            raise CliError("--flash", "%s is a file, not a folder: the virtual board's flash "
+                           "is a folder (a flash image file is for --chip rp2040)" % flash)
+        try:
+            p.mkdir(parents=True, exist_ok=True)
+        except OSError as e:
+            raise CliError("--flash", "cannot make the flash folder %s: %s"
+                           % (flash, e.strerror or e), EXIT_FAIL) from None
+        if not os.access(p, os.W_OK | os.X_OK):
+            raise CliError("--flash", "cannot write in the flash folder %s: permission denied"
+                           % flash, EXIT_FAIL)
+        return
+    if p.is_dir():
+        raise CliError("--flash", "%s is a folder: the emulated %s's flash is an image file "
+                       "(a new name makes one)" % (flash, chip.upper()))
+    if p.exists():
+        try:
+            size = p.stat().st_size
+        except OSError as e:
+            raise CliError("--flash", "cannot read %s: %s" % (flash, e.strerror or e),
+                           EXIT_FAIL) from None
+        if size != FS_BYTES or not p.is_file():
+            raise CliError("--flash", "%s is not an emulated %s's flash image (%s bytes; an "
+                           "image is %s: what a previous --flash run saved); left untouched"
+                           % (flash, chip.upper(), format(size, ","),
+                              format(FS_BYTES, ",")))
+        if not os.access(p, os.R_OK | os.W_OK):
+            raise CliError("--flash", "cannot read and write %s: permission denied" % flash,
+                           EXIT_FAIL)
+        return
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise CliError("--flash", "cannot make %s: no such folder %s" % (flash, parent),
+                       EXIT_FAIL)
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise CliError("--flash", "cannot make %s: permission denied" % flash, EXIT_FAIL)
+
+
 def cmd_virtual(args: argparse.Namespace) -> int:
     progress = lambda m: _stderr("virtual: " + m)       # noqa: E731
     if args.finger != "lifted" and not args.chip:
@@ -47,6 +99,7 @@ def cmd_virtual(args: argparse.Namespace) -> int:
     if args.chip and args.source:
         raise CliError("--source", "the emulated %s runs the compiled image from its flash; "
                        "--source is for the unix-port virtual board" % args.chip)
+    check_flash(args.flash, args.chip)
     vb = None
     # SIGTERM/SIGHUP end it as Ctrl-C does: the interpreter killed, the
     # temporary flash and the registry entry removed (also while deploying)

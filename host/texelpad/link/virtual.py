@@ -437,10 +437,64 @@ def stop_on_signals() -> Iterator[None]:
             signal.signal(s, h)
 
 
+# The power-up file in the flash folder: what `texelpad scene boot` writes
+# (link.board.BOOT_FILE, relative on the unix port: on_board_path) and the
+# board's main.py reads (its CONFIG on the unix port).
+BOOT_CONFIG = "texelpad.json"
+
+
+def boot_config(flash: str | os.PathLike) -> dict[str, Any]:
+    """The power-up file of a flash folder as the board's main.py reads it:
+    {"board": NAME, "scene": {...}}, or {} when there is none or it is not
+    a JSON object (main.py then starts its default)."""
+    try:
+        cfg = json.loads((Path(flash) / BOOT_CONFIG).read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError):
+        return {}
+    return cfg if isinstance(cfg, dict) else {}
+
+
+def start_at_power_up(b: Any, flash: str | os.PathLike,
+                      progress: Callable[[str], None] | None = None) -> dict[str, Any] | None:
+    """Start the display on board b (a connected Board of the virtual board
+    whose flash folder this is) as the board's main.py does at power-up, in
+    real time: the board file and scene of its power-up file (texelpad scene
+    boot), else board file "virtual" and the default scene. A power-up file
+    the board refuses leaves it stopped, as main.py leaves a board ("texelpad:
+    not started"), and says so through progress. The status, or None."""
+    from .transport import DeviceError
+    say = progress or (lambda m: None)
+    cfg = boot_config(flash)
+    if not cfg:
+        return b.start("virtual", None, realtime=True)
+    board = cfg.get("board") or "virtual"
+    scene = cfg.get("scene")
+    try:
+        # checked as the board checks it, for that board file's display, before it goes
+        from . import protocol
+        from .board import board_display
+        display = board_display(b, board)
+        if scene is not None:
+            import texel.runtime.scene
+            texel.runtime.scene.validate(protocol.plain(scene), display)
+        st = b.restart(board, scene, realtime=True)
+    except (DeviceError, ValueError) as e:
+        say("not started: the power-up file %s was refused: %s (texelpad scene boot FILE "
+            "replaces it, --clear removes it)" % (Path(flash) / BOOT_CONFIG, e))
+        return None
+    scene = st.get("scene") if isinstance(st, dict) else None
+    name = scene.get("name") if isinstance(scene, dict) else None
+    say("playing the power-up scene of %s (board %s%s)"
+        % (Path(flash) / BOOT_CONFIG, board, ", %r" % name if name else ""))
+    return st
+
+
 def open_virtual(flash: str | None = None, source: bool = False, start: bool = True,
                  progress: Callable[[str], None] | None = None) -> VirtualBoard:
     """A started VirtualBoard with texelpad's image (deployed into its flash,
-    or the installed source) playing the default scene in real time."""
+    or the installed source) playing in real time what a board plays at
+    power-up: the power-up scene of its flash (texelpad scene boot), else the
+    default scene (start_at_power_up)."""
     from .board import connect
     vb = VirtualBoard(flash, image="source" if source else None)
     vb.start()
@@ -452,7 +506,7 @@ def open_virtual(flash: str | None = None, source: bool = False, start: bool = T
                        progress=(lambda m: progress("deploy: " + m)) if progress else None)
         if start:
             with connect(vb.port) as b:
-                b.start("virtual", None, realtime=True)
+                start_at_power_up(b, vb.flash, progress)
     except BaseException:
         vb.stop()
         raise
