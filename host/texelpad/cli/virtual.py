@@ -15,7 +15,9 @@ from .common import EXIT_FAIL, EXIT_OK, CliError, _fail, _stderr, positive_float
 
 def add_virtual(p: argparse.ArgumentParser) -> None:
     p.description = ("Start the device image under the MicroPython unix port on a "
-                    "pseudo-terminal, playing the study's split screen in real time, and print "
+                    "pseudo-terminal, playing in real time what a board plays at power-up (the "
+                    "power-up scene of its flash, set by texelpad scene boot, else the study's "
+                    "split screen), and print "
                     "its serial port as the first line, so texelpad --port, mpremote connect "
                     "PORT resume ..., or any serial tool can talk to it; texelpad ports lists "
                     "it. A soft reset (Ctrl-D, mpremote's default) restarts the interpreter "
@@ -30,8 +32,9 @@ def add_virtual(p: argparse.ArgumentParser) -> None:
                         "back every 2 s), rest (mid-strip), lifted (default), or a JavaScript "
                         "function (ch, t_seconds) => 0..4095")
     p.add_argument("--flash", metavar="DIR|FILE",
-                   help="keep the board's filesystem in DIR (with --chip: in the flash image "
-                        "FILE) between runs (default: temporary)")
+                   help="keep the board's filesystem in the folder DIR (with --chip: in the "
+                        "flash image FILE) between runs (default: temporary); its power-up "
+                        "scene plays at start")
     p.add_argument("--source", action="store_true",
                    help="run the device code from this checkout instead of deploying the "
                         "compiled image into the flash")
