@@ -28,3 +28,4 @@ def lab(port, tmp_path):
         c.lab = lab
         yield c
     owner.close()
+    lab.close()

@@ -30,6 +30,11 @@ def _playing(lab) -> dict:
     return lab.lab.owner.scene_source()
 
 
+def _n(lab, sid) -> int:
+    """The number of the question session sid asks now (its answers so far)."""
+    return lab.lab._number(lab.lab.live[sid])
+
+
 def _answer_all(lab, sid, sim, protocol, limit=100):
     """Answer as the simulated participant until the session is done (or
     limit answers); returns the last reply."""
@@ -41,7 +46,7 @@ def _answer_all(lab, sid, sim, protocol, limit=100):
         a = sim.answer(protocol, live.state)
         if protocol == "staircase":                 # the page sends the texture picked
             a = live.question.odd if a else (live.question.odd + 1) % 3
-        r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": a})
+        r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": a, "question": _n(lab, sid)})
         assert r.status_code == 200, r.text
     return r
 
@@ -62,7 +67,8 @@ def test_a_pursuit_session_end_to_end_with_the_simulated_participant(lab, port):
         # feel B, then answer as the participant would
         assert lab.post("/api/sessions/%s/feel" % sid, json={"option": 1}).json() == {"playing": 1}
         comp = live.state.next_comparison()
-        r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": sim.compare(comp.a, comp.b)})
+        r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": sim.compare(comp.a, comp.b),
+                                                               "question": n})
         assert r.status_code == 200, r.text
         q = r.json()["question"]
         n += 1
@@ -151,7 +157,8 @@ def test_the_similarity_matrix_rates_each_exemplar_against_each_pursuit_match(la
         tex = _playing(lab)["regions"][1]["texture"]
         pairs.add((st.current[0], st.current_match))
         assert tex["pitch_db"] == st.config.matches[st.current_match]["pitch_db"]
-        assert lab.post("/api/sessions/%s/answer" % qid, json={"answer": 3}).status_code == 200
+        assert lab.post("/api/sessions/%s/answer" % qid,
+                        json={"answer": 3, "question": _n(lab, qid)}).status_code == 200
     assert len(pairs) == 9 and st.done
 
 
@@ -160,23 +167,25 @@ def test_search_and_staircase_sessions_and_resume_from_the_file(lab, port):
     sid = r.json()["id"]
     sim = SimulatedParticipant(Point(0.4, 0.6))
     _answer_all(lab, sid, sim, "search", limit=4)
-    assert lab.post("/api/sessions/%s/answer" % sid, json={"answer": {"save": 2}}).status_code == 200
+    assert lab.post("/api/sessions/%s/answer" % sid, json={"answer": {"save": 2},
+                                                                 "question": 4}).status_code == 200
     mean = lab.lab.live[sid].state.mean
     # a server restart: the session comes back from its file, the same state
     lab.lab.live.clear()
     r = lab.get("/api/sessions/%s" % sid)
     assert r.status_code == 200 and r.json()["answers_so_far"] == 5
     assert lab.lab.live[sid].state.mean == mean and len(lab.lab.live[sid].state.saved) == 1
-    r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": {"stop": True}})
+    r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": {"stop": True}, "question": 5})
     assert r.json()["question"]["done"] and Session.open(lab.lab.live[sid].session.path).finished
-    assert lab.post("/api/sessions/%s/answer" % sid,
-                    json={"answer": {"choose": 0}}).status_code == 400
+    r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": {"choose": 0}, "question": 6})
+    assert r.status_code == 409 and "finished" in r.json()["error"], r.text
     # staircase: pick the odd one (the simulated participant finds it at long texels)
     r = lab.post("/api/sessions", json={"config": "staircase", "participant": "p02", "seed": 3})
     sid = r.json()["id"]
     for _ in range(3):
         odd = lab.lab.live[sid].question.odd
-        r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": odd})
+        r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": odd,
+                                                             "question": _n(lab, sid)})
         assert r.status_code == 200
     st = lab.lab.live[sid].state
     assert st.length_mm == 23.5 and [t["correct"] for t in st.track] == [True] * 3
@@ -215,11 +224,15 @@ def test_a_refused_answer_changes_nothing(lab, port):
     sid = lab.post("/api/sessions", json={"protocol": "pursuit", "participant": "p03",
                                           "seed": 1}).json()["id"]
     before = _playing(lab)
-    for body in ({"answer": "C"}, {"answer": None}, {"option": 0}, {}, {"answer": ["A"]}):
+    for body in ({"answer": "C", "question": 0}, {"answer": None, "question": 0}, {"option": 0},
+                 {}, {"answer": ["A"], "question": 0}, {"answer": "A"},
+                 {"answer": "A", "question": "0"}, {"answer": "A", "question": True}):
         r = lab.post("/api/sessions/%s/answer" % sid, json=body)
         assert r.status_code == 400, (body, r.text)
     assert lab.post("/api/sessions/%s/feel" % sid, json={"option": 2}).status_code == 400
-    assert lab.post("/api/sessions/%s/feel" % sid, content="x" * 20000).status_code == 400
+    r = lab.post("/api/sessions/%s/feel" % sid, content="x" * 20000,
+                 headers={"content-type": "application/json"})
+    assert r.status_code == 413 and "over 16384 bytes" in r.json()["error"], r.text
     assert len(Session.open(lab.lab.live[sid].session.path).records) == 0
     assert lab.lab.live[sid].state.trial == 0 and not lab.lab.live[sid].state.answers[0]
     assert _playing(lab) == before
@@ -264,10 +277,11 @@ def test_the_server_survives_a_board_that_disappears_and_says_so(tmp_path):
     with TestClient(make_app(lab), base_url=BASE) as c:
         sid = c.post("/api/sessions", json={"config": "pursuit-4sin", "participant": "p09",
                                             "seed": 1}).json()["id"]
-        assert c.post("/api/sessions/%s/answer" % sid, json={"answer": "A"}).status_code == 200
+        assert c.post("/api/sessions/%s/answer" % sid,
+                      json={"answer": "A", "question": 0}).status_code == 200
         vb.stop()                                               # unplugged
         # the answer to what was felt is kept; the reply says the board is gone
-        r = c.post("/api/sessions/%s/answer" % sid, json={"answer": "B"})
+        r = c.post("/api/sessions/%s/answer" % sid, json={"answer": "B", "question": 1})
         assert r.status_code == 200 and "board" in r.json()["board_lost"], r.text
         assert r.json()["playing"] is None
         r = c.get("/api/status")
@@ -289,11 +303,12 @@ def test_the_server_survives_a_board_that_disappears_and_says_so(tmp_path):
             assert r.json()["playing"] == 0
             q = lab.live[sid].question
             assert owner.scene_source() == lab.owner.push(q.options[0])[1]
-            r = c.post("/api/sessions/%s/answer" % sid, json={"answer": "unsure"})
+            r = c.post("/api/sessions/%s/answer" % sid, json={"answer": "unsure", "question": 2})
             assert r.status_code == 200 and "board_lost" not in r.json()
             assert [x["answer"] for x in Session.open(s.path).answers()] == ["A", "B", "unsure"]
         finally:
             owner.close()
+            lab.close()
             vb2.stop()
 
 
@@ -301,8 +316,12 @@ def test_browser_tabs_at_once_are_served_one_at_a_time(tmp_path):
     """Six tabs (threads) feel and answer on their own sessions at once
     against `texelpad lab`: every request is answered, every session file
     holds exactly its tab's answers in order, and the board ends playing the
-    scene of one of the last requests - pushes are never interleaved."""
+    scene of one of the last requests - pushes are never interleaved. An
+    answer to a question whose scene another tab replaced meanwhile is
+    refused (409: the board does not play it now); the tab feels it again
+    and answers, as the page does."""
     import threading
+    import urllib.error
     import urllib.request
 
     def call(url, body=None):
@@ -320,9 +339,15 @@ def test_browser_tabs_at_once_are_served_one_at_a_time(tmp_path):
         def tab(sid):
             try:
                 for i in range(8):
-                    call(url + "api/sessions/%s/feel" % sid, {"option": i % 2})
                     a = ["A", "B", "unsure"][(i + len(sid)) % 3]
-                    call(url + "api/sessions/%s/answer" % sid, {"answer": a})
+                    for _ in range(200):
+                        call(url + "api/sessions/%s/feel" % sid, {"option": i % 2})
+                        try:
+                            call(url + "api/sessions/%s/answer" % sid, {"answer": a, "question": i})
+                            break
+                        except urllib.error.HTTPError as e:
+                            if e.code != 409:
+                                raise
                     sent[sid].append(a)
             except Exception as e:          # noqa: BLE001 - reported below
                 errors.append(repr(e))

@@ -101,7 +101,7 @@ def run_http(steps: int = 200) -> dict:
                 if k and k % per == 0 and k // per < 9:      # the next trial: submit a match
                     call(url + "api/sessions/%s/answer" % sid,
                          {"answer": {"pitch_db": pitch, "irregularity_db": irr,
-                                     "confidence": 3}})
+                                     "confidence": 3}, "question": k // per - 1})
                 refs.append(call(url + "api/sessions/%s/monitor" % sid)["detail"]["reference"])
                 pitch = round(-10 + 30 * abs((k % 40) - 20) / 20, 3)
                 irr = round(-30 + 30 * (k % 97) / 97, 3)

@@ -1,6 +1,12 @@
 """`texelpad lab`: the study protocols in the browser (web/server.py), on a board
 (--port) or the virtual board. Binds 127.0.0.1 only; the URL is the first
-line it prints. Runs until Ctrl-C, SIGTERM or SIGHUP."""
+line it prints. Runs until Ctrl-C, SIGTERM or SIGHUP.
+
+One server per data folder (texelpad.study.session.DataLock): a second one
+is refused, naming the process that holds it. Without --http-port the lab
+serves on the port of the folder's last run (so a participant's open page
+finds it again after a crash), or a free one when that is taken. --board is
+checked on the board at startup."""
 from __future__ import annotations
 
 import argparse
@@ -31,59 +37,127 @@ def add_lab(p: argparse.ArgumentParser) -> None:
                    help="a folder of your own study configs (*.json) beside the shipped ones")
     p.add_argument("--brushes", metavar="DIR",
                    help="the scene editor's brush files (default: DATA/brushes)")
-    p.add_argument("--http-port", type=int, default=0, metavar="N",
-                   help="the web server's port on 127.0.0.1 (default: a free one)")
+    p.add_argument("--http-port", type=int, default=None, metavar="N",
+                   help="the web server's port on 127.0.0.1 (default: the data folder's last "
+                        "one, else a free one; 0: a free one)")
     p.add_argument("--open", action="store_true", help="open the page in the browser")
     p.set_defaults(func=cmd_lab)
 
 
 def cmd_lab(args: argparse.Namespace) -> int:
     if args.action == "export":
-        from ..study.export import export
-        from ..study.session import SessionError
-        try:
-            res = export(args.data, args.out)
-        except (OSError, SessionError) as e:
-            raise CliError("--data", str(e), EXIT_FAIL) from None
-        print("wrote %s (%d answers) and %d figures to %s"
-              % (res["csv"], res["rows"], len(res["figures"]), args.out))
-        return EXIT_OK
+        return _export(args)
+    if args.http_port is not None and not 0 <= args.http_port <= 65535:
+        raise CliError("--http-port", "expected 0 .. 65535, got %d" % args.http_port)
     import uvicorn
 
     from ..link.virtual import open_virtual, stop_on_signals
-    from ..web.owner import BoardOwner
+    from ..study import configs as C
+    from ..study.session import DataLock, SessionError
+    from ..web.owner import BoardLost, BoardOwner
     from ..web.server import Lab, make_app
+    try:
+        C.available(args.configs)           # a broken --configs folder: said before anything
+    except ValueError as e:
+        raise CliError("--configs", str(e)) from None
+    lock = DataLock(args.data)
+    try:
+        lock.acquire()                      # one server per data folder
+    except SessionError as e:
+        raise CliError("--data", str(e), EXIT_FAIL) from None
+    try:
+        sock = _bind(args.http_port, lock.previous.get("http_port"))
+        port = sock.getsockname()[1]
+        lock.update(http_port=port)
+        url = "http://127.0.0.1:%d/" % port
+        with stop_on_signals():
+            vb = None
+            try:
+                if args.port is None:
+                    _stderr("lab: starting the virtual board")
+                    vb = open_virtual(source=True)
+                    owner = BoardOwner(vb.port, args.board or "virtual", realtime=True)
+                else:
+                    owner = BoardOwner(args.port, args.board)
+                if args.board:
+                    try:
+                        owner.check_board_name()
+                    except BoardLost as e:      # (said on the pages too; it may come back)
+                        _stderr("lab: could not check --board %s: %s" % (args.board, e))
+                    except ValueError as e:
+                        owner.close()
+                        raise CliError("--board", str(e)) from None
+                try:
+                    lab = Lab(owner, args.data, args.configs, data_lock=lock)
+                    if args.brushes:
+                        lab.brushes = args.brushes
+                except ValueError as e:
+                    raise CliError("--configs", str(e)) from None
+                app = make_app(lab)
+                print(url, flush=True)
+                if args.open:
+                    webbrowser.open(url)
+                # a request still running at shutdown gets a few seconds, then
+                # the server stops anyway (a client that stalls cannot keep it up)
+                server = uvicorn.Server(uvicorn.Config(app, log_level="warning", lifespan="off",
+                                                       timeout_graceful_shutdown=3))
+                server.run(sockets=[sock])
+                owner.close()
+            except KeyboardInterrupt:
+                pass
+            finally:
+                sock.close()
+                if vb is not None:
+                    vb.stop()
+    finally:
+        lock.release()
+    sys.stdout.flush()
+    return EXIT_OK
+
+
+def _bind(asked: int | None, last: object) -> socket.socket:
+    """A socket on 127.0.0.1 (never another interface): the port asked; else
+    the data folder's last one when it is free (a participant's open page
+    finds the lab there again after a crash); else a free one."""
     sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
     sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-    sock.bind(("127.0.0.1", args.http_port))        # never another interface
-    url = "http://127.0.0.1:%d/" % sock.getsockname()[1]
-    with stop_on_signals():
-        vb = None
-        try:
-            if args.port is None:
-                _stderr("lab: starting the virtual board")
-                vb = open_virtual(source=True)
-                owner = BoardOwner(vb.port, args.board or "virtual", realtime=True)
-            else:
-                owner = BoardOwner(args.port, args.board)
+    try:
+        if asked is not None:
             try:
-                lab = Lab(owner, args.data, args.configs)
-                if args.brushes:
-                    lab.brushes = args.brushes
-            except ValueError as e:
-                raise CliError("--configs", str(e)) from None
-            app = make_app(lab)
-            print(url, flush=True)
-            if args.open:
-                webbrowser.open(url)
-            server = uvicorn.Server(uvicorn.Config(app, log_level="warning", lifespan="off"))
-            server.run(sockets=[sock])
-            owner.close()
-        except KeyboardInterrupt:
-            pass
-        finally:
-            sock.close()
-            if vb is not None:
-                vb.stop()
-    sys.stdout.flush()
+                sock.bind(("127.0.0.1", asked))
+            except OSError as e:
+                raise CliError("--http-port", "cannot serve on 127.0.0.1:%d: %s"
+                               % (asked, e.strerror or e), EXIT_FAIL) from None
+            return sock
+        if isinstance(last, int) and not isinstance(last, bool) and 0 < last <= 65535:
+            try:
+                sock.bind(("127.0.0.1", last))
+                return sock
+            except OSError as e:
+                _stderr("lab: the last port of this data folder, %d, is taken (%s): serving "
+                        "on another one" % (last, e.strerror or e))
+        sock.bind(("127.0.0.1", 0))
+        return sock
+    except BaseException:
+        sock.close()
+        raise
+
+
+def _export(args: argparse.Namespace) -> int:
+    """Every session that can be exported is; a broken one is named with the
+    reason on stderr (exit 1, the rest written)."""
+    from ..study.export import export
+    from ..study.session import SessionError
+    try:
+        res = export(args.data, args.out)
+    except (OSError, SessionError) as e:
+        raise CliError("--data", str(e), EXIT_FAIL) from None
+    print("wrote %s (%d answers) and %d figures to %s"
+          % (res["csv"], res["rows"], len(res["figures"]), args.out))
+    for _, why in res["broken"]:
+        _stderr("lab export: left out %s" % why)
+    if res["broken"]:
+        _stderr("lab export: %d of %d sessions left out (the rest are exported)"
+                % (len(res["broken"]), res["sessions"]))
+        return EXIT_FAIL
     return EXIT_OK

@@ -10,7 +10,9 @@ so a config edited later never changes what a session was.
 
 Every file is checked when listed: the protocol must start from it (the
 protocol's own Config checks), so a broken file is named with the reason
-instead of failing a participant's session later. Pure logic and files.
+instead of failing a participant's session later - a file that is not JSON,
+not UTF-8, over FILE_MAX or nested too deep for the parser too (never a
+traceback). Pure logic and files.
 """
 from __future__ import annotations
 
@@ -23,6 +25,7 @@ from .session import SessionError, check_name
 
 SHIPPED = Path(__file__).with_name("configs")
 KEYS = {"protocol", "title", "note", "reference", "seed", "config"}
+FILE_MAX = 1 << 20          # bytes: a config is a few hundred; a larger file is a mistake
 
 
 def _check(name: str, c: Any) -> dict[str, Any]:
@@ -65,10 +68,15 @@ def available(extra: str | Path | None = None) -> dict[str, dict[str, Any]]:
             name = path.stem
             try:
                 check_name("config", name)
-                out[name] = _check(name, json.loads(path.read_text()))
+                if path.stat().st_size > FILE_MAX:
+                    raise SessionError("config %s: over %d bytes" % (name, FILE_MAX))
+                out[name] = _check(name, json.loads(path.read_text(encoding="utf-8")))
                 out[name]["file"] = str(path)
             except (OSError, ValueError) as e:
                 out[name] = {"error": str(e), "file": str(path)}
+            except RecursionError:      # (json nests by recursion: a 50,000-deep file)
+                out[name] = {"error": "config %s: nests too deep to be a config" % name,
+                             "file": str(path)}
     return out
 
 

@@ -2,6 +2,12 @@
 summary figure per session (pursuit: the centre's path on the pitch -
 irregularity plane; staircase: the track with its reversals and threshold;
 search: the mean's path and step size). Reads the files only (never a board).
+
+A session that cannot be read or replayed (a damaged line, an answer its
+protocol refuses) is reported by name with the reason and left out; the
+others are exported. A data folder that does not exist, or holds no session,
+is an error (nothing is written): an empty CSV would look like a study
+without answers.
 """
 from __future__ import annotations
 
@@ -13,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from . import protocols
-from .session import Session, sessions
+from .session import Session, SessionError, sessions
 from .space import irregularity_db, pitch_db
 
 COLUMNS = ("participant", "protocol", "session", "config_file", "seed", "n", "time",
@@ -77,17 +83,55 @@ def rows(s: Session) -> list[dict[str, Any]]:
     return out
 
 
-def write_csv(data: str | os.PathLike, out: str | os.PathLike) -> tuple[Path, int]:
-    """Every session under data as one CSV (written beside, then renamed)."""
+def session_files(data: str | os.PathLike) -> list[Path]:
+    """The session files under data; SessionError when data is no folder or
+    holds none."""
+    root = Path(data)
+    if not root.is_dir():
+        raise SessionError("%s: %s" % (root, "not a folder" if root.exists() else
+                                       "no such folder"))
+    found = sessions(root)
+    if not found:
+        raise SessionError("%s: no session files (PARTICIPANT/PROTOCOL-N.jsonl) in it" % root)
+    return found
+
+
+def _load(path: Path) -> tuple[Session, list[dict[str, Any]]]:
+    """A session and its rows, or SessionError saying why it cannot be exported."""
+    try:
+        s = Session.open(path)
+        return s, rows(s)
+    except SessionError:
+        raise
+    except OSError as e:
+        raise SessionError("%s: %s" % (path, e.strerror or e)) from None
+    except (ValueError, KeyError, TypeError, IndexError, AttributeError) as e:
+        raise SessionError("%s: does not replay (%s: %s)"
+                           % (path, type(e).__name__, str(e)[:200])) from None
+
+
+def write_csv(data: str | os.PathLike, out: str | os.PathLike,
+              broken: list[tuple[Path, str]] | None = None) -> tuple[Path, int]:
+    """Every session under data as one CSV (written beside, then renamed).
+    A session that cannot be exported goes into `broken` as (path, reason)
+    (without a list: SessionError)."""
     out = Path(out)
+    files = session_files(data)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(out.name + ".tmp")
     n = 0
     with open(tmp, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=COLUMNS)
         w.writeheader()
-        for path in sessions(data):
-            for r in rows(Session.open(path)):
+        for path in files:
+            try:
+                _, rs = _load(path)
+            except SessionError as e:
+                if broken is None:
+                    raise
+                broken.append((path, str(e)))
+                continue
+            for r in rs:
                 w.writerow(r)
                 n += 1
     os.replace(tmp, out)
@@ -211,12 +255,24 @@ def _references_on(ax: Any, header: dict[str, Any]) -> None:
 
 
 def export(data: str | os.PathLike, out_dir: str | os.PathLike) -> dict[str, Any]:
-    """sessions.csv and one PNG per session into out_dir."""
+    """sessions.csv and one PNG per session into out_dir; "broken": the
+    sessions left out, [(path, reason)]."""
+    files = session_files(data)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    csv_path, n = write_csv(data, out_dir / "sessions.csv")
+    broken: list[tuple[Path, str]] = []
+    csv_path, n = write_csv(data, out_dir / "sessions.csv", broken)
     figs = []
-    for path in sessions(data):
-        s = Session.open(path)
-        figs.append(figure(s, out_dir / ("%s-%s.png" % (s.header["participant"], path.stem))))
-    return {"csv": csv_path, "rows": n, "figures": figs}
+    left_out = {p for p, _ in broken}
+    for path in files:
+        if path in left_out:
+            continue
+        try:
+            s = Session.open(path)
+            figs.append(figure(s, out_dir / ("%s-%s.png" % (s.header["participant"],
+                                                            path.stem))))
+        except (OSError, ValueError, KeyError, TypeError, IndexError, AttributeError) as e:
+            broken.append((path, "%s: no figure (%s: %s)" % (path, type(e).__name__,
+                                                              str(e)[:200])))
+    return {"csv": csv_path, "rows": n, "figures": figs, "broken": broken,
+            "sessions": len(files)}

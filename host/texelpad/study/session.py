@@ -10,6 +10,16 @@ server killed, board unplugged, power cut) loses at most the answer being
 written. Reading back drops a torn last line - one that a crash cut off -
 and says so; damage anywhere else is an error, never silently skipped.
 
+A file whose last record lacks its newline (a copy cut short, an editor
+that strips it) keeps that record - it is whole - and the next record is
+written after a newline, never glued onto it.
+
+One server per data folder: DataLock, an exclusive fcntl.flock on
+DATA/.texelpad-lab.lock holding the holder's pid (and its web port, which
+the next run on the folder uses again). The kernel lets go of it when the
+process ends, however it ends; a second server on the folder is refused and
+told which process holds it.
+
 Participant ids and protocol names are plain words ([A-Za-z0-9_-], 1..40):
 nothing a browser sends can name a path outside the data folder. Pure logic
 and files: no link, no web framework.
@@ -120,19 +130,23 @@ class Session:
         rec["time"] = _now()
         if self.torn:
             self._cut_torn_tail()
-        fd = os.open(self.path, os.O_WRONLY | os.O_APPEND)
+        fd = os.open(self.path, os.O_RDWR | os.O_APPEND)
         try:
-            self._write(fd, rec)
+            size = os.fstat(fd).st_size
+            # a last line without its newline (whole: open() kept it): end
+            # it first, in the same write as the record
+            glue = size > 0 and os.pread(fd, 1, size - 1) != b"\n"
+            self._write(fd, rec, b"\n" if glue else b"")
         finally:
             os.close(fd)
         self.records.append(rec)
         return rec
 
     @staticmethod
-    def _write(fd: int, rec: dict[str, Any]) -> None:
+    def _write(fd: int, rec: dict[str, Any], before: bytes = b"") -> None:
         try:
-            line = (json.dumps(rec, ensure_ascii=False, allow_nan=False,
-                               separators=(",", ":")) + "\n").encode("utf-8")
+            line = before + (json.dumps(rec, ensure_ascii=False, allow_nan=False,
+                                        separators=(",", ":")) + "\n").encode("utf-8")
         except (TypeError, ValueError) as e:
             raise SessionError("record is not JSON data: %s" % e) from None
         view = memoryview(line)
@@ -182,3 +196,77 @@ def sessions(data: str | os.PathLike, participant: str | None = None) -> list[Pa
         check_name("participant", participant)
         return sorted((root / participant).glob("*.jsonl"))
     return sorted(root.glob("*/*.jsonl"))
+
+
+class DataLocked(SessionError):
+    """The data folder is another server's."""
+
+
+class DataLock:
+    """One server per data folder: an exclusive, non-blocking fcntl.flock on
+    DATA/.texelpad-lab.lock, the holder's {"pid", "http_port"?, "started"}
+    written in it. The kernel drops the lock when the holder's process ends
+    (a crash, SIGKILL); the file stays, so `previous` tells the next run the
+    last holder's port. Where fcntl is missing (Windows) nothing is locked."""
+
+    NAME = ".texelpad-lab.lock"
+
+    def __init__(self, data: str | os.PathLike) -> None:
+        self.path = Path(data) / self.NAME
+        self.fd: int | None = None
+        self.previous: dict[str, Any] = {}      # what the last holder wrote
+
+    def acquire(self) -> "DataLock":
+        try:
+            import fcntl
+        except ImportError:                     # (no flock: not locked)
+            return self
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as e:
+            raise SessionError("data folder %s: %s" % (self.path.parent, e.strerror or e)) from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            holder = _read_lock(fd)
+            os.close(fd)
+            pid = holder.get("pid")
+            where = " on http://127.0.0.1:%d/" % holder["http_port"] \
+                if isinstance(holder.get("http_port"), int) else ""
+            raise DataLocked("data folder %s is in use by another texelpad lab (%s%s): stop "
+                             "it, or give another --data"
+                             % (self.path.parent, "process %d" % pid if isinstance(pid, int)
+                                else "a process starting", where)) from None
+        self.previous = _read_lock(fd)
+        self.fd = fd
+        self.update()
+        return self
+
+    def update(self, **info: Any) -> None:
+        """Write the holder's pid (and info: its http_port) into the lock file."""
+        if self.fd is None:
+            return
+        rec = {"pid": os.getpid(), "started": _now()}
+        cur = _read_lock(self.fd)
+        if cur.get("pid") == os.getpid():
+            rec.update(cur)
+        rec.update(info)
+        raw = (json.dumps(rec) + "\n").encode()
+        os.ftruncate(self.fd, 0)
+        os.pwrite(self.fd, raw, 0)
+        os.fsync(self.fd)
+
+    def release(self) -> None:
+        if self.fd is not None:
+            os.close(self.fd)               # (closing drops the flock)
+            self.fd = None
+
+
+def _read_lock(fd: int) -> dict[str, Any]:
+    try:
+        raw = os.pread(fd, 4096, 0)
+        v = json.loads(raw.decode("utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return v if isinstance(v, dict) else {}

@@ -59,7 +59,9 @@ pushes nothing and writes no file; the board's own validation
 503 when the board is gone (web/api.handle). "base" (the scene_id the page
 edited) refuses a push when another page changed the board's scene since:
 the editor sends the whole scene, and would otherwise silently replace a
-study's scene playing for a participant.
+study's scene playing for a participant. While a study session's question
+plays, a push is refused (409, web/server.py Lab.claim_board) whatever its
+base.
 """
 from __future__ import annotations
 
@@ -564,7 +566,7 @@ def routes(lab: Any) -> list[Route]:
         if request.query_params:
             raise Refused("GET %s takes no parameters" % request.url.path)
 
-    async def palette(request: Request) -> dict[str, Any]:
+    def palette(request: Request) -> dict[str, Any]:
         no_query(request)
         display = lab.owner.display()
         texel_spec = {}
@@ -584,7 +586,7 @@ def routes(lab: Any) -> list[Route]:
                                                / 1000.0, 6)},
                 "max_regions": _scene.MAX_REGIONS}
 
-    async def get_scene(request: Request) -> dict[str, Any]:
+    def get_scene(request: Request) -> dict[str, Any]:
         no_query(request)
         st, canonical, display = playing()
         idle = _strip.idle_of(st)
@@ -593,13 +595,13 @@ def routes(lab: Any) -> list[Route]:
                 "name": canonical.get("name") if canonical else None,
                 "scene_id": strip["scene_id"], "strip": strip}
 
-    async def get_strip(request: Request) -> dict[str, Any]:
+    def get_strip(request: Request) -> dict[str, Any]:
         no_query(request)
         st = running()
         return strip_answer(renders, memory, st, lab.owner.scene_source())
 
-    async def push(request: Request) -> dict[str, Any]:
-        body = await body_of(request)
+    def push(request: Request) -> dict[str, Any]:
+        body = body_of(request)
         keys(body, SCENE_KEYS)
         regs = body.get("regions")
         if not isinstance(regs, list) or len(regs) > PAINT_MAX:
@@ -644,6 +646,9 @@ def routes(lab: Any) -> list[Route]:
             raise Refused("regions: painting these gives %d regions; a board plays at most %d "
                           "(remove some, or paint over several at once)"
                           % (len(pieces), _scene.MAX_REGIONS))
+        claim = getattr(lab, "claim_board", None)   # a study's scene is not replaced: 409
+        if claim is not None:
+            claim("the editor")
         st0 = lab.owner.status() if base is not None or not pieces else None
         if base is not None:
             now = scene_id(lab.owner.scene_source(), display, _strip.idle_of(st0))
@@ -672,8 +677,8 @@ def routes(lab: Any) -> list[Route]:
                 "name": canonical.get("name"), "scene_id": strip["scene_id"],
                 "scene": canonical, "status": st, "strip": strip}
 
-    async def save_brush(request: Request) -> dict[str, Any]:
-        body = await body_of(request)
+    def save_brush(request: Request) -> dict[str, Any]:
+        body = body_of(request)
         keys(body, SAVE_KEYS)
         name = body.get("name")
         if isinstance(name, str) and "." not in name:

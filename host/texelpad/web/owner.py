@@ -8,7 +8,7 @@ from __future__ import annotations
 import threading
 from typing import Any, Callable
 
-from ..link.board import Board, connect
+from ..link.board import Board, board_display, connect
 from ..link.protocol import plain
 from ..link.transport import LinkError
 
@@ -32,6 +32,9 @@ class BoardOwner:
         self._connect = connector
         self._board: Board | None = None
         self._lock = threading.Lock()
+        # Boards connected so far: a scene pushed on an earlier connection
+        # may not play any more (the board was lost, replugged, restarted)
+        self.connections = 0
         # the display of the board once texelpad was seen running there: the
         # owner holds the port, so nothing else can stop it or change it; a
         # lost board clears it
@@ -46,6 +49,7 @@ class BoardOwner:
                 self.lost = str(e)
                 raise BoardLost("the board on %s does not answer: %s" % (self.port, e)) from None
             self.lost = None
+            self.connections += 1
         return self._board
 
     def _call(self, f: Callable[[Board], Any]) -> Any:
@@ -93,6 +97,27 @@ class BoardOwner:
             st = b.start(self.board_name, None, **self.start_opts)
         self._display = st["display"]
         return self._display
+
+    def check_board_name(self) -> None:
+        """The board file board_name is one the board has and can run
+        (texel.app.board_display; nothing that plays is touched): ValueError
+        with the board's words and the names it can run when not, BoardLost
+        when the board does not answer. `texelpad lab --board` asks it at
+        startup, not at the first session."""
+        if not self.board_name:
+            return
+
+        def go(b: Board) -> None:
+            try:
+                board_display(b, self.board_name)
+            except ValueError as e:
+                try:
+                    names = b.fitting()
+                except (LinkError, ValueError):
+                    names = []
+                raise ValueError("%s%s" % (e, "; this board can run: %s" % ", ".join(names)
+                                           if names else "")) from None
+        self._call(go)
 
     def display(self) -> dict[str, Any]:
         """The display of the board (started first when it is not running;

@@ -15,14 +15,34 @@ may see - option labels and answers, never a parameter value.
                                                  seed?, reference?, matches_from?}
     GET  /api/sessions/P/NAME                   the participant's question (resumed from its file)
     GET  /api/sessions/P/NAME/monitor           the experimenter's view: parameters, state
-    POST /api/sessions/P/NAME/feel              {option: k} | free: {pitch_db, irregularity_db}
-    POST /api/sessions/P/NAME/answer            {answer: ...}
+    POST /api/sessions/P/NAME/feel              {option: k, question: n?} | free: {pitch_db,
+                                                 irregularity_db, question: n?}
+    POST /api/sessions/P/NAME/answer            {answer: ..., question: n}
     POST /api/sessions/P/NAME/replay            {record: n}: play what answer n heard
+    POST /api/board/release                     {}: the session playing lets the board go
 
 Every request is validated (a JSON object of known keys, at most 16 KB; ids
 as texelpad.study.session.check_name; the board's own scene validation is the
 last word) and a refused one changes nothing: 400 with the reason, 503 when
-the board is gone. An answer is checked, then written to the session file
+the board is gone.
+
+One click, one answer (issue 24, item 1): every question a session asks has
+a number, question.number - the answers given before it - and an answer
+names the question it answers ({"question": n}). One for a question already
+answered (a double-click, a page that sent twice) or not yet asked is
+refused with 409 and changes nothing; so is an answer to a question whose
+scene the board no longer plays (another page played something since: the
+participant feels it again first). The file records what truly played.
+
+The board belongs to the study (item 4): while a session's question plays
+and the session is not finished, the classroom's and the editor's pushes are
+refused (409, naming the session); the session lets go when it finishes or
+when the experimenter releases it (POST /api/board/release), and takes the
+board again at its next question. Another session starting or playing takes
+the board; the one it took it from plays its question again before it takes
+an answer.
+
+An answer is checked, then written to the session file
 (fsynced), and only then moves the protocol's state: a crash at any point
 resumes from the file. A board that is gone after an answer was written does
 not undo it: the reply says the answer is kept and the board is lost, and the
@@ -30,6 +50,7 @@ next question plays when the board answers again.
 """
 from __future__ import annotations
 
+import json
 import random
 import threading
 from dataclasses import dataclass
@@ -50,10 +71,10 @@ from ..study import protocols
 from ..study import questions as Q
 from ..study import scenes as S
 from ..study.quant import EXEMPLARS
-from ..study.session import Session, SessionError, check_name, sessions
+from ..study.session import DataLock, Session, SessionError, check_name, sessions
 from . import strip
 from . import editor
-from .api import Refused, body_of, handle, keys
+from .api import Conflict, Refused, body_of, handle, keys
 from .owner import BoardLost, BoardOwner
 
 CREATE_KEYS = {"config", "protocol", "participant", "seed", "reference", "matches_from"}
@@ -61,14 +82,20 @@ STATIC = Path(__file__).with_name("static")   # the pages, their scripts and sty
 LOCAL_HOSTS = ["127.0.0.1", "localhost"]
 
 
+def _plain(v: Any) -> bool:
+    return v is None or isinstance(v, (bool, int, float, str))
+
+
 @dataclass
 class Live:
     """A session in memory: its file, the protocol's state, the current
     question (built once per state: None after an answer) and what plays."""
+    key: str
     session: Session
     state: Any
     question: Q.Question | None = None
-    playing: int | None = None
+    playing: int | None = None              # the option playing (None: nothing of this session)
+    connection: int = 0                     # the owner's connection it played on
     playing_scene: dict[str, Any] | None = None
     moves: int = 0                          # free exploration: slider changes this trial
     sliders: tuple[float, float] | None = None
@@ -80,14 +107,63 @@ class Live:
 
 class Lab:
     def __init__(self, owner: BoardOwner, data: str | Path,
-                 configs: str | Path | None = None) -> None:
+                 configs: str | Path | None = None, data_lock: DataLock | None = None) -> None:
+        """data_lock: the data folder's lock, already held (texelpad lab takes
+        it before it starts the board); without one the Lab takes it here,
+        and a folder another lab holds is refused (SessionError, naming the
+        process). Lab.close() lets it go."""
         self.owner = owner
         self.data = Path(data)
-        self.data.mkdir(parents=True, exist_ok=True)
         self.configs = configs
         C.available(configs)                # a missing --configs folder is said at once
+        if data_lock is None:
+            data_lock = DataLock(self.data)
+            data_lock.acquire()
+        self.data_lock = data_lock
         self.live: dict[str, Live] = {}
         self.lock = threading.Lock()        # one request at a time (web/api.handle)
+        self.board_session: str | None = None   # the session whose question plays
+
+    def close(self) -> None:
+        self.data_lock.release()
+
+    # --- whose scene plays -------------------------------------------------------------
+    def _took_board(self, lv: Live) -> None:
+        """lv's scene plays now: the session before it (another one) lost it."""
+        if self.board_session not in (None, lv.key):
+            prev = self.live.get(self.board_session)
+            if prev is not None:
+                prev.playing = None
+        self.board_session = lv.key
+        lv.connection = self.owner.connections
+
+    def _owning(self) -> Live | None:
+        """The unfinished session whose question the board plays, if any."""
+        lv = self.live.get(self.board_session) if self.board_session else None
+        if lv is None or lv.playing is None or lv.session.finished or \
+                lv.connection != self.owner.connections:
+            self.board_session = None
+            return None
+        return lv
+
+    def claim_board(self, what: str) -> None:
+        """Refuse a push that is no session's (the classroom, the editor, a
+        replay of another session) while a study session's question plays."""
+        lv = self._owning()
+        if lv is not None:
+            raise Conflict("%s: the board plays session %s, a study running (its participant "
+                           "may be feeling it): wait until it is finished, or release the "
+                           "board on the experimenter's page" % (what, lv.key))
+
+    def release(self) -> dict[str, Any]:
+        """The experimenter lets the board go: the session playing plays its
+        question again when it is next asked (or felt)."""
+        lv = self._owning()
+        self.board_session = None
+        if lv is None:
+            return {"released": None}
+        lv.playing = None
+        return {"released": lv.key}
 
     # --- questions and playing ---------------------------------------------------------
     def _question(self, lv: Live) -> Q.Question:
@@ -98,6 +174,7 @@ class Lab:
     def _play(self, lv: Live, k: int) -> None:
         _, canonical = self.owner.push(lv.question.options[k])
         lv.playing, lv.playing_scene = k, canonical
+        self._took_board(lv)
 
     def _begin(self, lv: Live) -> None:
         """Play what the current question starts with: option 0; the free
@@ -116,6 +193,7 @@ class Lab:
                                        pitch, irregularity, lv.moves)
         _, canonical = self.owner.push(scene)
         lv.playing, lv.playing_scene, lv.sliders = 0, canonical, (p, s)
+        self._took_board(lv)
         if record:          # the path the participant took, for analysis (not an answer)
             lv.session.append({"kind": "move", "trial": lv.state.trial, "move": lv.moves,
                                "pitch_db": p, "irregularity_db": s, "scene": canonical})
@@ -147,6 +225,9 @@ class Lab:
                 raise Refused("config: expected a config's name or an object")
             config = dict(config)
             reference, seed = body.get("reference"), body.get("seed")
+        if "seed" in body and body["seed"] is None:
+            raise Refused("seed: expected an int in [0, 2^31), got null (leave it out for a "
+                          "random seed)")
         if seed is None:
             seed = random.SystemRandom().randrange(1 << 31)
         if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 1 << 31:
@@ -175,8 +256,8 @@ class Lab:
                                {"pitch_db": 0.0, "irregularity_db": 0.0, "v": 2}, display),
                        display)
         sess = Session.create(self.data, proto, participant, config, seed)
-        lv = Live(sess, state)
         key = "%s/%s" % (participant, sess.path.stem)
+        lv = Live(key, sess, state)
         self.live[key] = lv
         self._begin(lv)
         return self._view(key, lv)
@@ -226,7 +307,7 @@ class Lab:
             if not path.is_file():
                 raise Refused("no session %s" % key)
             sess = Session.open(path)
-            lv = Live(sess, protocols.replay(sess))
+            lv = Live(key, sess, protocols.replay(sess))
             if lv.protocol == "free":                   # the sliders where they were
                 moves = [r for r in sess.records if r.get("kind") == "move"
                          and r.get("trial") == lv.state.trial]
@@ -236,11 +317,34 @@ class Lab:
             self.live[key] = lv
         return lv
 
+    @staticmethod
+    def _number(lv: Live) -> int:
+        """The number of the question asked now: the answers given before it."""
+        return sum(1 for _ in lv.session.answers())
+
     def _view(self, key: str, lv: Live) -> dict[str, Any]:
         q = self._question(lv)
-        return {"id": key, "protocol": lv.protocol, "question": q.public,
+        n = self._number(lv)
+        return {"id": key, "protocol": lv.protocol, "question": dict(q.public, number=n),
                 "playing": lv.playing, "sliders": lv.sliders if lv.protocol == "free" else None,
-                "answers_so_far": sum(1 for _ in lv.session.answers())}
+                "answers_so_far": n}
+
+    def _asked(self, lv: Live, n: Any, what: str) -> None:
+        """n names the question asked now, or Conflict (409): one answered
+        already (a double-click) or one not asked yet."""
+        if isinstance(n, bool) or not isinstance(n, int):
+            raise Refused("question: expected the number of the question %s (question.number "
+                          "of GET /api/sessions/P/NAME), got %s"
+                          % (what, json.dumps(n)[:40] if _plain(n) else type(n).__name__))
+        now = self._number(lv)
+        if self._question(lv).done:
+            raise Conflict("question %d: the session is finished (%d answers)" % (n, now))
+        if n < now:
+            raise Conflict("question %d is answered already (the session is at question %d): "
+                           "nothing changed" % (n, now))
+        if n > now:
+            raise Conflict("question %d is not asked yet (the session is at question %d): "
+                           "nothing changed" % (n, now))
 
     def question(self, participant: str, name: str) -> dict[str, Any]:
         key = self._key(participant, name)
@@ -266,10 +370,12 @@ class Lab:
         q = self._question(lv)
         if q.done:
             raise Refused("the session is finished")
+        if isinstance(body, dict) and "question" in body:   # (a page's late click: 409)
+            self._asked(lv, body["question"], "felt")
         if lv.protocol == "free":
-            keys(body, {"pitch_db", "irregularity_db"})
+            keys(body, {"pitch_db", "irregularity_db", "question"})
             return self._slide(lv, body.get("pitch_db"), body.get("irregularity_db"))
-        keys(body, {"option"})
+        keys(body, {"option", "question"})
         k = body.get("option")
         if isinstance(k, bool) or not isinstance(k, int) or not 0 <= k < len(q.options):
             raise Refused("option: expected 0 .. %d, got %r" % (len(q.options) - 1, k))
@@ -277,11 +383,21 @@ class Lab:
         return {"playing": k}
 
     def answer(self, participant: str, name: str, body: dict[str, Any]) -> dict[str, Any]:
-        keys(body, {"answer"})
+        keys(body, {"answer", "question"})
         key = self._key(participant, name)
         lv = self.get(participant, name)
+        if "question" not in body:
+            raise Refused("question: required - the number of the question answered "
+                          "(question.number of GET /api/sessions/P/NAME)")
+        self._asked(lv, body["question"], "answered")
         q = self._question(lv)
         taken = Q.normalise(lv.protocol, q, lv.state, body.get("answer"))
+        if lv.playing is None or self.board_session != key or \
+                lv.connection != self.owner.connections:
+            raise Conflict("the board does not play this question now (%s): feel it again, "
+                           "then answer - nothing changed"
+                           % ("another page played on it since" if lv.playing is not None
+                              else "it played something else since"))
         rec = {"question": q.public, "answer": taken, "scene": lv.playing_scene,
                "playing": lv.playing, "state": q.detail}
         if lv.protocol == "staircase":
@@ -293,6 +409,8 @@ class Lab:
         lost = None
         if nq.done:
             lv.session.append({"kind": "end", "result": nq.detail})
+            if self.board_session == key:       # finished: the board is free
+                self.board_session = None
         else:
             try:
                 self._begin(lv)
@@ -315,8 +433,13 @@ class Lab:
         scene = recs[n].get("scene")
         if not scene:
             raise Refused("answer %d has no scene recorded" % n)
+        owning = self._owning()
+        if owning is not None and owning is not lv:
+            self.claim_board("replay")
         self.owner.push(scene)
         lv.playing = None
+        if self.board_session == lv.key:
+            self.board_session = None
         return {"replayed": n}
 
     def list_sessions(self) -> list[dict[str, Any]]:
@@ -340,28 +463,34 @@ def make_app(lab: Lab, allowed_hosts: list[str] | None = None) -> Starlette:
             return FileResponse(STATIC / name, media_type="text/html")
         return endpoint
 
+    # plain functions: web.api.handle reads the body first, then runs them
+    # in a worker thread under the lab's lock
     def session_route(method):
-        async def endpoint(request: Request):
+        def endpoint(request: Request):
             p = request.path_params
             if method in (Lab.question, Lab.monitor):
                 return method(lab, p["participant"], p["name"])
-            return method(lab, p["participant"], p["name"], await body_of(request))
+            return method(lab, p["participant"], p["name"], body_of(request))
         return endpoint
 
-    async def status(request: Request):
+    def status(request: Request):
         return lab.owner.status()
 
-    async def scene(request: Request):
+    def scene(request: Request):
         return {"scene": lab.owner.scene_source()}
 
-    async def configs(request: Request):
+    def configs(request: Request):
         return {"configs": C.available(lab.configs), "protocols": protocols.TITLES}
 
-    async def list_sessions(request: Request):
+    def list_sessions(request: Request):
         return {"sessions": lab.list_sessions()}
 
-    async def create(request: Request):
-        return lab.create(await body_of(request))
+    def create(request: Request):
+        return lab.create(body_of(request))
+
+    def release(request: Request):
+        keys(body_of(request), set())
+        return lab.release()
 
     h = lambda fn: handle(lab.lock, fn)             # noqa: E731
     s = "/api/sessions/{participant}/{name}"
@@ -376,7 +505,8 @@ def make_app(lab: Lab, allowed_hosts: list[str] | None = None) -> Starlette:
               Route(s + "/monitor", h(session_route(Lab.monitor))),
               Route(s + "/feel", h(session_route(Lab.feel)), methods=["POST"]),
               Route(s + "/answer", h(session_route(Lab.answer)), methods=["POST"]),
-              Route(s + "/replay", h(session_route(Lab.replay)), methods=["POST"])]
+              Route(s + "/replay", h(session_route(Lab.replay)), methods=["POST"]),
+              Route("/api/board/release", h(release), methods=["POST"])]
     routes += strip.routes(lab)
     routes += editor.routes(lab)
     routes.append(Mount("/static", StaticFiles(directory=STATIC), name="static"))

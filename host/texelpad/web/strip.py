@@ -7,7 +7,9 @@ the virtual board's finger, for classrooms and anyone without a glass plate.
     POST /api/finger         {"position_mm": number or null}: the virtual
                              board's finger there now (null: lifted)
     POST /api/strip/texel    {"pitch_db", "irregularity_db", "seed"?}: play
-                             one full-screen texel texture (format 2)
+                             one full-screen texel texture (format 2); refused
+                             (409) while a study session's question plays
+                             (web/server.py Lab.claim_board)
     GET  /classroom          the teachers' page (static/classroom.html)
 
 The amplitude is the canonical scene the board plays (Board.scene_source)
@@ -227,21 +229,24 @@ def routes(lab: Any) -> list:
     cache = StripCache()
     lab.strip_cache = cache             # (the tests look at it)
 
-    async def strip(request: Request) -> dict[str, Any]:
+    def strip(request: Request) -> dict[str, Any]:
         if request.query_params:
             raise Refused("GET /api/strip takes no parameters")
         st = _status_running(lab.owner)
         return strip_answer(cache, st, lab.owner.scene_source())
 
-    async def finger(request: Request) -> dict[str, Any]:
-        body = await body_of(request)
+    def finger(request: Request) -> dict[str, Any]:
+        body = body_of(request)
         display = lab.owner.display()
         x = check_position(body, display)
         t_us = lab.owner.finger(x)
         return {"position_mm": x, "t_us": t_us}
 
-    async def push_texel(request: Request) -> dict[str, Any]:
-        params = check_texel(await body_of(request))
+    def push_texel(request: Request) -> dict[str, Any]:
+        params = check_texel(body_of(request))
+        claim = getattr(lab, "claim_board", None)   # (a study's scene is not replaced: 409)
+        if claim is not None:
+            claim("the classroom")
         display = lab.owner.display()
         st, canonical = lab.owner.push(full_screen_texel(params, display))
         return strip_answer(cache, st, canonical)

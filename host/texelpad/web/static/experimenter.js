@@ -1,6 +1,7 @@
 // The experimenter's screen: pick a study config, a participant and start (or
 // resume) a session; follow it with its parameters shown (the participant's
-// screen never shows them); replay what an answer heard.
+// screen never shows them); replay what an answer heard. The monitor polls
+// quietly: an error shown (a refused start) stays until the next action.
 "use strict";
 const NINE = ["2sin", "3sin", "4sin", "white", "pink", "blue", "square", "triangle", "sawtooth"];
 let configs = {}, current = null, strip = null, poll = null;
@@ -65,7 +66,7 @@ async function follow(id) {
 async function refresh() {
   if (!current) return;
   let m;
-  try { m = await call("GET", "/api/sessions/" + current + "/monitor"); }
+  try { m = await call("GET", "/api/sessions/" + current + "/monitor", undefined, {quiet: true}); }
   catch (e) { return; }
   $("monitor-title").textContent = current + ": " + m.title;
   const box = $("monitor");
@@ -92,15 +93,29 @@ $("config").onchange = configChanged;
 $("start").onclick = async () => {
   const body = {config: $("config").value, participant: $("participant").value.trim()};
   const seed = $("seed").value.trim();
-  if (seed) body.seed = Number(seed);
+  if (seed) {                   // a whole number, or nothing (random): never a silent guess
+    if (!/^[0-9]{1,10}$/.test(seed) || Number(seed) >= 2 ** 31) {
+      showError("not started: seed " + JSON.stringify(seed) + " is not a whole number in " +
+                "0 .. 2147483647 (leave it empty for a random seed)");
+      return;
+    }
+    body.seed = Number(seed);
+  }
   const c = configs[$("config").value];
   if (!$("reference-box").hidden && (!c.reference || c.reference.name !== $("reference").value))
     body.reference = {kind: "reference", name: $("reference").value};
   const picked = [...$("matches").selectedOptions].map((o) => o.value);
   if (!$("matches-box").hidden && picked.length) body.matches_from = picked;
-  const res = await call("POST", "/api/sessions", body);
+  let res;
+  try { res = await call("POST", "/api/sessions", body); }
+  catch (e) { showError("not started: " + e.message); return; }
   await loadSessions();
   await follow(res.id);
+};
+$("release").onclick = async () => {
+  const r = await call("POST", "/api/board/release", {});
+  $("released").textContent = r.released ? "released the board from " + r.released
+                                         : "no session held the board";
 };
 $("replay").onclick = async () => {
   if (current) await call("POST", "/api/sessions/" + current + "/replay",

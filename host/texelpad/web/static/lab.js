@@ -1,24 +1,31 @@
 // texelpad lab: what both pages share. call() is the one way to the server:
 // JSON in and out, a refusal's reason shown in #error (the server changed
-// nothing), never thrown away.
+// nothing), never thrown away: an error stays until the next request the user
+// makes succeeds. {quiet: true}: a background request (a poll) that neither
+// shows nor clears #error. A thrown error carries the HTTP status (e.status;
+// 409: the request came too late or too early - a question answered already).
 "use strict";
 const $ = (id) => document.getElementById(id);
 
-async function call(method, path, body) {
+async function call(method, path, body, opts) {
+  const quiet = !!(opts && opts.quiet);
   let r;
   try {
     r = await fetch(path, {method, headers: {"content-type": "application/json"},
                            body: body === undefined ? undefined : JSON.stringify(body)});
   } catch (e) {
-    showError("the lab server does not answer (is texelpad lab still running?)");
+    if (!quiet) showError("the lab server does not answer (is texelpad lab still running?)");
     throw e;
   }
   const j = await r.json().catch(() => ({error: r.statusText}));
   if (!r.ok) {
-    showError((r.status === 503 ? "board: " : "") + (j.error || r.statusText));
-    throw new Error(j.error || r.statusText);
+    const text = (r.status === 503 ? "board: " : "") + (j.error || r.statusText);
+    if (!quiet) showError(text);
+    const e = new Error(text);
+    e.status = r.status;
+    throw e;
   }
-  showError("");
+  if (!quiet) showError("");
   return j;
 }
 

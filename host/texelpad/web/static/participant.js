@@ -2,9 +2,31 @@
 // the answers, a slider's position - never a parameter value (the server
 // sends none). ?s=PARTICIPANT/SESSION names the session; reloading the page
 // (or a crashed server coming back) resumes where it stopped.
+//
+// One click, one answer: every request names the question it is for
+// (question.number); while one is in flight the buttons are disabled, and a
+// request the server refuses as too late (409: answered already, or the
+// board played something else since) reloads the question as it is now.
 "use strict";
 const sid = new URLSearchParams(location.search).get("s");
-let strip = null, timer = null;
+let strip = null, timer = null, number = null, busy = false;
+
+// every button and slider of the question, disabled while a request is in flight
+function setBusy(v) {
+  busy = v;
+  document.querySelectorAll("#question button, #question input").forEach((b) => {
+    b.disabled = v;
+  });
+}
+
+// a 409: the page is behind (or ahead of) the session; show it as it is now
+async function reload(e) {
+  if (!e || e.status !== 409) return false;
+  show(await call("GET", "/api/sessions/" + sid));
+  showError(/does not play/.test(e.message) ? "The texture changed: feel it again, then answer."
+                                            : "");
+  return true;
+}
 
 const PROMPTS = {
   pair: "Feel A and B. Which one is closer to the reference on the left half?",
@@ -28,11 +50,32 @@ function markPlaying(k) {
 }
 
 async function answer(a) {
-  const res = await call("POST", "/api/sessions/" + sid + "/answer", {answer: a});
+  let res;
+  try {
+    res = await call("POST", "/api/sessions/" + sid + "/answer", {answer: a, question: number});
+  } catch (e) {
+    setBusy(false);
+    if (!(await reload(e))) throw e;
+    return;
+  }
   show(res);
   if (res.board_lost)           // the answer is kept; the next question plays when it is back
     showError("Your answer is saved, but the board is gone (" + res.board_lost +
               "). Reload this page when it is back.");
+}
+
+async function feel(k) {
+  if (busy) return;
+  setBusy(true);
+  try {
+    const r = await call("POST", "/api/sessions/" + sid + "/feel", {option: k, question: number});
+    markPlaying(r.playing);
+  } catch (e) {
+    setBusy(false);
+    if (!(await reload(e))) throw e;
+    return;
+  }
+  setBusy(false);
 }
 
 // free exploration: slider changes go to the board one at a time, the latest wins
@@ -49,7 +92,7 @@ async function slide() {
   try {
     while (sliderNext) {
       const v = sliderNext; sliderNext = null;
-      await call("POST", "/api/sessions/" + sid + "/feel", v);
+      await call("POST", "/api/sessions/" + sid + "/feel", Object.assign({question: number}, v));
       if (strip) strip.refresh();
     }
   } finally { sliderBusy = false; }
@@ -57,6 +100,8 @@ async function slide() {
 
 function show(res) {
   const q = res.question;
+  number = q.number;
+  setBusy(false);               // (the request that brought it is done)
   clearInterval(timer); $("timer").textContent = "";
   if (q.done) {
     $("question").hidden = true; $("done").hidden = false;
@@ -69,10 +114,8 @@ function show(res) {
   $("feel").innerHTML = ""; $("answers").innerHTML = "";
   $("sliders").hidden = q.kind !== "sliders";
   q.options.forEach((name, k) => {
-    $("feel").appendChild(el("button", {id: "feel-" + k, onclick: async () => {
-      const r = await call("POST", "/api/sessions/" + sid + "/feel", {option: k});
-      markPlaying(r.playing);
-    }}, "feel " + name));
+    $("feel").appendChild(el("button", {id: "feel-" + k, onclick: () => feel(k)},
+                             "feel " + name));
   });
   markPlaying(res.playing);
   if (q.kind === "sliders") {
@@ -92,15 +135,20 @@ function show(res) {
       box.appendChild(l);
     }
     $("answers").appendChild(el("button", {id: "submit", onclick: async () => {
+      if (busy) return;
       const c = document.querySelector("input[name=confidence]:checked");
       if (!c) { showError("choose your confidence (1-5) first"); return; }
+      setBusy(true);            // at once: a second click of a double-click finds it disabled
       while (sliderBusy) await new Promise((r) => setTimeout(r, 20));
       await answer(Object.assign(sliderValues(), {confidence: Number(c.value)}));
     }}, "this is my match"));
   } else {
     q.answers.forEach((a, i) => {
-      $("answers").appendChild(el("button", {id: "answer-" + i, onclick: () => answer(a)},
-                                  label(q.kind, a, q)));
+      $("answers").appendChild(el("button", {id: "answer-" + i, onclick: () => {
+        if (busy) return;
+        setBusy(true);          // at once: a second click of a double-click finds it disabled
+        answer(a);
+      }}, label(q.kind, a, q)));
     });
   }
   if (q.seconds) {              // the staircase's 30 s per trial (seed 001): shown, not forced
