@@ -25,8 +25,8 @@ def describe_scene(desc: dict[str, Any] | None) -> str:
     for r in desc["regions"]:
         what = r["kind"]
         if what == "texel":
-            what = "texel pitch %s dB, irregularity %s dB, seed %s" % (
-                r["pitch_db"], r["irregularity_db"], r["seed"])
+            what = "texel pitch %s dB, irregularity %s dB, seed %s, format %s" % (
+                r["pitch_db"], r["irregularity_db"], r["seed"], r.get("v", 1))
         elif what == "reference":
             what = "reference %s" % r["name"]
         elif what == "constant":
@@ -35,7 +35,7 @@ def describe_scene(desc: dict[str, Any] | None) -> str:
             what = "brush, seed %s" % r["seed"]
         else:
             what = "samples (%d values, %s)" % (r["values"], r["fit"])
-        lines.append("  %7.2f .. %7.2f mm  %-52s %s, %d B" % (
+        lines.append("  %7.2f .. %7.2f mm  %-62s %s, %d B" % (
             r["start_mm"], r["end_mm"], what, r["mode"], r["bytes"]))
     lines.append("  %d region%s, %d bytes on the board" % (
         desc["count"], "" if desc["count"] == 1 else "s", desc["bytes"]))

@@ -57,11 +57,11 @@ def summary(plan: Any, engine: str) -> str:
     above = plan.above_nyquist
     return (
         "Rendered %d samples (%.2f mm) with the %s engine: %s. Central pitch %.4g c/mm "
-        "(%.2f dB), irregularity %.4g decade (%.2f dB), seed %d, %s, gain %g. Drawn texel "
-        "pitches span %.4g .. %.4g c/mm (%.2f .. %.2f dB, median %.4g c/mm); %d of %d texels "
+        "(%.2f dB), irregularity %.4g decade (%.2f dB), seed %d, format %d, %s, gain %g. Drawn "
+        "texel pitches span %.4g .. %.4g c/mm (%.2f .. %.2f dB, median %.4g c/mm); %d of %d texels "
         "(%.1f %%) lie above Nyquist (%.2f c/mm)%s."
         % (plan.n, plan.n * texel.DX_MM, engine, texels, 10 ** (p["pitch_db"] / 10.0),
-           p["pitch_db"], sigma, p["irregularity_db"], p["seed"], quant, p["gain"],
+           p["pitch_db"], sigma, p["irregularity_db"], p["seed"], p["v"], quant, p["gain"],
            lo, hi, 10 * math.log10(lo), 10 * math.log10(hi), med, above, plan.count,
            100.0 * above / plan.count, texel.NYQUIST_CPMM,
            "" if above == 0 else " and alias, as in the original generator"))
