@@ -34,6 +34,8 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
     "scene": ("scene", "scene", "save the scene playing to a file (pull), or set the scene the "
                                 "board plays at power-up (boot)"),
     "scenes": ("scene", "scenes", "list the example scenes shipped with texelpad"),
+    "board": ("boardfile", "boardfile", "your own board file: check it for its chip and "
+                                        "firmware (check), put it on the board (install)"),
     "monitor": ("board", "monitor",
                 "live finger position and amplitude, to the terminal or a CSV file"),
     "ports": ("board", "ports", "list the boards plugged in"),
