@@ -156,6 +156,14 @@ def test_all_problems_at_once():
     assert sorted(paths) == sorted(["colour", "carrier.duty_cap", "carrier.pwm.slice",
                                     "sensor.pinz", "sensor.filter_shift", "refresh.mode"])
     assert "did you mean 'pins'" in dict(_errors(d))["sensor.pinz"]
+    # a refusal of the pin list as a whole (the bridge pair) leaves its pins to the chip
+    d = _load("pico_bridge")
+    d["carrier"]["pins"] = [18, 21]
+    d["sensor"]["pins"] = [18]
+    errs = _errors(d)
+    assert [p for p, _ in errs] == ["carrier.pins", "carrier.pwm.slice", "sensor.pins[0]",
+                                    "sensor.pins[0]"]
+    assert 'set "slice": 1' in errs[1][1]
 
 
 def test_stm32_timer_and_adc_pins():

@@ -220,15 +220,14 @@ def _get(d: Any, path: str) -> Any:
     return d
 
 
-def _related(a: str, b: str) -> bool:
-    """Paths that overlap: one is the other or inside it ("carrier.pins" and
-    "carrier.pins[0]", "carrier" and "carrier.freq_hz")."""
-    if not a or not b:
+def _within(refused: str, dep: str) -> bool:
+    """Whether validate's refusal at `refused` is about what a hardware check
+    read at `dep`: the same key or a part of it ("carrier.pwm.timer" within
+    "carrier.pwm"). A refusal of a whole list or section ("carrier.pins: a
+    bridge takes ...") leaves its well-typed items to the hardware checks."""
+    if not refused or not dep:
         return False
-    for x, y in ((a, b), (b, a)):
-        if x == y or y.startswith(x + ".") or y.startswith(x + "["):
-            return True
-    return False
+    return refused == dep or refused.startswith(dep + ".") or refused.startswith(dep + "[")
 
 
 def _sections(port: Any) -> dict[str, tuple]:
@@ -317,7 +316,7 @@ def check(doc: Any, firmware: str = "stock", file_stem: str | None = None) -> Re
     # path as validate's refusal says the same thing, with what to do: it replaces it
     blocked = [p.path for p in refused]
     kept_hw = [p for p, deps in hard
-               if not any(_related(b, dep) for b in blocked for dep in deps if b != p.path)]
+               if not any(_within(b, dep) for b in blocked for dep in deps if b != p.path)]
     kept_paths = {p.path for p in kept_hw if p.level == "error"}
     probs = unknown + [p for p in refused if p.path not in kept_paths]
     probs += kept_hw
