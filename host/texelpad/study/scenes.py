@@ -29,7 +29,7 @@ def texture_format(config: dict[str, Any] | None) -> int:
     for: its "texture_format", 2 when it has none. ValueError for anything but
     1 or 2."""
     v = (config or {}).get("texture_format", FORMAT_NEW)
-    if isinstance(v, bool) or v not in (1, 2):
+    if type(v) is not int or v not in (1, 2):      # not True, not 2.0: "v" is an int
         raise ValueError("texture_format: expected 1 (the lab's float generator, the exact "
                          "original) or 2 (the integer plan, the same texture on every "
                          "board), got %r" % (v,))
