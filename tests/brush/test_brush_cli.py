@@ -76,6 +76,7 @@ def test_fit_design_paint_show_compare(capsys, tmp_path):
     (["brush"], "say what to do"),
     # issue 24: no position column by name is an error, not a sample number read as mm
     (["brush", "fit", "NOPOS.csv", "--out", "OUT/b.json"], "no position column"),
+    (["brush", "fit", "FAR.csv", "--out", "OUT/b.json"], "= 3.77e+302 samples"),
     (["brush", "show", "DEEP.json", "--out", "OUT/b.png"], "nested too deeply"),
     (["brush", "paint", "DEEP.json", "--out", "OUT/m.csv"], "not a brush"),
     (["brush", "paint", "GOOD.json", "--length-mm", "nan", "--out", "OUT/m.csv"],
@@ -100,6 +101,7 @@ def test_bad_input_is_one_line_and_writes_nothing(capsys, tmp_path, argv, fragme
     (tmp_path / "NOPOS.csv").write_text("sample,friction\n" + "".join(
         "%d,%.3f\n" % (i, 0.5 + 0.1 * (i % 7)) for i in range(400)))
     (tmp_path / "DEEP.json").write_text("[" * 50000 + "]" * 50000)
+    (tmp_path / "FAR.csv").write_text("x_mm,friction\n1e300,0.5\n-1e300,0.6\n")
     D.save(D.design("white"), tmp_path / "GOOD.json")
     good = D.design("white")
     broken = dict(good, lam=good["lam"][:3] + [float("nan")] + good["lam"][4:])
@@ -107,7 +109,7 @@ def test_bad_input_is_one_line_and_writes_nothing(capsys, tmp_path, argv, fragme
     (tmp_path / "OUT").mkdir()
     argv = [a.replace("OUT/", str(tmp_path / "OUT") + "/") for a in argv]
     argv = [str(tmp_path / a) if a in ("BAD.csv", "BROKEN.json", "NOPOS.csv", "DEEP.json",
-                                       "GOOD.json") else a for a in argv]
+                                       "GOOD.json", "FAR.csv") else a for a in argv]
     code, o, e = run_cli(capsys, *argv)
     assert code == 2 and fragment in e and len(e.strip().splitlines()) == 1, (code, e)
     assert not list((tmp_path / "OUT").iterdir())

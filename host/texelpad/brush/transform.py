@@ -166,8 +166,9 @@ def resample(positions_mm: Sequence[float], friction: Sequence[float],
                          % (span, uniq.size, need_mm, WINDOW, dx_um))
     n = int(math.floor(span / dx_mm * (1.0 + 1e-12))) + 1
     if n > LENGTH_MAX:
-        raise ValueError("recording: spans %.6g mm = %d samples of %.4g um, more than the "
-                         "longest map (%d samples)" % (span, n, dx_um, LENGTH_MAX))
+        raise ValueError("recording: spans %.6g mm = %s samples of %.4g um, more than the "
+                         "longest map (%d samples)"
+                         % (span, "%d" % n if n < 10 ** 12 else "%.3g" % n, dx_um, LENGTH_MAX))
     # positions so large that float64 cannot place a grid point to 1/1000 of a step
     # (beyond ~2e10 mm for 5.3 um): the grid would be uneven or stand still
     if float(np.spacing(max(abs(uniq[0]), abs(uniq[-1])))) > dx_mm * 1e-3:
