@@ -99,8 +99,8 @@ def cmd_lab(args: argparse.Namespace) -> int:
                     webbrowser.open(url)
                 # a request still running at shutdown gets a few seconds, then
                 # the server stops anyway (a client that stalls cannot keep it up)
-                server = uvicorn.Server(uvicorn.Config(app, log_level="warning", lifespan="off",
-                                                       timeout_graceful_shutdown=3))
+                server = _Server(uvicorn.Config(app, log_level="warning", lifespan="off",
+                                                timeout_graceful_shutdown=3))
                 server.run(sockets=[sock])
                 owner.close()
             except KeyboardInterrupt:
@@ -113,6 +113,35 @@ def cmd_lab(args: argparse.Namespace) -> int:
         lock.release()
     sys.stdout.flush()
     return EXIT_OK
+
+
+def _server_class() -> type:
+    import asyncio
+
+    import uvicorn
+
+    from ..web.api import stop_reading
+
+    class Server(uvicorn.Server):
+        """uvicorn's server, which on Ctrl-C / SIGTERM also ends the request
+        bodies still arriving (web.api.stop_reading: a client that stalls
+        gets 503 at once instead of holding the shutdown until uvicorn's
+        graceful timeout cancels it with a traceback)."""
+        loop = None
+
+        async def serve(self, sockets=None):
+            self.loop = asyncio.get_running_loop()
+            await super().serve(sockets)
+
+        def handle_exit(self, sig, frame):
+            super().handle_exit(sig, frame)
+            if self.loop is not None:
+                self.loop.call_soon_threadsafe(stop_reading)
+    return Server
+
+
+def _Server(config):                # noqa: N802 - a class made when uvicorn is imported
+    return _server_class()(config)
 
 
 def _bind(asked: int | None, last: object) -> socket.socket:

@@ -54,6 +54,27 @@ class TooSlow(Refused):
     status = 408
 
 
+class Stopping(Refused):
+    status = 503
+
+
+# The body reads in progress (their cancel scopes): stop_reading() ends them
+# when the server stops, so a client that stalls cannot hold up the shutdown
+_reading: set[anyio.CancelScope] = set()
+_stopping = False
+
+
+def stop_reading() -> None:
+    """The server is stopping: every body still being read is refused (503)
+    at once, and so is every one that starts. Call it on the event loop
+    (texelpad lab's server does, from its signal handler, with
+    call_soon_threadsafe)."""
+    global _stopping
+    _stopping = True
+    for scope in list(_reading):
+        scope.cancel()
+
+
 def depth_ok(value: Any, limit: int = DEPTH_MAX) -> bool:
     """Whether value nests at most `limit` lists/objects deep (iterative: a
     deep value cannot exhaust the stack here)."""
@@ -109,15 +130,23 @@ async def read_body(request: Request) -> Any:
                            % (BODY_MAX, int(declared)))
     parts: list[bytes] = []
     size = 0
+    if _stopping:
+        raise Stopping("texelpad lab is stopping")
+    scope = anyio.CancelScope(deadline=anyio.current_time() + BODY_SECONDS)
+    _reading.add(scope)
     try:
-        with anyio.fail_after(BODY_SECONDS):
+        with scope:
             async for chunk in request.stream():
                 size += len(chunk)
                 if size > BODY_MAX:
                     raise TooLarge("request body over %d bytes" % BODY_MAX)
                 parts.append(chunk)
-    except TimeoutError:
-        raise TooSlow("the request body did not arrive within %g s" % BODY_SECONDS) from None
+    finally:
+        _reading.discard(scope)
+    if scope.cancelled_caught:
+        if _stopping:
+            raise Stopping("texelpad lab is stopping")
+        raise TooSlow("the request body did not arrive within %g s" % BODY_SECONDS)
     raw = b"".join(parts)
     return parse_json(raw) if raw.strip() else {}
 
@@ -168,7 +197,7 @@ def handle(lock: threading.Lock,
                 request.state.body = await read_body(request)
             out = await run_in_threadpool(locked, request)
             return out if isinstance(out, Response) else JSONResponse(out)
-        except (TooLarge, TooSlow) as e:
+        except (TooLarge, TooSlow, Stopping) as e:
             return _error(e.status, str(e), close=True)
         except BoardLost as e:
             return _error(503, str(e))
