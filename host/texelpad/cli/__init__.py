@@ -28,6 +28,8 @@ COMMANDS: dict[str, tuple[str, str, str]] = {
                               "level or a scene (JSON file) on the board"),
     "deploy": ("deploy", "deploy",
                "install or update the device image on the board (only what changed)"),
+    "firmware": ("firmware", "firmware", "build the texelpad firmware (.uf2) for a Pico: "
+                                         "MicroPython + ulab + texelpad in flash"),
     "virtual": ("virtual", "virtual", "run a virtual board; prints its serial port (a pty) first"),
     "stop": ("board", "stop", "safety: turn the carrier off now"),
     "status": ("board", "status", "what the board plays and how its loop runs"),

@@ -28,6 +28,9 @@ def add_deploy(p: argparse.ArgumentParser) -> None:
                    help="leave /main.py alone (by default it is written: the board then starts "
                         "its default scene at power-up)")
     p.add_argument("--dry-run", action="store_true", help="only say what would be written")
+    p.add_argument("--force", action="store_true",
+                   help="on the texelpad firmware: rewrite its ROMFS partition even when it "
+                        "holds this texelpad's image")
     _port_arg(p, "the one board plugged in")
     p.set_defaults(func=cmd_deploy)
 
@@ -40,13 +43,23 @@ def cmd_deploy(args: argparse.Namespace) -> int:
     with _connect(args, check=False, import_image=False) as b:
         try:
             rep = deploy(b, source=args.source, include_main=not args.no_main,
-                         dry_run=args.dry_run, progress=lambda m: _stderr("deploy: " + m), bar=bar)
+                         dry_run=args.dry_run, progress=lambda m: _stderr("deploy: " + m), bar=bar,
+                         force=args.force)
         except ImageError as e:
             raise CliError("", str(e), EXIT_FAIL) from None
         except LinkError as e:
             raise _fail(e) from None
         finally:
             bar.end()
+    if rep.get("form") == "romfs":          # the texelpad firmware (deploy/romfs_install.py)
+        print("%s %s (texelpad firmware, board %s): ROMFS partition %s (%s bytes), in %.2f s%s"
+              % ("would deploy to" if args.dry_run else "deployed to", b.port, rep["board"],
+                 "rewritten" if rep["written"] else "already holds this texelpad",
+                 format(rep["image_bytes"], ","), rep["seconds"],
+                 "; restarted %s with its scene" % rep["restarted"] if rep["restarted"] else ""))
+        if not args.dry_run:
+            print("next: texelpad demo --port %s" % b.port)
+        return EXIT_OK
     rep_fixed = rep["repaired"]
     print("%s %s: %d of %d files written (%s bytes), %d unchanged, %d removed%s, in %.2f s%s" % (
         "would deploy to" if args.dry_run else "deployed to", b.port, rep["written"],

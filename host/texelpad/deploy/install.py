@@ -136,7 +136,8 @@ def preflight(board: Any, todo: list[image.ImageFile], touched: list[str],
 
 def deploy(board: Any, source: bool = False, include_main: bool = True, dry_run: bool = False,
            progress: Callable[[str], None] | None = None,
-           bar: Callable[[int, int, str], None] | None = None) -> dict[str, Any]:
+           bar: Callable[[int, int, str], None] | None = None,
+           force: bool = False) -> dict[str, Any]:
     """Deploy the image to `board` (a Board from connect(port, check=False)).
     progress: one-line messages; bar(done_bytes, total_bytes, file): upload
     progress. Returns what was done. Raises image.ImageError, before anything
@@ -148,6 +149,15 @@ def deploy(board: Any, source: bool = False, include_main: bool = True, dry_run:
     say = progress or (lambda m: None)
     t_start = time.perf_counter()
     fw = board.firmware
+    if not source:
+        from .romfs_install import deploy_romfs, firmware_info
+        info = firmware_info(board)
+        if info is not None:                # the texelpad firmware: texelpad is its ROMFS
+            return deploy_romfs(board, info, force=force, dry_run=dry_run, progress=say, bar=bar)
+        if fw.get("platform") == "rp2":
+            say("stock MicroPython found: the image goes into its filesystem as .mpy files "
+                "(the texelpad firmware keeps it in flash instead: texelpad firmware, "
+                "docs/firmware.md)")
     target = image.target_for(fw["implementation"], fw["mpy"], fw["version"], fw["platform"],
                               source=source)
     files = image.build_image(target, include_main=include_main)

@@ -125,11 +125,18 @@ def check_board_dir(board_dir: Path) -> dict:
 
 
 def romfs_payload(board_dir: Path, board: dict) -> tuple[dict[str, bytes], bytes]:
-    """(files, image) of the ROMFS partition for a board folder: texelpad's rp2
-    image, the folder's board file among the shipped boards, firmware.json."""
+    """(files, image) of the ROMFS partition for a board folder."""
+    return payload_for(board["name"], (board_dir / "board.json").read_bytes())
+
+
+def payload_for(name: str, board_json: bytes) -> tuple[dict[str, bytes], bytes]:
+    """(files, image) of the ROMFS partition of the firmware for board name:
+    texelpad's rp2 image, the board file (board_json) among the shipped
+    boards, firmware.json (the board, the versions, a digest of the rest:
+    what `texelpad deploy` compares)."""
     files = romfs.romfs_files(image.TARGETS["rp2"])
-    files["lib/texel/boards.d/%s.json" % board["name"]] = (board_dir / "board.json").read_bytes()
-    info = {"board": board["name"], "texelpad": __version__, "micropython": MICROPYTHON_VERSION,
+    files["lib/texel/boards.d/%s.json" % name] = board_json
+    info = {"board": name, "texelpad": __version__, "micropython": MICROPYTHON_VERSION,
             "image_sha256": image.hashlib.sha256(
                 b"".join(k.encode() + v for k, v in sorted(files.items()))).hexdigest()}
     files[FIRMWARE_INFO] = (json.dumps(info, sort_keys=True) + "\n").encode()

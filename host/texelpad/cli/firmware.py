@@ -1,0 +1,75 @@
+"""`texelpad firmware`: build the texelpad firmware (.uf2) for a board folder (texelpad.firmware)."""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .common import EXIT_FAIL, EXIT_OK, CliError
+
+
+def add_firmware(p: argparse.ArgumentParser) -> None:
+    p.description = (
+        "Build DIR/texelpad-NAME.uf2: MicroPython 1.28 + ulab with texelpad in a ROMFS "
+        "partition (docs/firmware.md). Drag it onto a Pico in BOOTSEL mode and it boots "
+        "playing its power-up scene. Makers do not need this: the .uf2 is published with each "
+        "release. Building needs Debian's gcc-arm-none-eabi libnewlib-arm-none-eabi cmake and a "
+        "MicroPython v1.28.0 source tree (the offline kit in ../shared/instruments/mpfirmware, "
+        "or --micropython DIR).")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--board", default=None, metavar="NAME",
+                   help="a board folder shipped in boards/ (pico, pico_bridge; default pico)")
+    g.add_argument("--board-dir", default=None, metavar="DIR",
+                   help="a board folder of your own (mpconfigboard.h, mpconfigboard.cmake, "
+                        "pins.csv, manifest.py, board.json: copy boards/pico)")
+    p.add_argument("--out", default="firmware", metavar="DIR",
+                   help="where the .uf2 (and .romfs, .elf, build/) go (default ./firmware)")
+    p.add_argument("--micropython", default=None, metavar="DIR",
+                   help="a MicroPython v1.28.0 checkout to build with (default: the offline kit)")
+    p.add_argument("--ulab", default=None, metavar="DIR",
+                   help="with --micropython: a ulab 6.12 checkout, built in as a user C module")
+    p.set_defaults(func=cmd_firmware)
+
+
+def _board_dir(args: argparse.Namespace) -> Path:
+    from ..firmware.build import repo_boards_dir
+    if args.board_dir:
+        return Path(args.board_dir)
+    name = args.board or "pico"
+    boards = repo_boards_dir()
+    if boards is None:
+        raise CliError("--board", "the boards/ folder ships with texelpad's source, not the "
+                                  "wheel: clone the repository, or give --board-dir DIR")
+    d = boards / name
+    if not d.is_dir():
+        have = sorted(x.name for x in boards.iterdir() if (x / "board.json").is_file())
+        raise CliError("--board", "%r: no such board folder in %s (have: %s)"
+                       % (name, boards, ", ".join(have)))
+    return d
+
+
+def cmd_firmware(args: argparse.Namespace) -> int:
+    from ..firmware.build import FirmwareError, build_firmware
+    if args.ulab and not args.micropython:
+        raise CliError("--ulab", "goes with --micropython (the offline kit has its own ulab)")
+    d = _board_dir(args)
+    try:
+        b = build_firmware(d, args.out, args.micropython, args.ulab,
+                           progress=lambda m: print("firmware: " + m, file=sys.stderr, flush=True))
+    except FirmwareError as e:
+        msg = str(e)
+        flag = "--board-dir" if ("board folder" in msg or "board.json" in msg
+                                 or "mpconfigboard" in msg) else ""
+        if flag:
+            raise CliError(flag, msg) from None
+        print("texelpad firmware: " + msg, file=sys.stderr)
+        return EXIT_FAIL
+    kb = 1024
+    print("%s  (board %s)" % (b.uf2, b.board))
+    print("  MicroPython 1.28 + ulab: %d KB of flash; texelpad's ROMFS: %d of %d KB at 0x%06x; "
+          "your files (littlefs): %d KB" % (b.firmware_bytes // kb, b.romfs_bytes // kb,
+                                            b.romfs_capacity // kb, b.romfs_base,
+                                            b.storage_bytes // kb))
+    print("  built in %.0f s. Hold BOOTSEL, plug the Pico in, drag the .uf2 onto RPI-RP2; it "
+          "reboots playing. Then: texelpad demo --port PORT" % b.seconds)
+    return EXIT_OK

@@ -1,0 +1,132 @@
+"""`texelpad deploy` on a board running the texelpad firmware: rewrite its ROMFS partition.
+
+The texelpad firmware (texelpad.firmware, boards/) keeps texelpad in a ROMFS partition, which
+the board reads as /rom (bytecode and reference maps in place). Its /rom/firmware.json names
+the board and carries a digest of the partition's files; deploy builds the partition this host
+would build for that board (texelpad.firmware.build.payload_for), and when the digests differ
+(or with force) writes it with MicroPython's vfs.rom_ioctl (the calls `mpremote romfs deploy`
+makes: erase, write 4 KB at a time, finish), then soft-resets and starts again what played.
+No firmware rebuild: the MicroPython part stays.
+
+While the partition is rewritten nothing of texelpad may run: its bytecode and maps are in
+that flash. So the display is stopped, texel dropped from sys.modules and /rom unmounted
+first; the writes are plain MicroPython (vfs, binascii). A deploy cut off half-way leaves a
+partition without a valid image: the board then boots to its REPL saying so (frozen main.py)
+and the next deploy writes it whole.
+"""
+from __future__ import annotations
+
+import binascii
+import json
+import time
+from typing import Any, Callable
+
+from ..link import protocol
+from ..link.transport import LinkError
+
+CHUNK = 4096
+INFO_PATH = "/rom/firmware.json"
+
+FIRMWARE_INFO = """import sys
+_t = None
+try:
+ import vfs
+ if hasattr(vfs, 'rom_ioctl'):
+  with open('%s') as _f:
+   _t = _f.read()
+except OSError:
+ pass
+print(repr(_t))
+""" % INFO_PATH
+
+
+def firmware_info(board: Any) -> dict | None:
+    """The texelpad firmware's /rom/firmware.json, or None (stock firmware)."""
+    if board.firmware.get("platform") != "rp2":
+        return None
+    text = board.link.eval(FIRMWARE_INFO)
+    if not text:
+        return None
+    try:
+        info = json.loads(text)
+    except ValueError:
+        return {"board": None, "image_sha256": None}    # damaged: rewrite it
+    return info if isinstance(info, dict) else {"board": None, "image_sha256": None}
+
+
+def _board_json(board: Any, name: str) -> bytes:
+    """The board file to carry: the shipped one of that name, else the one the
+    partition holds now (a maker's own board, from `texelpad firmware --board-dir`)."""
+    from . import image
+    shipped = image.BOARDS_DIR / (name + ".json")
+    if shipped.is_file():
+        return shipped.read_bytes()
+    text = board.link.eval("with open('/rom/lib/texel/boards.d/%s.json') as _f:\n"
+                           " print(repr(_f.read()))\n" % name)
+    return text.encode()
+
+
+def deploy_romfs(board: Any, info: dict, force: bool = False, dry_run: bool = False,
+                 progress: Callable[[str], None] | None = None,
+                 bar: Callable[[int, int, str], None] | None = None) -> dict[str, Any]:
+    from ..firmware.build import payload_for
+    say = progress or (lambda m: None)
+    t0 = time.perf_counter()
+    name = info.get("board") or "pico"
+    files, img = payload_for(name, _board_json(board, name))
+    want = json.loads(files["firmware.json"])["image_sha256"]
+    current = info.get("image_sha256") == want
+    report: dict[str, Any] = {
+        "target": "rp2-romfs", "form": "romfs", "firmware": "texelpad", "board": name,
+        "files": len(files), "image_bytes": len(img), "written": 0, "bytes_written": 0,
+        "unchanged": len(files) if current and not force else 0, "removed": [],
+        "dry_run": dry_run, "restarted": None, "playing": None}
+    say("texelpad firmware found (board %s, texelpad %s): texelpad lives in its ROMFS "
+        "partition; %s" % (name, info.get("texelpad", "?"),
+                           "it holds this texelpad's image" if current else
+                           "this texelpad's image differs (%d bytes)" % len(img)))
+    if (current and not force) or dry_run:
+        report["seconds"] = time.perf_counter() - t0
+        return report
+    was = None
+    st = board.status() if board.image is not None else {}
+    if st.get("running"):
+        was = (st["board"], board.scene_source())
+        say("stopping the display on %s while the partition is written" % st["board"])
+        board.stop()
+    report["playing"] = was[0] if was else None
+    link = board.link
+    # nothing of texelpad may run from here on: its code is in the flash being rewritten
+    link.exec(protocol.PURGE + "import vfs\ntry:\n vfs.umount('/rom')\nexcept OSError:\n pass\n")
+    size = link.eval("import vfs\n_d = vfs.rom_ioctl(2, 0)\nprint(repr(len(memoryview(_d))))")
+    if len(img) > size:
+        raise LinkError("texelpad's image (%d bytes) does not fit this board's ROMFS partition "
+                        "(%d bytes): flash a newer texelpad firmware (texelpad firmware)"
+                        % (len(img), size))
+    say("erasing %d bytes of the ROMFS partition" % len(img))
+    step = link.eval("import vfs\nprint(repr(vfs.rom_ioctl(3, 0, %d)))" % len(img), timeout=120)
+    chunk = max(CHUNK, int(step) if isinstance(step, int) and step > 0 else CHUNK)
+    link.exec("from binascii import a2b_base64 as _b\nimport vfs")
+    for off in range(0, len(img), chunk):
+        piece = img[off:off + chunk]
+        piece += b"\xff" * (-len(piece) % 4)
+        link.exec("vfs.rom_ioctl(4, 0, %d, _b(%r))" % (
+            off, binascii.b2a_base64(piece, newline=False).decode("ascii")), timeout=60)
+        if bar:
+            bar(min(off + chunk, len(img)), len(img), "ROMFS")
+    link.exec("vfs.rom_ioctl(5, 0)")
+    report["written"] = len(files)
+    report["bytes_written"] = len(img)
+    say("soft reset of %s: the new partition mounts at /rom" % board.port)
+    link.soft_reset()
+    got = firmware_info(board)
+    if not got or got.get("image_sha256") != want:
+        raise LinkError("the ROMFS partition did not read back as written (%r): run texelpad "
+                        "deploy again" % (got,))
+    if was is not None:
+        say("starting %s again with the scene it played" % was[0])
+        board.restart(was[0], was[1], False)
+        report["restarted"] = was[0]
+    report["playing"] = report["restarted"]
+    report["seconds"] = time.perf_counter() - t0
+    return report

@@ -1,0 +1,54 @@
+"""The texelpad firmware for tests: built once per test session with the offline kit
+(../shared/instruments/mpfirmware) into a cache folder kept between runs (a rebuild of an
+unchanged tree only relinks: seconds), and booted on the emulated Pico as if the .uf2 were
+dragged onto it (texelpad.link.emulated.EmulatedPico(firmware=...)).
+
+Skips where the machine cannot build it (no arm-none-eabi-gcc, no kit) - except under CI
+(CI=true), where .ci/run installs the toolchain: there a missing toolchain fails the test.
+"""
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+
+from texelpad.deploy.image import cache_root
+
+
+def why_not_build() -> str | None:
+    from texelpad import toolchain
+    d = toolchain.instruments_dir()
+    if d is None or not (d / "mpfirmware" / "build.sh").is_file():
+        return "no firmware kit (../shared/instruments/mpfirmware)"
+    for t in ("arm-none-eabi-gcc", "cmake", "make"):
+        if not shutil.which(t):
+            return ("%s not installed (Debian: gcc-arm-none-eabi libnewlib-arm-none-eabi cmake)"
+                    % t)
+    return None
+
+
+def skip_or_fail(why: str) -> None:
+    if os.environ.get("CI") == "true":
+        pytest.fail("CI must build the firmware: " + why)
+    pytest.skip(why)
+
+
+def build_dir(board: str) -> Path:
+    return cache_root() / "firmware-tests" / board
+
+
+_built: dict[str, object] = {}
+
+
+def built(board: str = "pico"):
+    """texelpad.firmware.build.Built for boards/<board>, built once per session."""
+    if board not in _built:
+        why = why_not_build()
+        if why:
+            skip_or_fail(why)
+        from texelpad.firmware.build import build_firmware
+        root = Path(__file__).resolve().parents[2]
+        _built[board] = build_firmware(root / "boards" / board, build_dir(board))
+    return _built[board]
