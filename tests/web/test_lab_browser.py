@@ -190,3 +190,76 @@ def test_free_exploration_then_quantization_clicked_through(browser, lab):
         assert tex["pitch_db"] == free[ref]["pitch_db"]
         assert tex.get("quant_db", 0.0) == r["state"]["quant_db"]
     assert [r["answer"] for r in qs.answers()] == [1 + i % 5 for i in range(12)]
+
+
+# --- issue 24: one click, one answer; the experimenter sees every refusal -------------------
+
+def _answer_posts(page) -> list:
+    posts = []
+    page.on("request", lambda r: posts.append(r.post_data)
+            if r.method == "POST" and r.url.endswith("/answer") else None)
+    return posts
+
+
+def test_a_double_click_gives_one_answer(browser, lab):
+    """A double-click on a rating, or on "this is my match", answered the
+    next trial too (trial 1 -> trial 3, the same match in the file twice):
+    the page disables its buttons while the answer is in flight, and the
+    answer names its question (a repeat would be refused, 409)."""
+    url, data = lab
+    exp, p, sid, _ = _start(browser, url, "quant-exemplars", "web06", 1)
+    posts = _answer_posts(p)
+    assert p.inner_text("#progress").startswith("trial 1 of 12 - 0 answers")
+    p.dblclick("#answer-2")
+    _wait_answers(p, 1)
+    p.wait_for_selector("#answer-4:not([disabled])")
+    assert p.inner_text("#progress").startswith("trial 2 of 12 - 1 answer")
+    p.dblclick("#answer-4")
+    _wait_answers(p, 2)
+    p.wait_for_selector("#answer-4:not([disabled])")
+    assert p.inner_text("#progress").startswith("trial 3 of 12 - 2 answers")
+    s = Session.open(Path(data) / (sid + ".jsonl"))
+    assert [r["answer"] for r in s.answers()] == [3, 5]
+    assert [json.loads(x)["question"] for x in posts] == [0, 1]     # one request per click
+    assert p.inner_text("#error") == ""
+    # the free exploration's "this is my match"
+    exp2, f, fid, _ = _start(browser, url, "free-nine", "web06", 2)
+    posts = _answer_posts(f)
+    f.fill("#pitch", "300")
+    f.check("#confidence-4")
+    f.dblclick("#submit")
+    _wait_answers(f, 1)
+    f.wait_for_selector("#submit:not([disabled])")
+    assert f.inner_text("#progress").startswith("trial 2 of 9 - 1 answer")
+    s = Session.open(Path(data) / (fid + ".jsonl"))
+    assert [r["answer"]["confidence"] for r in s.answers()] == [4]
+    assert len(posts) == 1
+
+
+def test_the_experimenter_sees_a_refused_start_until_the_next_action(browser, lab):
+    """The 1 s monitor poll cleared #error ~50 ms after a refusal was shown,
+    so a refused start was invisible while the monitor still showed the
+    previous participant; a seed typed as 12a became a random seed."""
+    url, data = lab
+    exp, p, sid, _ = _start(browser, url, "pursuit-4sin", "web07", 1)
+    exp.fill("#participant", "no such id!")
+    exp.click("#start")
+    exp.wait_for_function("document.getElementById('error').textContent.includes('not started')")
+    for _ in range(2):                  # two polls of the monitor later, still shown
+        with exp.expect_response(lambda r: r.url.endswith("/monitor")):
+            pass
+    assert "not started: participant" in exp.inner_text("#error")
+    exp.fill("#participant", "web08")
+    exp.fill("#seed", "12a")
+    exp.click("#start")
+    exp.wait_for_function("document.getElementById('error').textContent.includes('12a')")
+    assert "seed \"12a\" is not a whole number" in exp.inner_text("#error")
+    with exp.expect_response(lambda r: r.url.endswith("/monitor")):
+        pass
+    assert "12a" in exp.inner_text("#error") and not (Path(data) / "web08").exists()
+    exp.fill("#seed", "12")
+    exp.click("#start")                 # the next action that succeeds clears it
+    exp.wait_for_selector("#participant-link[href*='web08/']")
+    assert exp.inner_text("#error") == ""
+    s = Session.open(next((Path(data) / "web08").glob("*.jsonl")))
+    assert s.header["seed"] == 12
