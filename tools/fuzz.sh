@@ -1,12 +1,17 @@
 #!/usr/bin/env bash
 # The nightly fuzz job (docs/testing.md): the fuzz targets of tests/fuzz -
-# scenes, command-line flags, link framing - with 10,000 fresh random cases
-# each (never derandomized), outside CI's time budget. CI runs the same
-# targets with 50 cases each (plain pytest: TEXELPAD_FUZZ unset = smoke).
+# scenes, command-line flags, link framing, texelpad lab's HTTP API - with
+# 10,000 fresh random cases each (never derandomized), outside CI's time
+# budget. CI runs the same targets with 50 cases each (plain pytest:
+# TEXELPAD_FUZZ unset = smoke). The lab target (a `texelpad lab` on the
+# virtual board, 127.0.0.1 only) is also bounded in time: its cases after
+# TEXELPAD_FUZZ_LAB_SECONDS (1,200 s nightly, 60 s in the smoke run) are
+# counted "over time" and not run.
 #
 #   bash tools/fuzz.sh                        every target, 10,000 cases each
 #   TEXELPAD_FUZZ_CASES=50000 bash tools/fuzz.sh
 #   bash tools/fuzz.sh -k link                any pytest arguments (one target)
+#   TEXELPAD_FUZZ_LAB_SECONDS=3600 bash tools/fuzz.sh -k lab    the lab API for an hour
 #   TEXELPAD_FUZZ_SEED=1234 bash tools/fuzz.sh    the same cases again (same code)
 #   TEXELPAD_FUZZ_STRICT=1 bash tools/fuzz.sh     known bugs fail too (to check a fix)
 #
