@@ -430,3 +430,64 @@ def test_the_strip_labels_a_brush_region(lab, port):
     want = np.frombuffer(B.paint(B.validate({k: doc[k] for k in ("k", "lam", "range")}), 5, n),
                          dtype=np.uint16)
     assert np.array_equal(amp[:n], (want.astype(int) + 128) // 257)
+
+
+@pytest.mark.slow
+@pytest.mark.vboard
+def test_the_strip_zooms_so_a_full_screen_texture_is_not_a_solid_block(tmp_path):
+    """Issue 24, item 7: a full-screen texture is 19,200 positions on a canvas
+    of ~1,000 pixels, so every column's min..max covered the waveform band (a
+    solid block). Zoomed in (the wheel about the pointer, the buttons), each
+    column is about one position: the waveform is a line; the finger under
+    the pointer is the view's mm, not the whole display's; 'whole display'
+    goes back."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+    if not os.path.exists(CHROMIUM):
+        pytest.skip("Debian's chromium is not installed (.ci/run installs it)")
+    # the share of the waveform band's pixels painted (blue) by the strip
+    filled = """() => {
+      const c = document.getElementById('strip'), g = c.getContext('2d');
+      const h = c.height, band = Math.round(h * 0.35), top = band + 8;
+      const d = g.getImageData(0, top, c.width, h - top - 16).data;
+      let blue = 0;
+      for (let i = 0; i < d.length; i += 4) if (d[i + 2] > 150 && d[i] < 120) blue++;
+      return blue / (d.length / 4);
+    }"""
+    with lab_process(tmp_path) as (url, _):
+        _post(url + "api/strip/texel", {"pitch_db": 3.0, "irregularity_db": -30.0, "seed": 1})
+        with sync_api.sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS,
+                                         chromium_sandbox=False)
+            page = browser.new_page(viewport={"width": 1100, "height": 700})
+            errors: list[str] = []
+            page.on("pageerror", lambda e: errors.append(str(e)))
+            page.goto(url + "static/strip-test.html")
+            page.wait_for_selector("body[data-ready='1']")
+            whole = page.evaluate(filled)
+            assert page.evaluate("strip.view") == {"start_mm": 0, "end_mm": 101.76}
+            box = page.locator("#strip").bounding_box()
+            page.mouse.move(box["x"] + 0.25 * box["width"], box["y"] + box["height"] / 2)
+            for _ in range(5):                           # five notches: x32 about the pointer
+                page.mouse.wheel(0, -100)
+            page.wait_for_function("strip.view.end_mm - strip.view.start_mm < 4")
+            v = page.evaluate("strip.view")
+            assert v["start_mm"] < 25.44 < v["end_mm"]       # the pointer's mm stays put
+            assert abs((v["end_mm"] - v["start_mm"]) - 101.76 / 32) < 1e-6
+            zoomed = page.evaluate(filled)
+            # the whole display: every column's min..max, a block (0.37 measured for
+            # this texture); x32: about one position per column, a line (0.005)
+            assert whole > 0.2 and zoomed < whole / 10, (whole, zoomed)
+            # the finger lands at the view's mm under the pointer
+            page.mouse.move(box["x"] + 0.5 * box["width"], box["y"] + box["height"] / 2)
+            page.mouse.down()
+            page.mouse.up()
+            mid = (v["start_mm"] + v["end_mm"]) / 2
+            assert abs(page.evaluate("strip.finger_mm === null ? %r : strip.finger_mm" % mid)
+                       - mid) < 0.2
+            page.click(".strip-zoom-all")
+            assert page.evaluate("strip.view") == {"start_mm": 0, "end_mm": 101.76}
+            page.click(".strip-zoom-in")
+            v = page.evaluate("strip.view")
+            assert abs(v["end_mm"] - v["start_mm"] - 50.88) < 1e-6
+            assert not errors, errors
+            browser.close()

@@ -22,6 +22,12 @@
 //   strip.setMuted(bool); strip.audioState(); strip.muted; strip.data; strip.finger_mm; strip.sent; strip.scheduled
 //   strip.select(startMm, endMm) / strip.select(null); strip.selection ({start_mm, end_mm} or
 //   null); strip.setMode("select" | "feel"); strip.mode    (with options.onSelect)
+//   strip.zoom(factor[, centerMm]); strip.setView(startMm, endMm) / strip.setView(null) (the
+//   whole display); strip.view ({start_mm, end_mm}: the span drawn)
+//     zoomButtons: the zoom buttons (default: made after the canvas; null: none). The wheel
+//     over the strip zooms about the pointer (Shift + wheel, or a sideways wheel, pans):
+//     a full-screen texture is 19,200 positions on a canvas of ~1,000 pixels, a solid
+//     block of min..max at the whole display; zoomed in, each position's amplitude shows.
 //
 // The strip (host/texelpad/web/strip.py, GET /api/strip) is the amplitude the
 // board plays at each display position (one uint8 each, 0..255 = 0..1), from
@@ -47,6 +53,8 @@
                                   // high-pass rings down instead of a click
   var PAUSE_MS = 40;              // no pointer event for this long: the finger stands
   var SNAP_PX = 6;                // selection: an end this near a boundary (CSS px) snaps to it
+  var ZOOM_MIN_POSITIONS = 40;    // the narrowest view: this many display positions
+  var ZOOM_STEP = 2;              // a button press or a wheel notch zooms by this factor
   var CLICK_PX = 3;               // selection: a drag shorter than this is a click
 
   function decode(b64) {
@@ -127,6 +135,38 @@
                 error: null, selection: null, mode: options.onSelect ? "select" : "feel"};
     var selecting = null;                    // a selection drag: {x0 (mm), px0 (client x)}
     var m = null, sized = false;
+    // the span drawn, in mm (null: the whole display)
+    var view = null;
+
+    function span() {
+      return view ? [view[0], view[1]] : [0, m ? m.lengthMm : 1];
+    }
+
+    // the canvas x (device pixels, w wide) of x mm in the view
+    function xOf(x, w) {
+      var v = span();
+      return (x - v[0]) / (v[1] - v[0]) * w;
+    }
+
+    // the view [a, b] mm, kept on the display and at least ZOOM_MIN_POSITIONS wide
+    function setView(a, b) {
+      if (!m || a === null || a === undefined) { view = null; draw(); return; }
+      var L = m.lengthMm, minW = Math.min(L, ZOOM_MIN_POSITIONS / m.perMm);
+      var wdt = Math.max(minW, Math.min(L, b - a)), c = 0.5 * (a + b);
+      a = c - wdt / 2;
+      if (a < 0) a = 0;
+      if (a + wdt > L) a = L - wdt;
+      view = wdt >= L ? null : [a, a + wdt];
+      draw();
+    }
+
+    function zoom(factor, centre) {
+      if (!m) return;
+      var v = span(), c = centre === undefined || centre === null ? 0.5 * (v[0] + v[1]) : centre;
+      var f = (c - v[0]) / (v[1] - v[0]);  // the centre stays where it is on the canvas
+      var wdt = (v[1] - v[0]) / factor;
+      setView(c - f * wdt, c - f * wdt + wdt);
+    }
 
     // A canvas sized by its width/height attributes alone (no CSS size) would
     // grow with every redraw at a device pixel ratio above 1 (draw() sets its
@@ -172,9 +212,14 @@
       if (!m) return;
       var band = Math.round(h * 0.35), top = band + Math.round(4 * dpr), wave = h - top - 2;
       // per pixel column: the mean as a grey level (white = amplitude 1, the
-      // most friction reduction: slippery), min..max as the waveform below
+      // most friction reduction: slippery), min..max as the waveform below;
+      // the columns cover the view's positions (the whole display: n / w each)
+      var v = span(), p0 = v[0] * m.perMm, p1 = v[1] * m.perMm;
       for (var c = 0; c < w; c++) {
-        var a = Math.floor(c * m.n / w), b = Math.max(a + 1, Math.floor((c + 1) * m.n / w));
+        var a = Math.floor(p0 + (p1 - p0) * c / w);
+        var b = Math.max(a + 1, Math.floor(p0 + (p1 - p0) * (c + 1) / w));
+        a = Math.max(0, Math.min(m.n - 1, a));
+        b = Math.max(a + 1, Math.min(m.n, b));
         var lo = 1, hi = 0;
         for (var i = a; i < b; i++) { var v = m.amp[i]; if (v < lo) lo = v; if (v > hi) hi = v; }
         var mean = (m.cum[b] - m.cum[a]) / (b - a), grey = Math.round(mean * 255);
@@ -189,22 +234,24 @@
       g.font = Math.round(11 * dpr) + "px system-ui, sans-serif";
       g.textBaseline = "top";
       m.data.regions.forEach(function (r) {
-        var xs = r.start_mm / m.lengthMm * w, xe = r.end_mm / m.lengthMm * w;
+        var xs = xOf(r.start_mm, w), xe = xOf(r.end_mm, w);
+        if (xe < 0 || xs > w) return;                   // (outside the view)
         g.fillStyle = "#c60";
         g.fillRect(Math.round(xs), 0, Math.max(1, Math.round(dpr)), h);
         g.fillRect(Math.round(xe) - 1, 0, Math.max(1, Math.round(dpr)), h);
         g.fillStyle = "rgba(255,255,255,0.8)";
         var label = r.label;
         var tw = g.measureText(label).width;
-        if (labels && tw < xe - xs - 6 * dpr) {
-          g.fillRect(xs + 3 * dpr, 2 * dpr, tw + 4 * dpr, 14 * dpr);
+        var lx = Math.max(xs, 0);
+        if (labels && tw < Math.min(xe, w) - lx - 6 * dpr) {
+          g.fillRect(lx + 3 * dpr, 2 * dpr, tw + 4 * dpr, 14 * dpr);
           g.fillStyle = "#000";
-          g.fillText(label, xs + 5 * dpr, 3 * dpr);
+          g.fillText(label, lx + 5 * dpr, 3 * dpr);
         }
       });
       // the selected span (options.onSelect)
       if (self.selection) {
-        var ss = self.selection.start_mm / m.lengthMm * w, se = self.selection.end_mm / m.lengthMm * w;
+        var ss = xOf(self.selection.start_mm, w), se = xOf(self.selection.end_mm, w);
         g.fillStyle = "rgba(30,110,255,0.28)";
         g.fillRect(ss, 0, Math.max(1, se - ss), h);
         g.fillStyle = "#15f";
@@ -212,16 +259,32 @@
         g.fillRect(Math.round(se) - Math.max(2, Math.round(2 * dpr)), 0,
                    Math.max(2, Math.round(2 * dpr)), h);
       }
+      // the zoom: which part of the display this is
+      if (view) {
+        g.fillStyle = "rgba(0,0,0,0.6)";
+        g.font = Math.round(10 * dpr) + "px system-ui, sans-serif";
+        g.textBaseline = "bottom";
+        var t = view[0].toFixed(2) + " .. " + view[1].toFixed(2) + " mm of " +
+                m.lengthMm.toFixed(2) + " (x" + (m.lengthMm / (view[1] - view[0])).toFixed(0) + ")";
+        g.fillText(t, w - g.measureText(t).width - 4 * dpr, h - 2 * dpr);
+      }
+      self.view = {start_mm: span()[0], end_mm: span()[1]};
       // the finger
       if (self.finger_mm !== null) {
-        var fx = self.finger_mm / m.lengthMm * w;
+        var fx = xOf(self.finger_mm, w);
         g.fillStyle = "#d00";
         g.fillRect(Math.round(fx - dpr), 0, Math.max(2, Math.round(2 * dpr)), h);
       }
     }
 
+    // a new display length: the whole display again
+    function keepView(d) {
+      if (view && (!self.data || d.length_mm !== self.data.length_mm)) view = null;
+    }
+
     function refresh() {
       return api("GET", path).then(function (d) {
+        keepView(d);
         if (!self.data || d.scene_id !== self.data.scene_id) m = model(d);
         else m.data = d;
         self.data = d;
@@ -235,6 +298,7 @@
 
     // a strip answer from elsewhere (POST /api/strip/texel answers with one)
     function show(d) {
+      keepView(d);
       if (!self.data || d.scene_id !== self.data.scene_id) m = model(d);
       else m.data = d;                      // (as refresh: the same scene, its labels anew)
       self.data = d;
@@ -331,7 +395,8 @@
       var rect = canvas.getBoundingClientRect();
       var f = (e.clientX - rect.left) / Math.max(1, rect.width);
       f = f < 0 ? 0 : (f > 1 ? 1 : f);
-      return m ? f * m.lengthMm : 0;
+      var v = span();
+      return m ? v[0] + f * (v[1] - v[0]) : 0;
     }
 
     // the finger at x mm at event time t (ms): the sound of the way there
@@ -353,7 +418,8 @@
     // x mm on the display's positions, snapped to a region boundary or an end
     // of the display within SNAP_PX CSS pixels
     function snap(x) {
-      var rect = canvas.getBoundingClientRect(), mmPerPx = m.lengthMm / Math.max(1, rect.width);
+      var v = span();
+      var rect = canvas.getBoundingClientRect(), mmPerPx = (v[1] - v[0]) / Math.max(1, rect.width);
       var best = null, bestD = SNAP_PX * mmPerPx;
       var edges = [0, m.lengthMm];
       m.data.regions.forEach(function (r) { edges.push(r.start_mm, r.end_mm); });
@@ -473,6 +539,35 @@
     if (options.muteButton) {
       options.muteButton.addEventListener("click", function () { setMuted(!self.muted); });
     }
+
+    // zoom: the wheel about the pointer (Shift or a sideways wheel pans), and
+    // buttons (options.zoomButtons null: none)
+    canvas.addEventListener("wheel", function (e) {
+      if (!m) return;
+      e.preventDefault();
+      var v = span(), dx = e.shiftKey ? e.deltaY : e.deltaX;
+      if (Math.abs(dx) > Math.abs(e.shiftKey ? 0 : e.deltaY)) {
+        var shift = (v[1] - v[0]) * (dx > 0 ? 0.2 : -0.2);
+        if (view) setView(v[0] + shift, v[1] + shift);
+        return;
+      }
+      zoom(e.deltaY < 0 ? ZOOM_STEP : 1 / ZOOM_STEP, mmOf(e));
+    }, {passive: false});
+    if (options.zoomButtons === undefined && canvas.parentNode && document.createElement) {
+      var zb = document.createElement("span");
+      zb.className = "strip-zoom";
+      [["zoom-in", "zoom in", function () { zoom(ZOOM_STEP); }],
+       ["zoom-out", "zoom out", function () { zoom(1 / ZOOM_STEP); }],
+       ["zoom-all", "whole display", function () { setView(null); }]].forEach(function (b) {
+        var el = document.createElement("button");
+        el.type = "button";
+        el.className = "strip-" + b[0];
+        el.textContent = b[1];
+        el.addEventListener("click", b[2]);
+        zb.appendChild(el);
+      });
+      canvas.parentNode.insertBefore(zb, canvas.nextSibling);
+    }
     showMuted();                            // no AudioContext before a gesture
     // redraw at every size change (a hidden strip shown, a window resized)
     if (window.ResizeObserver) new ResizeObserver(function () { draw(); }).observe(canvas);
@@ -483,6 +578,8 @@
     self.draw = draw;
     self.setMuted = setMuted;
     self.select = select;
+    self.zoom = zoom;
+    self.setView = function (a, b) { setView(a, b); };
     self.setMode = function (mode) { self.mode = mode === "feel" ? "feel" : "select"; };
     self.audioState = function () { return audio ? audio.state : "none"; };
     // drawn at once (options.autoRefresh false: only when refresh() is called)
