@@ -112,7 +112,9 @@ def romfs_image(files: Mapping[str, bytes]) -> bytes:
         if pad == 1:
             pad += ALIGN                 # the smallest record is 2 bytes
         blobs += _padding(pad) + prefix + data
-        where[path] = (head + len(blobs) - len(data), len(data))
+        # a pointer counts from the body (MicroPython's VfsRom enters the
+        # filesystem record: extmod/vfs_rom.c, self->filesystem)
+        where[path] = (len(blobs) - len(data), len(data))
     tree: dict = {}
     for path, data in files.items():
         parts = path.strip("/").split("/")
@@ -159,6 +161,7 @@ def read_romfs(img: bytes) -> dict[str, bytes]:
                 return v, i
 
     n, i = uint(img, len(ROMFS_HEADER))
+    body = i                                # pointers count from here
     out: dict[str, bytes] = {}
 
     def walk(i: int, end: int, prefix: str) -> None:
@@ -180,7 +183,7 @@ def read_romfs(img: bytes) -> dict[str, bytes]:
                     else:
                         size, j = uint(img, j)
                         off, j = uint(img, j)
-                        out[prefix + name] = bytes(img[off:off + size])
+                        out[prefix + name] = bytes(img[body + off:body + off + size])
             i = nxt
 
     walk(i, i + n, "")

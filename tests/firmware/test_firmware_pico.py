@@ -1,0 +1,146 @@
+"""The texelpad firmware on the emulated Pico: built with the offline kit (boards/pico), the
+.uf2 booted as if dragged onto a Pico in BOOTSEL mode, everything checked through its serial
+port as a user's host sees it. No timing asserted: the figures are the benchmark's
+(python -m texelpad.bench.firmware)."""
+from __future__ import annotations
+
+import hashlib
+import json
+
+import numpy as np
+import pytest
+
+from support.cli import run_cli
+from support.firmware import built
+from support.pico import emulated_pico  # noqa: F401
+
+pytestmark = [pytest.mark.slow, pytest.mark.instruments]
+
+_BRUSH = {"k": [8.0] + [1.5 + 0.1 * (i % 20) for i in range(94)],
+          "lam": [0.5] + [0.05 / (1 + 0.04 * i) for i in range(94)], "range": [0.0, 1.0]}
+
+
+@pytest.fixture(scope="module")
+def fw():
+    return built("pico")
+
+
+@pytest.fixture(scope="module")
+def pico(fw):
+    from texelpad.link.emulated import EmulatedPico, why_not
+    why = why_not()
+    if why:
+        pytest.skip(why)
+    emu = EmulatedPico(firmware=fw.uf2)
+    try:
+        emu.start()
+        yield emu
+    finally:
+        print("[emulated Pico] " + " ".join(emu.stop().split()))
+
+
+def _connect(port, **kw):
+    from texelpad.link.board import connect
+    return connect(port, timeout=60, **kw)
+
+
+def test_the_uf2_boots_playing_its_power_up_scene_with_texel_from_flash(pico):
+    with _connect(pico.port) as b:       # the handshake imports texel: from /rom
+        st = b.status()
+        where = b.link.eval("import texel, sys\nprint(repr((texel.__file__, sys.path)))")
+        info = json.loads(b.link.eval("print(repr(open('/rom/firmware.json').read()))"))
+    assert st["running"] and st["board"] == "pico" and st["refresh"] == "viper-irq"
+    assert st["refreshes"] > 0 and st["overruns"] == 0 and st["faults"] == 0
+    kinds = [(r["kind"], r["mode"]) for r in st["scene"]["regions"]]
+    assert kinds == [("reference", "map"), ("texel", "plan")]     # texel.app.DEFAULT_SCENE
+    # the reference plays from flash: only the texel region's plan is in RAM
+    assert st["scene"]["buffer_bytes"] == st["scene"]["regions"][1]["bytes"]
+    assert where[0] == "/rom/lib/texel/__init__.mpy" and "/rom/lib" in where[1]
+    assert info["board"] == "pico" and info["micropython"] == "1.28.0"
+    print("\nheap free while the power-up scene plays: %s bytes" % format(st["mem_free"], ","))
+
+
+def test_the_references_in_flash_are_the_hosts_maps_bit_for_bit(pico):
+    from texel.gen import reference
+    code = ("import hashlib, binascii\nfrom texel.gen.reference import flash_u16\n"
+            "_o = {}\nfor _n in %r:\n"
+            " _p = '/rom/lib/texel/gen/ref/%%s.u16' %% _n\n"
+            " _v = flash_u16(_n, 19200)\n"
+            " _o[_n] = (binascii.hexlify(hashlib.sha256(memoryview(open(_p, 'rb'))).digest()),"
+            " 19200, _v[0], _v[9599], _v[19199])\n"
+            "print(repr(_o))" % (reference.STUDY_NAMES,))
+    with _connect(pico.port) as b:
+        got = b.link.eval(code)
+    for name in reference.STUDY_NAMES:
+        m = np.asarray(reference.reference_u16(name, 19200), dtype="<u2")
+        digest, n, first, mid, last = got[name]
+        assert digest.decode() == hashlib.sha256(m.tobytes()).hexdigest(), name
+        assert (n, first, mid, last) == (19200, m[0], m[9599], m[19199]), name
+
+
+def test_push_status_and_scene_pull_through_the_command_line(pico, capsys, tmp_path):
+    port = pico.port
+    code, out, err = run_cli(capsys, "push", "--port", port, "--pitch-db", "7",
+                             "--irregularity-db", "-10", "--seed", "3")
+    assert code == 0, err
+    code, out, err = run_cli(capsys, "status", "--port", port)
+    assert code == 0, err
+    f = tmp_path / "s.json"
+    code, out, err = run_cli(capsys, "scene", "pull", str(f), "--port", port)
+    assert code == 0, err
+    tex = json.loads(f.read_text())["regions"][0]["texture"]
+    assert (tex["kind"], tex["pitch_db"], tex["seed"], tex["v"]) == ("texel", 7.0, 3, 2)
+
+
+def test_a_full_screen_reference_and_a_brush_after_a_series_of_pushes(pico):
+    from texelpad.scenes import __path__ as scene_dir  # the shipped scenes
+    import pathlib
+    shipped = [json.loads(p.read_text()) for p in sorted(pathlib.Path(scene_dir[0]).glob("*.json"))]
+    full = {"regions": [{"start_mm": 0, "end_mm": 101.76,
+                         "texture": {"kind": "reference", "name": "white"}}]}
+    brush = {"regions": [{"start_mm": 10, "end_mm": 30,
+                          "texture": {"kind": "brush", "brush": _BRUSH, "seed": 4}}]}
+    with _connect(pico.port) as b:
+        frees = []
+        for rnd in range(2):
+            for sc in shipped:
+                b.push(sc)
+                frees.append(b.status()["mem_free"])
+            b.push_texel({"pitch_db": 5.0 + rnd, "irregularity_db": -12.0, "seed": rnd})
+        b.push(full)
+        st = b.status()
+        assert st["scene"]["regions"][0]["name"] == "white" and st["scene"]["buffer_bytes"] == 0
+        b.push(brush)
+        st = b.status()
+        assert st["scene"]["regions"][0]["kind"] == "brush" and st["faults"] == 0
+        assert st["overruns"] == 0
+    print("\nheap free after each of %d pushes: min %s, max %s bytes"
+          % (len(frees), format(min(frees), ","), format(max(frees), ",")))
+
+
+def test_a_bad_push_is_refused_and_the_scene_kept(pico):
+    from texelpad.link.transport import LinkError
+    good = {"regions": [{"start_mm": 0, "end_mm": 50.88,
+                         "texture": {"kind": "reference", "name": "4sin"}}]}
+    with _connect(pico.port) as b:
+        b.push(good)
+        before = b.scene_source()
+        for bad in ({"regions": [{"start_mm": 0, "end_mm": 50,
+                                  "texture": {"kind": "reference", "name": "nope"}}]},
+                    {"regions": [{"start_mm": 0, "end_mm": 50,
+                                  "texture": {"kind": "texel", "pitch_db": 99}}]}):
+            with pytest.raises((ValueError, LinkError)):
+                b.push(bad)
+            assert b.scene_source() == before and b.status()["running"]
+
+
+def test_deploy_finds_the_firmware_and_rewrites_only_its_romfs(pico, capsys):
+    code, out, err = run_cli(capsys, "deploy", "--port", pico.port)
+    assert code == 0, err
+    assert "texelpad firmware found (board pico" in err and "already holds this texelpad" in out
+    code, out, err = run_cli(capsys, "deploy", "--port", pico.port, "--force")
+    assert code == 0, err
+    assert "ROMFS partition rewritten" in out and "restarted pico" in out
+    with _connect(pico.port) as b:
+        st = b.status()
+        assert st["running"] and st["scene"]["regions"][0]["name"] == "4sin"   # what played
