@@ -73,7 +73,7 @@ def test_commands_are_imported_only_when_they_run():
 def test_the_table_lists_every_command_module_once():
     mods = {m for m, _, _ in cli.COMMANDS.values()}
     assert mods == {"demo", "board", "deploy", "virtual", "bench", "render", "tank", "scene", "lab",
-                    "encode", "brush"}
+                    "encode", "brush", "boardfile", "firmware"}
     for name, (mod, func, summary) in cli.COMMANDS.items():
         p = _parser_for(name)
         assert callable(p.get_default("func")), name
