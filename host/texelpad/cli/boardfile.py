@@ -95,6 +95,8 @@ def _stem(path: str) -> str | None:
     if path == "-":
         return None
     name = Path(path).name
+    if name == "board.json":            # a board folder's (boards/NAME/board.json): the folder's name
+        return Path(path).resolve().parent.name
     return name[:-5] if name.endswith(".json") else None
 
 
