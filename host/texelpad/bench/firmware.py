@@ -1,0 +1,702 @@
+"""Issue 19's goals measured on the emulated Pico running the texelpad firmware:
+`python -m texelpad.bench.firmware [--uf2 PATH] [--json OUT] [--stock] [--quick]`.
+
+The board is rp2emu (../shared/instruments: rp2040js, time from cycle counts)
+booting the .uf2 as if dragged onto a Pico (texelpad.link.emulated,
+EmulatedPico(firmware=...)): MicroPython 1.28 + ulab with texelpad in the
+ROMFS partition, playing its power-up scene. Every figure is on the board's
+own clock (time.ticks_us: emulated microseconds); the host's clock measures
+nothing but the wall time of the run. With --stock the same sequence also
+runs on the stock path (today: stock MicroPython + `texelpad deploy`,
+open_emulated's way) and its figures go beside the firmware's.
+
+A push is timed as the host sends it (texel's own request,
+protocol.staged_call: the scene as JSON text parsed by the board's json
+module, then texel.app.push, then the reply printed), wrapped on the board:
+_tpf_req(code) takes the request's code as text, notes ticks_us, compiles and
+runs it exactly as the raw REPL would, and notes ticks_us again after the
+reply is printed. texel.app.push is wrapped to note when it is entered, and
+its own last_push (validate_us, build_us, swap_us: contiguous from its entry)
+ends at the swap. So:
+
+    to playing = compile + JSON parse (up to push's entry) + validate + build + swap
+    answers    = everything until the reply is printed (the gc.collect after
+                 the swap, status(), repr) - the board is ready for the next push
+
+(The bytes' transfer over USB before the compile is not counted: "from the
+host's last byte".) The goal verdicts use these figures.
+
+The sequence (one emulator, one boot):
+  1. boot; connect; the first push after boot is a free-exploration scene;
+  2. PUSHES pushes in a row cycling through the scene list: every shipped
+     scene (host/texelpad/scenes), every study config's scenes (the nine
+     free-exploration trials: each reference left + a texel texture right;
+     the first question of every other config), 16 texel regions, every
+     reference full-screen, a full-screen brush (texelpad.brush.document.
+     design): each push's figures, refusals, the refresh's overruns over the
+     run and free memory after each push (gc.collect(); gc.mem_free()):
+     its least-squares slope per push;
+  3. refresh cost (bench/device/rp2_chip_bench.py's method: a viper busy
+     loop timed with the refresh interrupt on and off; the finger sweeps)
+     with a full-screen scene of each region kind the refresh tells apart
+     (constant, reference from flash, texel plan, brush map, uploaded
+     samples) and 16 texel regions;
+  4. heap free while playing the power-up scene; then stop, soft reset from
+     the raw REPL (main.py does not run): the heap before texelpad starts.
+For the worst push (and the goals not met) a second, script-mode run of
+rp2emu with --profile replays that scene and the PC histogram is mapped to
+the firmware's .elf symbols (arm-none-eabi-nm): where the cycles go.
+"""
+from __future__ import annotations
+
+import argparse
+import ast
+import bisect
+import json
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any, Callable
+
+from .link import slope_per_push
+
+Progress = Callable[[str], None]
+
+BOARD = "pico"
+PUSHES = 100
+QUICK_SCENES = 3
+QUICK_PUSHES = 5
+IRQ_SPIN = 300_000          # as bench/chip.py: ~29 ms per window on the chip
+IRQ_REPS = 3
+
+# issue 19's goals (ms unless said)
+GOALS = {
+    "scene_to_playing_ms": 20.0, "scene_answers_ms": 30.0, "regions16_to_playing_ms": 50.0,
+    "reference_to_playing_ms": 20.0, "brush_to_playing_ms": 200.0,
+    "first_push_answers_ms": 30.0, "refresh_us": 10.0, "overruns": 0,
+    "heap_free_playing_bytes": 200 * 1024, "refused": 0,
+}
+
+# what the board runs (sent once after connecting): the request wrapper
+DEVICE_CODE = r'''
+import time, gc, sys
+import texel.app as _tpf_app
+_tpf_t = [None]
+_tpf_orig = _tpf_app.push
+def _tpf_push(scene):
+    _tpf_t[0] = time.ticks_us()
+    return _tpf_orig(scene)
+_tpf_app.push = _tpf_push
+def _tpf_req(code):
+    rt = _tpf_app._rt
+    ov0 = rt.refresh.overruns
+    n0 = rt.pushes
+    _tpf_t[0] = None
+    err = None
+    t0 = time.ticks_us()
+    t1 = t0
+    try:
+        c = compile(code, '<request>', 'exec')
+        t1 = time.ticks_us()
+        exec(c, {})
+    except Exception as e:
+        err = '%s: %s' % (type(e).__name__, e)
+    t2 = time.ticks_us()
+    c = None
+    code = None
+    tp = _tpf_t[0]
+    gc.collect()
+    print(repr((time.ticks_diff(t1, t0), None if tp is None else time.ticks_diff(tp, t0),
+                time.ticks_diff(t2, t0), rt.last_push if rt.pushes != n0 else None, err,
+                gc.mem_free(), rt.refresh.overruns - ov0, rt.refresh.worst_us, rt.pushes)))
+def _tpf_heap():
+    gc.collect()
+    return gc.mem_free()
+'''
+
+
+def say_nothing(m: str) -> None:
+    pass
+
+
+# --- the scenes ---------------------------------------------------------------------------
+
+def _total(display: dict[str, Any]) -> float:
+    return round(display["positions"] * display["dx_um"] / 1000.0, 6)
+
+
+def shipped_scenes() -> list[tuple[str, dict[str, Any]]]:
+    d = Path(__file__).resolve().parents[1] / "scenes"
+    out = []
+    for p in sorted(d.glob("*.json")):
+        sc = json.loads(p.read_text())
+        out.append(("shipped " + p.stem, {"regions": sc["regions"]}))
+    return out
+
+
+def study_scenes(display: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
+    """What the lab pushes: the nine free-exploration trials (each reference
+    left, the sliders' start texture right), then the first question's
+    scenes of every other shipped study config."""
+    from ..study import configs, protocols, questions, scenes as S
+    out = []
+    every = configs.available()
+    for name, c in sorted(every.items()):
+        if "error" in c:
+            continue
+        header = {"protocol": c["protocol"], "config": c["config"], "seed": 1}
+        st = protocols.start(c["protocol"], c["config"], 1)
+        if c["protocol"] == "free":
+            v = S.texture_format(c["config"])
+            p0, s0 = c["config"]["start"]
+            for k, ref in enumerate(c["config"]["references"]):
+                tex = st.texture(p0, s0, k, v)
+                out.append(("%s trial %s" % (name, ref),
+                            S.split({"kind": "reference", "name": ref}, tex, display)))
+            continue
+        q = questions.ask(c["protocol"], st, header, display)
+        for k, sc in enumerate(q.options):
+            out.append(("%s option %d" % (name, k + 1), sc))
+    return out
+
+
+def regions16(display: dict[str, Any], seed: int) -> dict[str, Any]:
+    from .link import regions16 as r16
+    return r16(display, 2, seed)
+
+
+def reference_scenes(display: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
+    from texel.gen import reference
+    names = list(reference.STUDY_NAMES)
+    return [("full-screen reference %s" % n,
+             {"regions": [{"start_mm": 0, "end_mm": _total(display),
+                           "texture": {"kind": "reference", "name": n}}]}) for n in names]
+
+
+def brush_scene(display: dict[str, Any], seed: int = 1) -> dict[str, Any]:
+    from ..brush import document
+    return {"regions": [document.region(document.design("pink", 0.05), seed, 0,
+                                         _total(display))]}
+
+
+def scene_list(display: dict[str, Any]) -> list[tuple[str, str, dict[str, Any]]]:
+    """(category, name, scene): the mixed scenes the run cycles through."""
+    out = [("scene", n, s) for n, s in shipped_scenes() + study_scenes(display)]
+    out += [("regions16", "16 texel regions seed %d" % k, regions16(display, 200 + k))
+            for k in range(2)]
+    out += [("reference", n, s) for n, s in reference_scenes(display)]
+    out += [("brush", "full-screen brush seed %d" % k, brush_scene(display, k + 1))
+            for k in range(2)]
+    # interleaved so that a quick run and the first pushes see every category
+    # (the first push after boot: a free-exploration trial, what the lab pushes first)
+    free = [x for x in out if x[1].startswith("free")]
+    first = free[:1] + [next(x for x in out if x[0] == c) for c in ("regions16", "reference",
+                                                                    "brush")]
+    return first + [x for x in out if x not in first]
+
+
+# --- on the board -------------------------------------------------------------------------
+
+def _request(b: Any, scene: dict[str, Any]) -> dict[str, Any]:
+    """One push through the wrapper: the board's figures (module docstring)."""
+    from ..link import protocol
+    from ..link.board import host_check
+    from ..link.transport import LinkError
+    scene = host_check(scene)
+    plain, uploads = protocol.split_uploads(scene)
+    if uploads:                          # the data goes first, as Board.push sends it
+        try:
+            b._upload([u for _, u in uploads], None)
+        except (LinkError, ValueError) as e:
+            return {"refused": "upload: %s" % (str(e)[:300],)}
+    code = protocol.staged_call(protocol.APP, "push", [plain], 0,
+                                {i: k for k, (i, _) in enumerate(uploads)})
+    try:
+        out = b.link.exec("_tpf_req(%r)" % code, timeout=600).strip().splitlines()
+        (compile_us, entry_us, answer_us, lp, err, free, overruns, worst_us,
+         pushes) = ast.literal_eval(out[-1])
+        reply = ast.literal_eval(out[-2]) if len(out) > 1 else None
+    except (LinkError, ValueError, SyntaxError, IndexError) as e:
+        return {"refused": "link: %s" % (str(e)[:300],)}
+    r: dict[str, Any] = {"compile_us": compile_us, "answer_us": answer_us, "mem_free": free,
+                         "overruns": overruns, "worst_us": worst_us, "pushes": pushes,
+                         "request_bytes": len(code)}
+    if err or not (isinstance(reply, tuple) and reply and reply[0] == "ok") or lp is None:
+        r["refused"] = err or (reply[1] if isinstance(reply, tuple) else repr(out[-2:]))[:300]
+        return r
+    r.update({"entry_us": entry_us, "validate_us": lp["validate_us"], "build_us": lp["build_us"],
+              "swap_us": lp["swap_us"], "scene_bytes": lp.get("scene_bytes"),
+              "playing_us": entry_us + lp["validate_us"] + lp["build_us"] + lp["swap_us"]})
+    r["parse_us"] = entry_us - compile_us
+    return r
+
+
+def _irq_costs(b: Any, display: dict[str, Any], reps: int, say: Progress) -> dict[str, Any]:
+    """Refresh cost incl. IRQ entry/exit for a full-screen scene of each
+    region kind (and 16 texel regions), bench/chip.py's method."""
+    from .chip import CPU_HZ, EXCEPTION_CYCLES
+    total = _total(display)
+    kinds = [
+        ("constant", {"regions": [{"start_mm": 0, "end_mm": total,
+                                   "texture": {"kind": "constant", "level": 0.5}}]}),
+        ("reference (flash map)", reference_scenes(display)[2][1]),
+        ("texel plan (format 2)", {"regions": [{"start_mm": 0, "end_mm": total, "texture": {
+            "kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7, "v": 2}}]}),
+        ("brush (RAM map)", brush_scene(display, 3)),
+        # 1,024 values tiled: a 38,400-byte map built in RAM (as a brush's)
+        ("samples (1,024 tiled, RAM map)", {"regions": [{"start_mm": 0, "end_mm": total,
+                                                         "texture": {
+            "kind": "samples", "fit": "tile",
+            "u16": [(i * 2654435761) & 0xFFFF for i in range(1024)]}}]}),
+        # a full-screen upload: played from its 1 KB chunks (scene.K_CHUNK)
+        ("samples (19,200 uploaded, chunks)", {"regions": [{"start_mm": 0, "end_mm": total,
+                                                            "texture": {
+            "kind": "samples", "fit": "tile",
+            "u16": [(i * 2654435761) & 0xFFFF for i in range(display["positions"])]}}]}),
+        ("16 texel regions", regions16(display, 300)),
+    ]
+    out = {}
+    for name, sc in kinds:
+        r = _request(b, sc)
+        if "refused" in r:
+            out[name] = {"refused": r["refused"]}
+            continue
+        rows = b.link.eval("print(repr(_tpb_irq_cost(%d, %d, %d)))" % (IRQ_SPIN, reps, 40),
+                           timeout=600)
+        us = [(on - off) / n for on, off, n, _pos in rows if n > 0]
+        out[name] = {"median_us": statistics.median(us), "max_us": max(us),
+                     "cycles": statistics.median(us) * CPU_HZ / 1e6,
+                     "positions": [pos for *_x, pos in rows], "windows": len(us)}
+        say("refresh, %s: median %.2f us (max %.2f)" % (name, out[name]["median_us"],
+                                                        out[name]["max_us"]))
+    worst = max((v["max_us"] for v in out.values() if "max_us" in v), default=None)
+    return {"kinds": out, "worst_us": worst, "exception_cycles_not_counted": EXCEPTION_CYCLES,
+            "worst_us_with_exception": None if worst is None
+            else worst + EXCEPTION_CYCLES / (CPU_HZ / 1e6)}
+
+
+def run_board(firmware: str | None, pushes: int, scenes: int | None, irq_reps: int,
+              say: Progress) -> dict[str, Any]:
+    """The sequence of the module docstring on one emulated Pico: booted from
+    `firmware` (a .uf2), or with None the stock path (stock MicroPython +
+    texelpad deploy + start, as open_emulated)."""
+    from ..link.board import connect
+    from ..link.emulated import EmulatedPico, finger_js, why_not
+    from ..link.virtual import stop_on_signals
+    from .engines import DEVICE_SCRIPTS
+    why = why_not()
+    if why:
+        raise RuntimeError(why)
+    label = "firmware" if firmware else "stock"
+    res: dict[str, Any] = {"path": label}
+    t_wall = time.monotonic()
+    with stop_on_signals(), EmulatedPico(firmware=firmware,
+                                         extra_args=("--adc-js", finger_js("sweep"))) as emu:
+        say("%s: booting the emulated Pico" % label)
+        emu.start()
+        if not firmware:
+            from ..deploy.install import deploy
+            with connect(emu.port, check=False, import_image=False, timeout=120) as b:
+                deploy(b, progress=lambda m: None)
+            with connect(emu.port, timeout=120) as b:
+                b.start(BOARD)
+        with connect(emu.port, timeout=120) as b:
+            st = b.status()
+            if not st.get("running"):
+                raise RuntimeError("%s: texelpad is not playing after boot: %r" % (label, st))
+            display = st["display"]
+            res["firmware"] = st["firmware"]
+            res["boot_scene"] = st.get("scene")
+            res["boot_last_push"] = st.get("last_push")
+            b.link.exec(DEVICE_CODE, timeout=60)
+            b.link.exec((DEVICE_SCRIPTS / "rp2_chip_bench.py").read_text(), timeout=60)
+            b.link.eval("print(repr(_tpb_snap(True)))")
+            allsc = scene_list(display)
+            if scenes is not None:
+                allsc = allsc[:scenes]
+            res["scenes"] = len(allsc)
+            # 1 + 2: the first push after boot, then the mixed run
+            rows = []
+            for i in range(pushes):
+                cat, name, sc = allsc[i % len(allsc)]
+                r = _request(b, sc)
+                r.update({"i": i, "category": cat, "name": name})
+                rows.append(r)
+                if "refused" in r:
+                    say("%s push %d (%s): REFUSED %s" % (label, i + 1, name, r["refused"]))
+                elif (i + 1) % 10 == 0 or i < 1:
+                    say("%s push %d/%d (%s): playing %.1f ms, answers %.1f ms, free %d"
+                        % (label, i + 1, pushes, name, r["playing_us"] / 1e3,
+                           r["answer_us"] / 1e3, r["mem_free"]))
+            res["rows"] = rows
+            snap = b.link.eval("print(repr(_tpb_snap()))")
+            res["run_overruns"] = snap[2]
+            res["run_worst_refresh_us"] = snap[3]
+            res["run_faults"] = snap[4]
+            # 3: the refresh per region kind
+            res["refresh"] = _irq_costs(b, display, irq_reps, say)
+            # 4: the heap, playing the power-up scene, then before texelpad starts
+            b.start(BOARD)
+            res["heap_free_playing_default"] = b.link.eval("print(_tpf_heap())")
+            b.stop()
+            b.link.soft_reset(timeout=120)
+            res["heap_free_bare"] = b.link.eval("import gc\ngc.collect()\nprint(gc.mem_free())")
+            res["heap_free_after_import"] = b.link.eval(
+                "import texel.app, gc\ngc.collect()\nprint(gc.mem_free())")
+    res["wall_s"] = time.monotonic() - t_wall
+    return res
+
+
+# --- the profile of a push ----------------------------------------------------------------
+
+def profile_push(uf2: str, scene: dict[str, Any], elf: str | None,
+                 say: Progress) -> dict[str, Any] | None:
+    """rp2emu's script mode with --profile: the board pushes `scene` (texel.app
+    playing since boot) and the PC histogram is folded onto the .elf's
+    function symbols. None when it cannot run."""
+    from ..link import protocol
+    from ..link.emulated import rp2emu_dir
+    from ..firmware import romfs
+    nm = shutil.which("arm-none-eabi-nm")
+    d = rp2emu_dir()
+    if not (nm and elf and os.path.isfile(elf) and d):
+        return None
+    text = protocol.scene_text(scene)
+    script = ("import json, texel.app\n_s = json.loads(%r)\ntexel.app.push(_s)\n" % text)
+    with tempfile.TemporaryDirectory(prefix="texelpad-prof-") as tmp:
+        sp, pp = Path(tmp) / "push.py", Path(tmp) / "prof.json"
+        sp.write_text(script)
+        # warm-up: the script mode counts from the script's start (the compile
+        # of this script is in the histogram too; the push dominates it)
+        p = subprocess.run([str(d / "run.sh"), "--firmware", uf2, "--profile", str(pp),
+                            "--timeout", "600", str(sp)], capture_output=True, text=True,
+                           timeout=900)
+        if p.returncode != 0 or not pp.is_file():
+            say("profile: rp2emu exited %d: %s" % (p.returncode, (p.stdout + p.stderr)[-300:]))
+            return None
+        hist = json.loads(pp.read_text())
+    syms = []
+    out = subprocess.run([nm, "-n", "-S", "--defined-only", elf], capture_output=True,
+                         text=True).stdout
+    for line in out.splitlines():
+        f = line.split()
+        if len(f) >= 4 and f[2] in "tTwW":
+            syms.append((int(f[0], 16), int(f[1], 16), f[3]))
+    syms.sort()
+    starts = [s[0] for s in syms]
+    by: dict[str, float] = {}
+    total = 0.0
+    for pc, cyc in hist:
+        total += cyc
+        if pc < 0:
+            by["(asleep: WFI/WFE)"] = by.get("(asleep: WFI/WFE)", 0) + cyc
+            continue
+        k = bisect.bisect_right(starts, pc & ~1) - 1
+        if k >= 0 and pc < syms[k][0] + max(syms[k][1], 2):
+            name = syms[k][2]
+        elif pc >= 0x20000000:
+            name = "(RAM: native/viper code of texelpad)"
+        elif pc >= romfs.XIP_BASE + 0xA0000:
+            name = "(flash: ROMFS)"
+        else:
+            name = "(unknown)"
+        by[name] = by.get(name, 0) + cyc
+    top = sorted(by.items(), key=lambda kv: -kv[1])[:15]
+    return {"total_cycles": total, "total_ms": total / 125e3,
+            "top": [{"symbol": s, "cycles": c, "pct": 100.0 * c / total if total else 0.0}
+                    for s, c in top]}
+
+
+# --- figures ------------------------------------------------------------------------------
+
+def _ms(us: float | None) -> float | None:
+    return None if us is None else us / 1e3
+
+
+def summarize(res: dict[str, Any]) -> dict[str, Any]:
+    rows = res["rows"]
+    ok = [r for r in rows if "refused" not in r]
+
+    def cat(c: str, key: str, fn: Callable = max) -> float | None:
+        v = [r[key] for r in ok if r["category"] == c]
+        return _ms(fn(v)) if v else None
+
+    def worst(c: str) -> str | None:
+        v = [r for r in ok if r["category"] == c]
+        return max(v, key=lambda r: r["playing_us"])["name"] if v else None
+
+    mem = [r["mem_free"] for r in rows if r.get("mem_free") is not None]
+    first = rows[0] if rows else {}
+    f = {
+        "scene_to_playing_ms": cat("scene", "playing_us"),
+        "scene_to_playing_ms_median": cat("scene", "playing_us", statistics.median),
+        "scene_to_playing_worst": worst("scene"),
+        "scene_answers_ms": cat("scene", "answer_us"),
+        "scene_answers_ms_median": cat("scene", "answer_us", statistics.median),
+        "regions16_to_playing_ms": cat("regions16", "playing_us"),
+        "regions16_answers_ms": cat("regions16", "answer_us"),
+        "reference_to_playing_ms": cat("reference", "playing_us"),
+        "reference_to_playing_worst": worst("reference"),
+        "reference_answers_ms": cat("reference", "answer_us"),
+        "brush_to_playing_ms": cat("brush", "playing_us"),
+        "brush_answers_ms": cat("brush", "answer_us"),
+        "first_push_to_playing_ms": _ms(first.get("playing_us")),
+        "first_push_answers_ms": _ms(first.get("answer_us")),
+        "first_push_scene": first.get("name"),
+        "refresh_us": res["refresh"]["worst_us"],
+        "refresh_us_with_exception": res["refresh"]["worst_us_with_exception"],
+        "overruns": res["run_overruns"],
+        "worst_refresh_body_us": res["run_worst_refresh_us"],
+        "heap_free_playing_bytes": min(mem) if mem else None,
+        "heap_free_playing_default_bytes": res["heap_free_playing_default"],
+        "heap_free_bare_bytes": res["heap_free_bare"],
+        "heap_free_after_import_bytes": res["heap_free_after_import"],
+        "pushes": len(rows), "refused": len(rows) - len(ok),
+        "refusals": [(r["name"], r["refused"]) for r in rows if "refused" in r],
+        "mem_free_slope_per_push": slope_per_push(mem),
+        "mem_free_first": mem[0] if mem else None, "mem_free_last": mem[-1] if mem else None,
+    }
+    return f
+
+
+def _met(key: str, v: Any) -> str:
+    g = GOALS.get(key)
+    if g is None or v is None:
+        return ""
+    good = v >= g if key == "heap_free_playing_bytes" else v <= g
+    return "met" if good else "NOT met"
+
+
+ROWS = [  # (key, label, unit, goal text)
+    ("scene_to_playing_ms", "shipped + study scenes: last byte -> playing (max)", "ms", "<= 20"),
+    ("scene_answers_ms", "shipped + study scenes: board answers (max)", "ms", "<= 30"),
+    ("regions16_to_playing_ms", "16 texel regions: -> playing (max)", "ms", "<= 50"),
+    ("reference_to_playing_ms", "full-screen reference: -> playing (max of 9)", "ms", "<= 20"),
+    ("brush_to_playing_ms", "full-screen brush: -> playing (max)", "ms", "<= 200"),
+    ("first_push_answers_ms", "first push after boot: answers", "ms", "<= 30"),
+    ("refresh_us", "one refresh incl. IRQ, worst region kind", "us", "<= 10"),
+    ("overruns", "refresh overruns while pushing", "", "0"),
+    ("heap_free_playing_bytes", "heap free while playing (min over the pushes)", "B",
+     ">= 204,800"),
+    ("refused", "pushes refused", "", "0"),
+    ("mem_free_slope_per_push", "free memory trend", "B/push", "flat"),
+]
+
+
+def _fmt(v: Any, unit: str) -> str:
+    if v is None:
+        return "-"
+    if unit == "B":
+        return format(int(v), ",")
+    if unit in ("ms", "us"):
+        return "%.2f" % v
+    if unit == "B/push":
+        return "%+.1f" % v
+    return str(v)
+
+
+def table(out: dict[str, Any]) -> str:
+    fw, stock = out["firmware"]["figures"], (out.get("stock") or {}).get("figures")
+    lines = ["texelpad firmware bench (issue 19): the emulated Pico (rp2040js @ 125 MHz), every "
+             "figure on the board's own clock (ticks_us)",
+             "uf2 %s: firmware %s bytes, ROMFS %s bytes of %s" % (
+                 out["uf2"], format(out["firmware_bytes"], ","), format(out["romfs_bytes"], ","),
+                 format(out["romfs_capacity"], ",")),
+             "%d pushes in a row of %d mixed scenes (first: %s)" % (
+                 fw["pushes"], out["firmware"]["scenes"], fw["first_push_scene"]), ""]
+    w = 52
+    head = "%-*s %12s %12s %12s  %s" % (w, "", "firmware", "today*", "goal", "")
+    lines.append(head)
+    for key, label, unit, goal in ROWS:
+        v = fw.get(key)
+        t = stock.get(key) if stock else None
+        verdict = _met(key, v) if key in GOALS else ""
+        lines.append("%-*s %12s %12s %12s  %s" % (w, label + (" [%s]" % unit if unit else ""),
+                                                  _fmt(v, unit), _fmt(t, unit), goal, verdict))
+    extra = [("scene_to_playing_ms_median", "  scenes: -> playing, median", "ms"),
+             ("scene_answers_ms_median", "  scenes: answers, median", "ms"),
+             ("regions16_answers_ms", "  16 texel regions: answers (max)", "ms"),
+             ("reference_answers_ms", "  full-screen reference: answers (max)", "ms"),
+             ("brush_answers_ms", "  full-screen brush: answers (max)", "ms"),
+             ("first_push_to_playing_ms", "  first push after boot: -> playing", "ms"),
+             ("refresh_us_with_exception", "  refresh + 30 exception cycles not emulated", "us"),
+             ("worst_refresh_body_us", "  refresh body worst (its own clock) while pushing",
+              "us"),
+             ("heap_free_playing_default_bytes", "heap free playing the power-up scene", "B"),
+             ("heap_free_after_import_bytes", "heap free, texel.app imported, not playing", "B"),
+             ("heap_free_bare_bytes", "heap free at boot before texelpad starts", "B")]
+    for key, label, unit in extra:
+        v = fw.get(key)
+        t = stock.get(key) if stock else None
+        lines.append("%-*s %12s %12s" % (w, label + " [%s]" % unit, _fmt(v, unit), _fmt(t, unit)))
+    if out.get("stock_error"):
+        lines.append("today's path failed: %s" % out["stock_error"][:300])
+    lines.append("* today = stock MicroPython 1.28 + ulab + `texelpad deploy`, the same scenes on the "
+                 "same emulator (--stock)%s" % ("" if stock else ": not run (pass --stock)"))
+    lines.append("")
+    lines.append("refresh cost per region kind (median / max us over %d windows, finger sweeping):"
+                 % IRQ_REPS)
+    for path in ("firmware", "stock"):
+        if not out.get(path):
+            continue
+        ks = out[path]["refresh"]["kinds"]
+        lines.append("  %-8s " % path + "; ".join(
+            "%s %s" % (k, "REFUSED" if "refused" in v else "%.2f/%.2f" % (v["median_us"],
+                                                                        v["max_us"]))
+            for k, v in ks.items()))
+    lines.append("")
+    lines.append("per category (firmware), ms: to playing = compile + parse + validate + build + "
+                 "swap (max-playing push)")
+    for c in ("scene", "regions16", "reference", "brush"):
+        rs = [r for r in out["firmware"]["rows"] if r["category"] == c and "refused" not in r]
+        if not rs:
+            continue
+        r = max(rs, key=lambda r: r["playing_us"])
+        lines.append("  %-10s %-40s %6.2f = %.2f + %.2f + %.2f + %.2f + %.2f; answers %.2f; "
+                     "JSON request %d B" % (
+                         c, r["name"][:40], r["playing_us"] / 1e3, r["compile_us"] / 1e3,
+                         r["parse_us"] / 1e3, r["validate_us"] / 1e3, r["build_us"] / 1e3,
+                         r["swap_us"] / 1e3, r["answer_us"] / 1e3, r["request_bytes"]))
+    if fw["refusals"]:
+        lines.append("REFUSED: " + "; ".join("%s: %s" % x for x in fw["refusals"][:10]))
+    if out.get("profile"):
+        p = out["profile"]
+        lines.append("")
+        lines.append("where the cycles go, %s (rp2emu --profile, script mode, %.1f ms incl. the "
+                     "script's compile; symbols of %s):" % (p["scene"], p["total_ms"],
+                                                            os.path.basename(out["elf"] or "")))
+        for t in p["top"][:12]:
+            lines.append("  %5.1f %%  %s" % (t["pct"], t["symbol"]))
+    if out.get("notes"):
+        lines.append("")
+        lines += ["note: " + n for n in out["notes"]]
+    lines.append("wall time %.0f s" % out["wall_s"])
+    return "\n".join(lines)
+
+
+def notes(out: dict[str, Any]) -> list[str]:
+    fw = out["firmware"]["figures"]
+    n = []
+    for key, label, unit, goal in ROWS:
+        if key in GOALS and _met(key, fw.get(key)) == "NOT met":
+            n.append("%s: %s %s (goal %s)" % (label, _fmt(fw.get(key), unit), unit, goal))
+    return n
+
+
+# --- the run ------------------------------------------------------------------------------
+
+def uf2_sizes(uf2: str) -> dict[str, int]:
+    from ..firmware import romfs
+    from ..link.emulated import FS_OFFSET
+    blocks = romfs.read_uf2(Path(uf2).read_bytes())
+    low = sum(len(p) for a, p, _ in blocks if a - romfs.XIP_BASE < FS_OFFSET)
+    high = b"".join(p for a, p, _ in sorted(blocks) if a - romfs.XIP_BASE >= FS_OFFSET)
+    rom = 0
+    if high.startswith(romfs.ROMFS_HEADER):
+        i, v = len(romfs.ROMFS_HEADER), 0
+        while True:
+            c = high[i]
+            i += 1
+            v = (v << 7) | (c & 0x7F)
+            if not c & 0x80:
+                break
+        rom = i + v
+    return {"firmware_bytes": low, "romfs_bytes": rom}
+
+
+def default_uf2(say: Progress) -> str:
+    """$TEXELPAD_FIRMWARE_UF2, or the firmware built for boards/pico into
+    ~/.cache/texelpad/firmware-pico (built once: 2-3 min)."""
+    env = os.environ.get("TEXELPAD_FIRMWARE_UF2")
+    if env:
+        return env
+    out = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "texelpad" / \
+        "firmware-pico"
+    uf2 = out / "texelpad-pico.uf2"
+    if not uf2.is_file():
+        from ..firmware.build import build_firmware, repo_boards_dir
+        boards = repo_boards_dir()
+        if boards is None:
+            raise RuntimeError("no boards/ folder (a wheel): give --uf2")
+        say("building the firmware into %s (2-3 min)" % out)
+        build_firmware(boards / BOARD, out, progress=lambda m: say("firmware: " + m))
+    return str(uf2)
+
+
+def run(uf2: str, stock: bool = False, quick: bool = False, pushes: int | None = None,
+        profile: bool = True, progress: Progress | None = None) -> dict[str, Any]:
+    say = progress or say_nothing
+    t0 = time.monotonic()
+    n = pushes if pushes is not None else (QUICK_PUSHES if quick else PUSHES)
+    scenes = QUICK_SCENES if quick else None
+    reps = 1 if quick else IRQ_REPS
+    cap = None
+    try:
+        from ..firmware.build import layout, repo_boards_dir
+        bd = repo_boards_dir()
+        cap = layout(bd / BOARD)[1] if bd else None
+    except Exception:
+        pass
+    elf = str(Path(uf2).with_suffix(".elf"))
+    out: dict[str, Any] = {"uf2": uf2, "elf": elf if os.path.isfile(elf) else None,
+                           "goals": GOALS, "quick": quick, "romfs_capacity": cap or 0}
+    out.update(uf2_sizes(uf2))
+    fw = run_board(uf2, n, scenes, reps, say)
+    fw["figures"] = summarize(fw)
+    out["firmware"] = fw
+    if stock:
+        try:
+            st = run_board(None, n, scenes, reps, say)
+            st["figures"] = summarize(st)
+            out["stock"] = st
+        except Exception as e:          # today's path failing is a figure too: say it
+            out["stock_error"] = "%s: %s" % (type(e).__name__, e)
+            say("stock: %s" % out["stock_error"])
+    out["notes"] = notes(out)
+    if profile and not quick and out["elf"]:
+        ok = [r for r in fw["rows"] if "refused" not in r]
+        if ok:
+            worst = max(ok, key=lambda r: r["playing_us"])
+            from ..link.board import host_check
+            disp = {"positions": 19200, "dx_um": 5.3}
+            sc = dict((name, s) for _c, name, s in scene_list(disp))[worst["name"]]
+            say("profile: %s in script mode" % worst["name"])
+            p = profile_push(uf2, host_check(sc), out["elf"], say)
+            if p:
+                p["scene"] = worst["name"]
+                out["profile"] = p
+    out["wall_s"] = time.monotonic() - t0
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m texelpad.bench.firmware",
+                                 description=__doc__.split("\n\n")[0])
+    ap.add_argument("--uf2", help="the texelpad firmware (.uf2; its .elf beside it for the "
+                    "profile); default $TEXELPAD_FIRMWARE_UF2 or built once into ~/.cache")
+    ap.add_argument("--json", help="write every figure as JSON here")
+    ap.add_argument("--stock", action="store_true",
+                    help="also measure today's path: stock MicroPython + texelpad deploy")
+    ap.add_argument("--quick", action="store_true",
+                    help="%d scenes, %d pushes, no profile (a smoke test)"
+                    % (QUICK_SCENES, QUICK_PUSHES))
+    ap.add_argument("--pushes", type=int, help="pushes in a row (default %d)" % PUSHES)
+    ap.add_argument("--no-profile", action="store_true", help="skip the --profile run")
+    a = ap.parse_args(argv)
+    say = lambda m: print("..", m, file=sys.stderr, flush=True)     # noqa: E731
+    uf2 = a.uf2 or default_uf2(say)
+    out = run(uf2, stock=a.stock, quick=a.quick, pushes=a.pushes, profile=not a.no_profile,
+              progress=say)
+    print(table(out))
+    if a.json:
+        Path(a.json).write_text(json.dumps(out, indent=1, default=str))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,50 @@
+"""The firmware benchmark (texelpad.bench.firmware) in its quick mode on the
+emulated Pico: every goal of issue 19 has its key in the JSON and no push was
+refused. No timing is asserted (the figures are printed: pytest -s)."""
+from __future__ import annotations
+
+import json
+import shutil
+
+import pytest
+
+from texelpad.bench import firmware as bench
+from texelpad.link.emulated import why_not
+
+pytestmark = [pytest.mark.instruments, pytest.mark.slow]
+
+
+@pytest.fixture(scope="module")
+def uf2():
+    why = why_not()
+    if why:
+        pytest.skip(why)
+    import os
+    if not os.environ.get("TEXELPAD_FIRMWARE_UF2"):
+        if not shutil.which("arm-none-eabi-gcc"):
+            pytest.skip("arm-none-eabi-gcc is not installed: the texelpad firmware cannot be "
+                        "built (Debian's gcc-arm-none-eabi libnewlib-arm-none-eabi cmake)")
+        from texelpad.firmware.build import _kit, repo_boards_dir
+        if repo_boards_dir() is None or _kit() is None:
+            pytest.skip("no boards/ folder or no offline MicroPython kit "
+                        "(../shared/instruments/mpfirmware): the firmware cannot be built")
+    try:
+        return bench.default_uf2(print)
+    except Exception as e:          # a build that cannot run here (no cmake, ...)
+        pytest.skip("the texelpad firmware could not be built: %s" % e)
+
+
+def test_the_quick_benchmark_reports_every_goal_and_refuses_nothing(uf2, tmp_path):
+    out_json = tmp_path / "fw.json"
+    assert bench.main(["--uf2", uf2, "--quick", "--json", str(out_json)]) == 0
+    out = json.loads(out_json.read_text())
+    fig = out["firmware"]["figures"]
+    for key in bench.GOALS:
+        assert key in fig, key
+    for key in ("mem_free_slope_per_push", "heap_free_bare_bytes",
+                "heap_free_playing_default_bytes", "first_push_to_playing_ms"):
+        assert key in fig, key
+    assert out["firmware_bytes"] > 0 and out["romfs_bytes"] > 0
+    assert fig["pushes"] == bench.QUICK_PUSHES
+    assert fig["refused"] == 0, fig["refusals"]
+    assert all("refused" not in r for r in out["firmware"]["rows"])
