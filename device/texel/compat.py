@@ -148,28 +148,3 @@ def heap_free():
     except (ImportError, AttributeError):
         return None
 
-
-def rom_u16(path, n):
-    """A read-only uint16 view (index it, len() it, uctypes.addressof() it) of
-    the first n little-endian values of a file that the filesystem keeps in
-    memory-mapped flash - a ROMFS file: MicroPython gives its bytes in place
-    (extmod/vfs_rom_file.c has a buffer protocol), so the view takes no heap
-    beyond a few words - or None: another filesystem (littlefs files have no
-    buffer protocol), CPython, a port without uctypes or ROMFS, a file too
-    short, data not 4-byte aligned (texelpad.firmware.romfs aligns *.u16).
-    The texelpad firmware's reference maps (texel/gen/ref/*.u16) play so."""
-    try:
-        import uctypes
-        f = open(path, "rb")
-    except (ImportError, OSError):
-        return None
-    try:
-        mv = memoryview(f)
-    except TypeError:
-        f.close()
-        return None
-    a = uctypes.addressof(mv)
-    if len(mv) < 2 * n or a & 3:
-        return None
-    return uctypes.struct(a, {"v": (uctypes.ARRAY | 0, uctypes.UINT16 | n)},
-                          uctypes.LITTLE_ENDIAN).v

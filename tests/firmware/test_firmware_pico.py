@@ -55,8 +55,11 @@ def test_the_uf2_boots_playing_its_power_up_scene_with_texel_from_flash(pico):
     assert kinds == [("reference", "map"), ("texel", "plan")]     # texel.app.DEFAULT_SCENE
     # the reference plays from flash: only the texel region's plan is in RAM
     assert st["scene"]["buffer_bytes"] == st["scene"]["regions"][1]["bytes"]
-    assert where[0] == "/rom/lib/texel/__init__.mpy" and "/rom/lib" in where[1]
+    # texel's code is frozen in the firmware (a __file__ naming no file); its data is the ROMFS's
+    from texelpad.firmware.romfs import code_digest
+    assert where[0] == "texel/__init__.py" and where[1][:4] == ["", ".frozen", "/rom", "/rom/lib"]
     assert info["board"] == "pico" and info["micropython"] == "1.28.0"
+    assert info["frozen_code_sha256"] == code_digest() and info["code_in_romfs"] is False
     print("\nheap free while the power-up scene plays: %s bytes" % format(st["mem_free"], ","))
 
 
@@ -76,6 +79,21 @@ def test_the_references_in_flash_are_the_hosts_maps_bit_for_bit(pico):
         digest, n, first, mid, last = got[name]
         assert digest.decode() == hashlib.sha256(m.tobytes()).hexdigest(), name
         assert (n, first, mid, last) == (19200, m[0], m[9599], m[19199]), name
+
+
+def test_the_generators_tables_read_in_place_make_the_hosts_maps(pico):
+    # the sine and plan tables come from the ROMFS (texel.rom.const_table), not copied
+    import texel
+    p = {"pitch_db": 8.1, "irregularity_db": -6.0, "seed": 11, "v": 2, "length_samples": 4800}
+    want = hashlib.sha256(np.asarray(texel.render_u16(p, engine="int"), dtype="<u2").tobytes())
+    with _connect(pico.port) as b:
+        got = b.link.eval(
+            "import texel, hashlib, binascii\nfrom texel.gen import sine_table, plan_int_tables\n"
+            "m = texel.render_u16(%r, engine='int')\n"
+            "print(repr((binascii.hexlify(hashlib.sha256(m).digest()),"
+            " str(type(sine_table.table())), str(type(plan_int_tables.table())))))" % (p,))
+    assert got[0].decode() == want.hexdigest()
+    assert got[1:] == ("<class 'struct'>", "<class 'struct'>")      # views of flash, not arrays
 
 
 def test_push_status_and_scene_pull_through_the_command_line(pico, capsys, tmp_path):
@@ -134,13 +152,27 @@ def test_a_bad_push_is_refused_and_the_scene_kept(pico):
             assert b.scene_source() == before and b.status()["running"]
 
 
+def _texel_file(port):
+    with _connect(port) as b:
+        st = b.status()
+        assert st["running"] and st["scene"]["regions"][0]["name"] == "4sin"   # what played
+        return b.link.eval("import texel\nprint(repr(texel.__file__))")
+
+
 def test_deploy_finds_the_firmware_and_rewrites_only_its_romfs(pico, capsys):
     code, out, err = run_cli(capsys, "deploy", "--port", pico.port)
     assert code == 0, err
     assert "texelpad firmware found (board pico" in err and "already holds this texelpad" in out
+    assert "its frozen code is this texelpad's" in err
+    # --force: this texelpad's code into the ROMFS, where it runs instead of the frozen copy
+    # (frozen_boot.py), as it does when a host's texelpad is newer than the firmware's
     code, out, err = run_cli(capsys, "deploy", "--port", pico.port, "--force")
     assert code == 0, err
-    assert "ROMFS partition rewritten" in out and "restarted pico" in out
-    with _connect(pico.port) as b:
-        st = b.status()
-        assert st["running"] and st["scene"]["regions"][0]["name"] == "4sin"   # what played
+    assert "ROMFS partition rewritten" in out and "this texelpad's code" in out
+    assert "restarted pico" in out
+    assert _texel_file(pico.port) == "/rom/lib/texel/__init__.mpy"
+    # and a plain deploy puts the partition back to the data: the frozen code runs again
+    code, out, err = run_cli(capsys, "deploy", "--port", pico.port)
+    assert code == 0, err
+    assert "ROMFS partition rewritten" in out and "the code is the firmware's, frozen" in out
+    assert _texel_file(pico.port) == "texel/__init__.py"

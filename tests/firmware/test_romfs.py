@@ -78,7 +78,7 @@ def test_every_board_folder_is_a_firmware_definition_with_the_shipped_board_file
     base, rom, storage = build.layout(d)
     assert base + rom + storage == build.FLASH_BYTES
     assert base <= 0xA0000          # the emulated Pico's flash file starts there
-    assert "freeze(\"$(BOARD_DIR)\", \"main.py\")" in (d / "manifest.py").read_text()
+    assert "package(\"texel\", base_path=\"$(BOARD_DIR)\")" in (d / "manifest.py").read_text()
 
 
 def test_a_board_folder_that_is_not_one_is_refused_saying_what_is_missing(tmp_path):

@@ -7,7 +7,6 @@
 #   NORM    1025 values  -Phi^-1(u) in Q24 at 32 points per octave of u
 # 6,148 bytes. A literal, not computed: computing them needs float64 and an
 # accurate inverse normal, and the point is that every runtime has the same ints.
-from array import array
 
 EXP_HI = 0          # offsets into table()
 EXP_MID = 256
@@ -15,6 +14,8 @@ NORM = 512
 NORM_PER_OCTAVE = 32
 NORM_SHIFT = 5      # log2(NORM_PER_OCTAVE)
 _table = None
+
+import sys
 
 _RAW = (
     b'\x00\x00\x00\x10\xfa\x1a\x0b\x10\xaa\x3d\x16\x10\x14\x68\x21\x10\x3e\x9a\x2c\x10\x2e\xd4\x37\x10\xe8\x15\x43\x10\x73\x5f\x4e\x10'
@@ -213,10 +214,18 @@ _RAW = (
 )
 
 
+
+
 def table():
-    """The three tables as one array('i') (cached). array('i') of these bytes
-    is native-endian: every supported target (x86, ARM Cortex-M) is little-endian."""
+    """The three tables as one read-only int32 table (cached; rom.const_table:
+    a view of the literal, or array('i'): native-endian, and every supported
+    target (x86, ARM Cortex-M) is little-endian)."""
     global _table
     if _table is None:
-        _table = array("i", _RAW)
+        if sys.platform == "rp2":       # the texelpad firmware's copy in flash: no RAM
+            from ..rom import const_table
+            _table = const_table(__file__, "plan_int_tables.i32", _RAW, "i")
+        else:
+            from array import array
+            _table = array("i", _RAW)
     return _table

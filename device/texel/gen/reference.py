@@ -223,7 +223,7 @@ def noise_path():
     sys.path (frozen modules may have no __file__)."""
     cands = []
     try:
-        here = __file__
+        here = __file__                 # frozen: the sys.path entries below find /rom/lib
         cut = max(here.rfind("/"), here.rfind("\\"))
         cands.append((here[:cut + 1] if cut >= 0 else "") + NOISE_FILE)
     except NameError:
@@ -253,15 +253,15 @@ FLASH_SAMPLES = 19200
 
 def flash_u16(name, length_samples):
     """The map of reference name, length_samples long, as a uint16 view of
-    flash (compat.rom_u16), or None where the image has no flash maps."""
+    flash (rom.rom_u16), or None where the image has no flash maps."""
     if name not in STUDY_NAMES or not 1 <= length_samples <= FLASH_SAMPLES:
         return None
+    from ..rom import rom_u16, data_beside
     try:
-        here = __file__
+        here = data_beside(__file__)    # frozen (texelpad firmware): the ROMFS's maps
     except NameError:
         return None
     cut = max(here.rfind("/"), here.rfind("\\"))
-    from ..compat import rom_u16
     return rom_u16("%s%s/%s.u16" % (here[:cut + 1], FLASH_DIR, name), length_samples)
 
 

@@ -6,11 +6,12 @@
 # The values are a literal (tools/gen_sine_table.py writes it; a test checks
 # it against the formula): computing 1,025 float sines would cost a board
 # ~150 ms at its first render.
-from array import array
 
 BITS = 10
 SIZE = 1 << BITS
 _table = None
+
+import sys
 
 _RAW = (
     b'\x00\x80\xc9\x80\x92\x81\x5b\x82\x24\x83\xed\x83\xb6\x84\x7e\x85\x47\x86\x10\x87\xd9\x87\xa1\x88\x6a\x89\x32\x8a\xfb\x8a\xc3\x8b'
@@ -81,9 +82,17 @@ _RAW = (
 )
 
 
+
+
 def table():
-    """The table as array('H') (little-endian literal: every target is)."""
+    """The table, read-only, indexable (rom.const_table: a view of the literal, or
+    array('H'); little-endian literal: every target is)."""
     global _table
     if _table is None:
-        _table = array("H", _RAW)
+        if sys.platform == "rp2":       # the texelpad firmware's copy in flash: no RAM
+            from ..rom import const_table
+            _table = const_table(__file__, "sine_table.u16", _RAW, "H")
+        else:
+            from array import array
+            _table = array("H", _RAW)
     return _table

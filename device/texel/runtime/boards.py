@@ -173,7 +173,8 @@ def _installed_boards():
     """<texel package>/boards.d, or None without __file__ (frozen). This
     module is <texel>/runtime/boards.py, so the package is two levels up."""
     try:
-        here = __file__
+        from ..rom import data_beside
+        here = data_beside(__file__)    # frozen (texelpad firmware): the ROMFS's copy
     except NameError:
         return None
     pkg = _norm_up(here.replace("\\", "/"), 2)

@@ -806,7 +806,7 @@ class Scene:
             if isinstance(b, tuple):    # K_CHUNK
                 for c in b:
                     self.buffer_bytes += 2 * len(c)
-            elif isinstance(b, array):  # not a map in flash (compat.rom_u16): no RAM
+            elif isinstance(b, array):  # not a map in flash (rom.rom_u16): no RAM
                 self.buffer_bytes += 2 * len(b)
         for pl in plans:
             self.buffer_bytes += 4 * len(pl[0]) + 4 * len(pl[1])

@@ -29,8 +29,9 @@ def add_deploy(p: argparse.ArgumentParser) -> None:
                         "its default scene at power-up)")
     p.add_argument("--dry-run", action="store_true", help="only say what would be written")
     p.add_argument("--force", action="store_true",
-                   help="on the texelpad firmware: rewrite its ROMFS partition even when it "
-                        "holds this texelpad's image")
+                   help="on the texelpad firmware: rewrite its ROMFS partition with this "
+                        "texelpad's code in it (run instead of the frozen copy), even when it "
+                        "holds what it should")
     _port_arg(p, "the one board plugged in")
     p.set_defaults(func=cmd_deploy)
 
@@ -52,10 +53,12 @@ def cmd_deploy(args: argparse.Namespace) -> int:
         finally:
             bar.end()
     if rep.get("form") == "romfs":          # the texelpad firmware (deploy/romfs_install.py)
-        print("%s %s (texelpad firmware, board %s): ROMFS partition %s (%s bytes), in %.2f s%s"
+        print("%s %s (texelpad firmware, board %s): ROMFS partition %s (%s bytes, %s), in %.2f s%s"
               % ("would deploy to" if args.dry_run else "deployed to", b.port, rep["board"],
                  "rewritten" if rep["written"] else "already holds this texelpad",
-                 format(rep["image_bytes"], ","), rep["seconds"],
+                 format(rep["image_bytes"], ","),
+                 "data and this texelpad's code" if rep["code_in_romfs"] else
+                 "data; the code is the firmware's, frozen", rep["seconds"],
                  "; restarted %s with its scene" % rep["restarted"] if rep["restarted"] else ""))
         if not args.dry_run:
             print("next: texelpad demo --port %s" % b.port)

@@ -1,12 +1,14 @@
 """`texelpad deploy` on a board running the texelpad firmware: rewrite its ROMFS partition.
 
-The texelpad firmware (texelpad.firmware, boards/) keeps texelpad in a ROMFS partition, which
-the board reads as /rom (bytecode and reference maps in place). Its /rom/firmware.json names
-the board and carries a digest of the partition's files; deploy builds the partition this host
-would build for that board (texelpad.firmware.build.payload_for), and when the digests differ
-(or with force) writes it with MicroPython's vfs.rom_ioctl (the calls `mpremote romfs deploy`
-makes: erase, write 4 KB at a time, finish), then soft-resets and starts again what played.
-No firmware rebuild: the MicroPython part stays.
+The texelpad firmware (texelpad.firmware, boards/) has texelpad's code frozen in and its data
+(reference maps, board files) in a ROMFS partition, which the board reads as /rom. Its
+/rom/firmware.json names the board and carries digests of the frozen code and of the
+partition's files. deploy builds the partition this host would build for that board
+(texelpad.firmware.build.payload_for): the data, plus this host's code when it differs from the
+frozen code (or with force; the frozen boot.py then puts the ROMFS's code first on sys.path),
+and when the partition's digest differs writes it with MicroPython's vfs.rom_ioctl (the calls
+`mpremote romfs deploy` makes: erase, write 4 KB at a time, finish), then soft-resets and starts
+again what played. No firmware rebuild.
 
 While the partition is rewritten nothing of texelpad may run: its bytecode and maps are in
 that flash. So the display is stopped, texel dropped from sys.modules and /rom unmounted
@@ -70,21 +72,28 @@ def deploy_romfs(board: Any, info: dict, force: bool = False, dry_run: bool = Fa
                  progress: Callable[[str], None] | None = None,
                  bar: Callable[[int, int, str], None] | None = None) -> dict[str, Any]:
     from ..firmware.build import payload_for
+    from ..firmware.romfs import code_digest
     say = progress or (lambda m: None)
     t0 = time.perf_counter()
     name = info.get("board") or "pico"
-    files, img = payload_for(name, _board_json(board, name))
+    mine = code_digest()
+    frozen = info.get("frozen_code_sha256")
+    code = force or mine != frozen
+    files, img = payload_for(name, _board_json(board, name), code=code, frozen_code=frozen or mine)
     want = json.loads(files["firmware.json"])["image_sha256"]
     current = info.get("image_sha256") == want
     report: dict[str, Any] = {
         "target": "rp2-romfs", "form": "romfs", "firmware": "texelpad", "board": name,
         "files": len(files), "image_bytes": len(img), "written": 0, "bytes_written": 0,
         "unchanged": len(files) if current and not force else 0, "removed": [],
-        "dry_run": dry_run, "restarted": None, "playing": None}
-    say("texelpad firmware found (board %s, texelpad %s): texelpad lives in its ROMFS "
-        "partition; %s" % (name, info.get("texelpad", "?"),
-                           "it holds this texelpad's image" if current else
-                           "this texelpad's image differs (%d bytes)" % len(img)))
+        "dry_run": dry_run, "restarted": None, "playing": None, "code_in_romfs": code}
+    say("texelpad firmware found (board %s, texelpad %s): %s; its ROMFS partition %s"
+        % (name, info.get("texelpad", "?"),
+           "its frozen code is this texelpad's" if mine == frozen else
+           "this texelpad's code differs from the firmware's frozen copy: the partition gets "
+           "this code too, which runs instead of the frozen one (with less heap free: flash a "
+           "new texelpad-%s.uf2, texelpad firmware, to have it frozen)" % name,
+           "holds what it should" if current else "is rewritten (%d bytes)" % len(img)))
     if (current and not force) or dry_run:
         report["seconds"] = time.perf_counter() - t0
         return report
@@ -98,23 +107,33 @@ def deploy_romfs(board: Any, info: dict, force: bool = False, dry_run: bool = Fa
     link = board.link
     # nothing of texelpad may run from here on: its code is in the flash being rewritten
     link.exec(protocol.PURGE + "import vfs\ntry:\n vfs.umount('/rom')\nexcept OSError:\n pass\n")
-    size = link.eval("import vfs\n_d = vfs.rom_ioctl(2, 0)\nprint(repr(len(memoryview(_d))))")
+    # the partition as rp2's block device (rp2.Flash: vfs.rom_ioctl(2, 0) on this port; the
+    # other rom_ioctl calls answer -EINVAL here) - what `mpremote romfs deploy` does on rp2
+    n_blocks, block = link.eval("import vfs\n_d = vfs.rom_ioctl(2, 0)\n"
+                                "print(repr((_d.ioctl(4, 0), _d.ioctl(5, 0))))")
+    size = n_blocks * block
     if len(img) > size:
         raise LinkError("texelpad's image (%d bytes) does not fit this board's ROMFS partition "
                         "(%d bytes): flash a newer texelpad firmware (texelpad firmware)"
                         % (len(img), size))
-    say("erasing %d bytes of the ROMFS partition" % len(img))
-    step = link.eval("import vfs\nprint(repr(vfs.rom_ioctl(3, 0, %d)))" % len(img), timeout=120)
-    chunk = max(CHUNK, int(step) if isinstance(step, int) and step > 0 else CHUNK)
-    link.exec("from binascii import a2b_base64 as _b\nimport vfs")
-    for off in range(0, len(img), chunk):
-        piece = img[off:off + chunk]
+    used = -(-len(img) // block)
+    say("erasing %d blocks of the ROMFS partition" % used)
+    for k in range(used):              # BP_IOCTL_SEC_ERASE: 0 when done
+        if link.eval("print(repr(_d.ioctl(6, %d)))" % k, timeout=60) not in (0, None):
+            raise LinkError("erasing block %d of the ROMFS partition failed" % k)
+    link.exec("from binascii import a2b_base64 as _b")
+    for off in range(0, len(img), CHUNK):
+        piece = img[off:off + CHUNK]
         piece += b"\xff" * (-len(piece) % 4)
-        link.exec("vfs.rom_ioctl(4, 0, %d, _b(%r))" % (
-            off, binascii.b2a_base64(piece, newline=False).decode("ascii")), timeout=60)
+        link.exec("_d.writeblocks(%d, _b(%r), %d)" % (
+            off // block, binascii.b2a_base64(piece, newline=False).decode("ascii"), off % block),
+            timeout=60)
         if bar:
-            bar(min(off + chunk, len(img)), len(img), "ROMFS")
-    link.exec("vfs.rom_ioctl(5, 0)")
+            bar(min(off + CHUNK, len(img)), len(img), "ROMFS")
+    # what the partition holds now, before anything is reset
+    head = link.eval("print(repr(bytes(memoryview(_d)[:%d])))" % min(len(img), 64))
+    if head != img[:len(head)]:
+        raise LinkError("the ROMFS partition did not take the image (it reads %r)" % head[:16])
     report["written"] = len(files)
     report["bytes_written"] = len(img)
     say("soft reset of %s: the new partition mounts at /rom" % board.port)

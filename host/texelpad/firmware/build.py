@@ -39,6 +39,7 @@ MICROPYTHON_VERSION = "1.28.0"
 BOARD_FILES = ("mpconfigboard.h", "mpconfigboard.cmake", "pins.csv", "manifest.py", "board.json")
 FLASH_BYTES = 2 * 1024 * 1024         # a Pico's W25Q16 (PICO_FLASH_SIZE_BYTES for "pico")
 FROZEN_MAIN = Path(__file__).with_name("frozen_main.py")
+FROZEN_BOOT = Path(__file__).with_name("frozen_boot.py")
 FIRMWARE_INFO = "firmware.json"       # at the ROMFS root: /rom/firmware.json on the board
 
 
@@ -129,18 +130,36 @@ def romfs_payload(board_dir: Path, board: dict) -> tuple[dict[str, bytes], bytes
     return payload_for(board["name"], (board_dir / "board.json").read_bytes())
 
 
-def payload_for(name: str, board_json: bytes) -> tuple[dict[str, bytes], bytes]:
+def payload_for(name: str, board_json: bytes, code: bool = False,
+                frozen_code: str | None = None) -> tuple[dict[str, bytes], bytes]:
     """(files, image) of the ROMFS partition of the firmware for board name:
-    texelpad's rp2 image, the board file (board_json) among the shipped
-    boards, firmware.json (the board, the versions, a digest of the rest:
-    what `texelpad deploy` compares)."""
-    files = romfs.romfs_files(image.TARGETS["rp2"])
+    texelpad's package data and flash maps, the board file (board_json)
+    among the shipped boards, firmware.json (the board, the versions, the
+    digest of the code frozen in the firmware and of the partition's files:
+    what `texelpad deploy` compares); with code, texelpad's .mpy image too
+    (it then runs instead of the frozen copy: FROZEN_BOOT)."""
+    files = romfs.romfs_files(image.TARGETS["rp2"], code=code)
     files["lib/texel/boards.d/%s.json" % name] = board_json
     info = {"board": name, "texelpad": __version__, "micropython": MICROPYTHON_VERSION,
+            "frozen_code_sha256": frozen_code or romfs.code_digest(), "code_in_romfs": code,
             "image_sha256": image.hashlib.sha256(
                 b"".join(k.encode() + v for k, v in sorted(files.items()))).hexdigest()}
     files[FIRMWARE_INFO] = (json.dumps(info, sort_keys=True) + "\n").encode()
     return files, romfs.romfs_image(files)
+
+
+def stage_board(board_dir: Path, stage: Path) -> None:
+    """The definition the build reads: a copy of the board folder with
+    texelpad's frozen power-up (main.py, boot.py) and the texel package's
+    sources beside its manifest.py (which freezes them)."""
+    shutil.rmtree(stage, ignore_errors=True)
+    shutil.copytree(board_dir, stage)
+    shutil.copyfile(FROZEN_MAIN, stage / "main.py")
+    shutil.copyfile(FROZEN_BOOT, stage / "boot.py")
+    for rel, data in romfs.frozen_sources().items():
+        dst = stage / rel
+        dst.parent.mkdir(parents=True, exist_ok=True)
+        dst.write_bytes(data)
 
 
 def _kit() -> Path | None:
@@ -176,7 +195,7 @@ def build_firmware(board_dir: str | os.PathLike, out_dir: str | os.PathLike,
     base, capacity, storage = layout(board_dir)
     out = Path(out_dir).resolve()
     out.mkdir(parents=True, exist_ok=True)
-    say("texelpad's image for the ROMFS partition (armv6m .mpy)")
+    say("texelpad's data for the ROMFS partition (maps, boards); its code is frozen")
     files, img = romfs_payload(board_dir, board)
     if len(img) > capacity:
         raise FirmwareError("texelpad's image (%s bytes) does not fit the ROMFS partition (%s "
@@ -184,9 +203,7 @@ def build_firmware(board_dir: str | os.PathLike, out_dir: str | os.PathLike,
                             % (format(len(img), ","), format(capacity, ","), board_dir))
     # the definition the build reads: a copy of the folder with the frozen power-up in it
     stage = out / "board" / ("TEXELPAD_" + re.sub(r"[^A-Za-z0-9]", "_", name).upper())
-    shutil.rmtree(stage, ignore_errors=True)
-    shutil.copytree(board_dir, stage)
-    shutil.copyfile(FROZEN_MAIN, stage / "main.py")
+    stage_board(board_dir, stage)
     _needs()
     log = out / "build.log"
     log.write_text("")

@@ -33,20 +33,119 @@ UF2_PAYLOAD = 256
 ROMFS_HEADER = b"\xd2\xcd\x31"
 KIND_PADDING, KIND_DATA, KIND_POINTER, KIND_DIR, KIND_FILE = 1, 2, 3, 4, 5
 
-# The firmware's own power-up module inside the partition: texel/main.py
-# compiled as a module (the frozen main.py of boards/common imports it when
-# the filesystem has no /main.py of the user's).
+# texel/main.py compiled as a module: the power-up the frozen main.py imports
+# (frozen as texel/main.py in the firmware; here when the partition carries code)
 BOOT_MODULE = "lib/texel/main.mpy"
+CODE_SUFFIX = ".mpy"
 
 
-def romfs_files(target: image.Target | None = None) -> dict[str, bytes]:
-    """The partition's files: texelpad's image for the target (rp2 unless
-    given) under lib/, plus lib/texel/main.mpy (the power-up)."""
+def romfs_files(target: image.Target | None = None, code: bool = True) -> dict[str, bytes]:
+    """The partition's files: texelpad's package data (the shipped boards of
+    the port, reference_noise.bin) and the references' flash maps under
+    lib/texel/; with code, texelpad's .mpy image too (rp2 unless target says)
+    with lib/texel/main.mpy. The firmware freezes the code and carries the
+    data only; `texelpad deploy` adds the code when this host's differs."""
     target = target or image.TARGETS["rp2"]
     out = {f.remote.lstrip("/"): f.data for f in image.build_image(target, include_main=False)}
     out[BOOT_MODULE] = image.compile_module(image.MAIN_PY, "texel/main.py")
+    if not code:
+        out = {k: v for k, v in out.items() if not k.endswith(CODE_SUFFIX)}
+    out.update(ram_modules())
     out.update(reference_maps())
+    out.update(const_tables())
     return out
+
+
+def code_digest(target: image.Target | None = None) -> str:
+    """sha256 of texelpad's code for the target (its .mpy image and main.mpy,
+    by path): what the firmware froze, recorded in its firmware.json, and what
+    deploy compares with this host's."""
+    import hashlib
+    files = romfs_files(target, code=True)
+    h = hashlib.sha256()
+    for k in sorted(files):
+        if k.endswith(CODE_SUFFIX) and not k.startswith("lib/%s/" % RAM_PACKAGE):
+            h.update(k.encode() + b"\0" + files[k])
+    return h.hexdigest()
+
+
+# Viper modules whose machine code the refresh interrupt runs at 8,333 Hz: not
+# frozen (frozen native code runs from flash through the RP2040's XIP cache,
+# which the emulated Pico does not model, and hw/rp2.py's PWM-wrap vector wants
+# the code in RAM) but loaded from the ROMFS as texel_ram.<name>, which copies
+# their native code into RAM at import; the frozen texel.runtime.<name> hands
+# that module's names on (RAM_SHIM). Their relative imports become absolute.
+RAM_MODULES = ("runtime/refresh_viper.py",)
+RAM_PACKAGE = "texel_ram"
+RAM_SHIM = b"""# texelpad firmware: this module's viper code runs from RAM, loaded from the ROMFS partition as
+# %(pkg)s.%(name)s (host/texelpad/firmware/romfs.py RAM_MODULES); its names are handed on here.
+import sys
+from %(pkg)s import %(name)s as _m
+sys.modules[__name__] = _m
+globals().update(_m.__dict__)
+"""
+
+
+def _absolute(src: str, rel: str) -> str:
+    """rel's source with its relative imports made absolute (texel.runtime.x)."""
+    parts = ["texel"] + rel.split("/")[:-1]
+    out = []
+    for line in src.splitlines(keepends=True):
+        stripped = line.lstrip()
+        if stripped.startswith("from .") and " import " in stripped:
+            dots = len(stripped[5:]) - len(stripped[5:].lstrip("."))
+            rest = stripped[5 + dots:]
+            base = parts[:len(parts) - dots + 1]
+            mod = ".".join(base + ([rest.split(" import ")[0]] if not rest.startswith(" ") else []))
+            line = line[:len(line) - len(stripped)] + "from %s import %s" % (
+                mod, stripped.split(" import ", 1)[1])
+        out.append(line)
+    return "".join(out)
+
+
+def ram_modules() -> dict[str, bytes]:
+    """lib/texel_ram/<name>.mpy for RAM_MODULES (armv6m), and the package's __init__."""
+    import tempfile
+    from pathlib import Path
+    out = {"lib/%s/__init__.mpy" % RAM_PACKAGE: b""}
+    with tempfile.TemporaryDirectory() as d:
+        init = Path(d) / "__init__.py"
+        init.write_text("# texelpad firmware: modules whose native code runs from RAM\n")
+        out["lib/%s/__init__.mpy" % RAM_PACKAGE] = image.compile_module(
+            init, "%s/__init__.py" % RAM_PACKAGE)
+        for rel in RAM_MODULES:
+            name = rel.rsplit("/", 1)[-1]
+            src = Path(d) / name
+            src.write_text(_absolute((image.PACKAGE_DIR / rel).read_text(), rel))
+            out["lib/%s/%s" % (RAM_PACKAGE, name[:-3] + ".mpy")] = image.compile_module(
+                src, "%s/%s" % (RAM_PACKAGE, name), march=image.TARGETS["rp2"].arch)
+    return out
+
+
+def frozen_sources(target: image.Target | None = None) -> dict[str, bytes]:
+    """texel's .py sources the firmware freezes ({"texel/app.py": bytes}):
+    the modules of the target's image (its own hardware backend only) and
+    texel/main.py (imported only by the frozen main.py: it starts the display)."""
+    target = target or image.TARGETS["rp2"]
+    out = {}
+    for p in image.package_modules(target.port):
+        inner = p.relative_to(image.PACKAGE_DIR).as_posix()
+        rel = "texel/" + inner
+        out[rel] = p.read_bytes()
+        if inner in RAM_MODULES:
+            name = inner.rsplit("/", 1)[-1][:-3]
+            out[rel] = RAM_SHIM % {b"pkg": RAM_PACKAGE.encode(), b"name": name.encode()}
+    out["texel/main.py"] = image.MAIN_PY.read_bytes()
+    return out
+
+
+def const_tables() -> dict[str, bytes]:
+    """The generator's constant tables beside their modules, aligned: the
+    board reads them in place (texel.rom.const_table) instead of copying the
+    frozen bytes literal into RAM (a frozen bytes object is not aligned)."""
+    from texel.gen import plan_int_tables, sine_table
+    return {"lib/texel/gen/sine_table.u16": bytes(sine_table._RAW),
+            "lib/texel/gen/plan_int_tables.i32": bytes(plan_int_tables._RAW)}
 
 
 def reference_maps() -> dict[str, bytes]:
@@ -74,7 +173,7 @@ def _record(kind: int, payload: bytes) -> bytes:
 
 
 ALIGN = 4                      # file data that code reads as words (the reference maps)
-ALIGNED_SUFFIXES = (".u16",)   # ... start on a 4-byte boundary (a Cortex-M0+ faults on an
+ALIGNED_SUFFIXES = (".u16", ".i32")   # ... start on a 4-byte boundary (a Cortex-M0+ faults on an
                                # unaligned halfword load: viper's ptr16 does plain ldrh)
 _LEN_BYTES = 5                 # the image's length field, fixed width (0x80 prefixes pad it)
 
