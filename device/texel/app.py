@@ -264,7 +264,9 @@ def push(scene):
         gc.collect()
         raise ValueError("scene does not fit in memory (%d bytes free); the current scene keeps playing"
                          % (compat.heap_free() or 0))
-    return status()
+    # _install collected already: a second collection here cost ~20 ms of the reply on an
+    # RP2040 (texelpad.bench.firmware)
+    return status(collect=False)
 
 
 def _running():
@@ -273,14 +275,19 @@ def _running():
     return _rt
 
 
-def status():
-    """What is playing and how the loop runs (a dict of literals)."""
+def status(collect=True):
+    """What is playing and how the loop runs (a dict of literals); mem_free
+    after a full collection unless collect is False (the caller just did)."""
     rt = _rt
+    if collect:
+        free = compat.heap_free()
+    else:
+        free = gc.mem_free() if hasattr(gc, "mem_free") else compat.heap_free()
     st = {"protocol": PROTOCOL, "texel": __version__,
           "firmware": "%s %s" % (sys.implementation.name,
                                  ".".join(str(x) for x in sys.implementation.version[:3])),
           "ulab": compat.ulab_version(), "viper": compat.HAS_VIPER,
-          "running": rt is not None, "mem_free": compat.heap_free()}
+          "running": rt is not None, "mem_free": free}
     if rt is None:
         return st
     r = rt.refresh
@@ -382,6 +389,34 @@ def samples_b64(region, offset, count):
 # fragmented, and 1,024 (a 2.7 KB text) during a second full-screen upload.
 UPLOAD_PIECE_MAX = 512
 _uploads = []
+
+
+STAGED = ("push", "start")     # what staged() calls
+
+
+def staged(func, text, fill=(), args=(), scene_at=0, kwargs=None):
+    """The host's push/start in one call (texelpad.link.protocol.staged_call):
+    the scene arrives as JSON text (parsed here by the C json module), the
+    samples region i takes upload slot k for each (i, k) in fill, then
+    func(*args with the scene at scene_at, **kwargs). Returns ('ok', its
+    value) or ('err', the ValueError's text). One statement for the board to
+    compile instead of eight: 7-11 ms less per push on an RP2040
+    (texelpad.bench.firmware)."""
+    if func not in STAGED:
+        return ("err", "staged: %r is not one of %s" % (func, STAGED))
+    try:
+        import json
+        s = json.loads(text)
+        if fill:
+            g = s["regions"]
+            for i, k in fill:
+                g[i]["texture"]["u16"] = take_upload(k)
+        a = list(args)
+        a.insert(scene_at, s)
+        f = push if func == "push" else start
+        return ("ok", f(*a, **(kwargs or {})))
+    except ValueError as e:
+        return ("err", str(e))
 
 
 def upload_begin(sizes):

@@ -4,7 +4,6 @@ refused. No timing is asserted (the figures are printed: pytest -s)."""
 from __future__ import annotations
 
 import json
-import shutil
 
 import pytest
 
@@ -16,22 +15,16 @@ pytestmark = [pytest.mark.instruments, pytest.mark.slow]
 
 @pytest.fixture(scope="module")
 def uf2():
+    """The firmware the other firmware tests boot (support.firmware: one build per session),
+    or $TEXELPAD_FIRMWARE_UF2."""
     why = why_not()
     if why:
         pytest.skip(why)
     import os
-    if not os.environ.get("TEXELPAD_FIRMWARE_UF2"):
-        if not shutil.which("arm-none-eabi-gcc"):
-            pytest.skip("arm-none-eabi-gcc is not installed: the texelpad firmware cannot be "
-                        "built (Debian's gcc-arm-none-eabi libnewlib-arm-none-eabi cmake)")
-        from texelpad.firmware.build import _kit, repo_boards_dir
-        if repo_boards_dir() is None or _kit() is None:
-            pytest.skip("no boards/ folder or no offline MicroPython kit "
-                        "(../shared/instruments/mpfirmware): the firmware cannot be built")
-    try:
-        return bench.default_uf2(print)
-    except Exception as e:          # a build that cannot run here (no cmake, ...)
-        pytest.skip("the texelpad firmware could not be built: %s" % e)
+    if os.environ.get("TEXELPAD_FIRMWARE_UF2"):
+        return os.environ["TEXELPAD_FIRMWARE_UF2"]
+    from support.firmware import built
+    return str(built("pico").uf2)
 
 
 def test_the_quick_benchmark_reports_every_goal_and_refuses_nothing(uf2, tmp_path):

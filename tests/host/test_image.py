@@ -40,7 +40,8 @@ MODULES = sorted(p for p in PKG.rglob("*.py")
                  if "__pycache__" not in p.parts and p != PKG / "main.py")
 BOARD_JSONS = sorted((PKG / "boards.d").glob("*.json"))
 NATIVE = {"texel/gen/engine_int_viper.py", "texel/gen/plan_int_viper.py",
-          "texel/gen/brush_viper.py", "texel/runtime/refresh_viper.py"}
+          "texel/gen/brush_viper.py", "texel/runtime/refresh_viper.py",
+          "texel/runtime/scene_viper.py"}
 # each target's port: its image carries that hardware backend and those boards only
 PORT = {"rp2": "rp2", "pyboard": "stm32", "unix": "virtual", "circuitpython": "circuitpython"}
 BACKEND = {"rp2": "rp2", "stm32": "stm32", "virtual": "virtual", "circuitpython": "cpy"}

@@ -208,7 +208,7 @@ def test_ctrl_c_during_the_push_call_says_what_plays(board, delay):
     exec0 = board.link.exec
 
     def exec_(code, timeout=None):
-        if "_m.push(" in code:
+        if "_m.staged(" in code:
             trip.at = time.monotonic() + delay
         return exec0(code, timeout)
     board.link.exec = exec_
@@ -387,8 +387,9 @@ def test_a_scene_crosses_as_json_data_and_comes_back_exactly(board):
         st = board.push(sc)
     finally:
         board.link.exec = exec0
-    push = [c for c in codes if "_m.push(" in c]
-    assert len(push) == 1 and "_j.loads(" in push[0] and "{'regions'" not in push[0]
+    push = [c for c in codes if "_m.staged('push'" in c]
+    # the scene is a str (JSON text, parsed by the board's json module), not a dict literal
+    assert len(push) == 1 and "'{\"regions\"" in push[0] and "{'regions'" not in push[0]
     assert st["scene"]["name"] == name
     tex = board.scene_source()["regions"][0]["texture"]
     assert tex["pitch_db"] == 12.346 and tex["v"] == 2 and tex["band_limit_cpmm"] is None

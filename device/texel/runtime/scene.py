@@ -739,7 +739,16 @@ def _render_texel(tex, n, engine, buf):
         render_u16(p, engine=engine, out=buf)
 
 
+_fast_fill = None           # scene_viper.fill, or False where it does not load
+
+
 def _fill_samples(vals, fit, n, buf):
+    global _fast_fill
+    if _fast_fill is None:
+        from ..compat import native
+        _fast_fill = native("texel.runtime.scene_viper", "fill") or False
+    if _fast_fill and _fast_fill(vals, fit, n, buf):
+        return
     m = len(vals)
     if fit == "tile" or m == 1 or n == 1:
         # tile: position i plays vals[i mod m] (stretch of one value or onto one
