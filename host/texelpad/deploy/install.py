@@ -24,6 +24,7 @@ board holds and what to run.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 from typing import Any, Callable
 
 from . import image
@@ -134,6 +135,30 @@ def preflight(board: Any, todo: list[image.ImageFile], touched: list[str],
                                "was changed" % (where, _errno_text(err), hint))
 
 
+@dataclass
+class Plan:
+    """What a deploy does to the board, found by the survey before anything
+    changes: the files to write, the leftovers to complete or drop, the stale
+    files to remove; what the display played; the report it fills in."""
+    target: image.Target
+    files: list[image.ImageFile]        # the whole image (checked after the writes)
+    todo: list[image.ImageFile]         # to write: new, or their hash differs
+    complete: list[image.ImageFile]     # their "<file>.new" is the image's: renamed into place
+    drop: list[str]                     # leftover ".new" files to remove
+    stale: list[str]                    # board files the image no longer has
+    leftovers: list[str]                # every ".new" an interrupted deploy left
+    free: int | None                    # free bytes on the board (None: unknown)
+    need: int                           # bytes the writes take, in whole blocks
+    total: int                          # bytes to write (the upload bar's total)
+    was: tuple | None                   # (board, scene, virtual) the display played
+    report: dict[str, Any]
+
+    @property
+    def changes(self) -> bool:
+        """Whether the board needs anything: a file to write, a leftover, a stale file."""
+        return bool(self.todo or self.stale or self.leftovers)
+
+
 def deploy(board: Any, source: bool = False, include_main: bool = True, dry_run: bool = False,
            progress: Callable[[str], None] | None = None,
            bar: Callable[[int, int, str], None] | None = None,
@@ -161,6 +186,23 @@ def deploy(board: Any, source: bool = False, include_main: bool = True, dry_run:
     target = image.target_for(fw["implementation"], fw["mpy"], fw["version"], fw["platform"],
                               source=source)
     files = image.build_image(target, include_main=include_main)
+    plan = plan_deploy(board, target, files, include_main=include_main, dry_run=dry_run, say=say)
+    say_plan(plan, say)
+    check_fits(plan)
+    if plan.changes:
+        preflight(board, plan.todo, plan.leftovers + plan.stale, probe=not dry_run)
+        if not dry_run:
+            write_plan(board, plan, say, bar)
+            restart_what_played(board, plan, say)
+    plan.report["seconds"] = time.perf_counter() - t_start
+    return plan.report
+
+
+def plan_deploy(board: Any, target: image.Target, files: list[image.ImageFile],
+                include_main: bool, dry_run: bool, say: Callable[[str], None]) -> Plan:
+    """Survey the board and plan the deploy: which files to write, complete,
+    drop and remove, the report's fields, and what the display plays. Reads
+    only: the board is as it was."""
     hashes, present, free = survey(board, files)
     todo = image.plan_upload(files, {p: (h or None) for p, h in hashes.items()})
     if any(h == "" for h in hashes.values()):        # no hashlib: cannot compare, write all
@@ -177,8 +219,6 @@ def deploy(board: Any, source: bool = False, include_main: bool = True, dry_run:
     todo = [f for f in todo if f.remote not in done_by_rename]
     drop = [p for p in leftovers if p[:-len(TMP)] not in done_by_rename]
     stale = [p for p in image.plan_remove(files, present) if p not in leftovers]
-    need = sum(_blocks(f.size) for f in todo)
-    total = sum(f.size for f in todo)
     names = [p.stem for p in image.board_files(target.port)]
     report: dict[str, Any] = {
         "target": target.name, "form": target.form, "arch": target.arch, "files": len(files),
@@ -188,7 +228,16 @@ def deploy(board: Any, source: bool = False, include_main: bool = True, dry_run:
                                          "removed": drop},
         "restarted": None, "playing": None, "dry_run": dry_run, "board_port": target.port,
         "boards": names, "main": include_main}
+    was = what_plays(board, say)
+    report["playing"] = was[0] if was else None
+    return Plan(target=target, files=files, todo=todo, complete=complete, drop=drop,
+                stale=stale, leftovers=leftovers, free=free,
+                need=sum(_blocks(f.size) for f in todo), total=sum(f.size for f in todo),
+                was=was, report=report)
 
+
+def what_plays(board: Any, say: Callable[[str], None]) -> tuple | None:
+    """(board, scene, virtual) the display plays, or None."""
     # what the display plays (read only: it keeps playing until every check passed)
     was = None
     if board.image is not None:
@@ -202,67 +251,71 @@ def deploy(board: Any, source: bool = False, include_main: bool = True, dry_run:
             # an image too old or broken to answer: nothing to restart
             say("could not read the display's state (%s); deploying without stopping it"
                 % _one_line(e))
-    report["playing"] = was[0] if was else None
+    return was
 
+
+def say_plan(plan: Plan, say: Callable[[str], None]) -> None:
+    """Say what the deploy will write and repair."""
+    report, todo, leftovers = plan.report, plan.todo, plan.leftovers
     say("%s image: %d files, %d bytes; %d to write (%d bytes), %d unchanged, %d stale"
-        % (target.name, len(files), report["image_bytes"], len(todo), total,
-           report["unchanged"], len(stale)))
+        % (plan.target.name, len(plan.files), report["image_bytes"], len(todo), plan.total,
+           report["unchanged"], len(plan.stale)))
     if leftovers:
         say("an interrupted deploy left %d .new file%s: %d complete%s (renamed into place), "
-            "%d to remove" % (len(leftovers), "" if len(leftovers) == 1 else "s", len(complete),
-                              "" if len(complete) == 1 else "s", len(drop)))
-    if free is not None and need > free:
+            "%d to remove" % (len(leftovers), "" if len(leftovers) == 1 else "s",
+                              len(plan.complete), "" if len(plan.complete) == 1 else "s",
+                              len(plan.drop)))
+
+
+def check_fits(plan: Plan) -> None:
+    """Raise ImageError, before anything changed, when the writes do not fit
+    the board's free space (when the board says it)."""
+    if plan.free is not None and plan.need > plan.free:
         raise image.ImageError(
             "the image does not fit: writing %d files needs about %d bytes (in %d-byte blocks) "
             "and the board has %d free; delete files from the board (mpremote fs ls :) or "
-            "deploy --no-main" % (len(todo), need, BLOCK, free))
-    if not todo and not stale and not leftovers:
-        report["seconds"] = time.perf_counter() - t_start
-        return report
-    preflight(board, todo, leftovers + stale, probe=not dry_run)
-    if dry_run:
-        report["seconds"] = time.perf_counter() - t_start
-        return report
+            "deploy --no-main" % (len(plan.todo), plan.need, BLOCK, plan.free))
 
+
+def write_plan(board: Any, plan: Plan, say: Callable[[str], None],
+               bar: Callable[[int, int, str], None] | None) -> None:
+    """Carry out the plan: stop a playing display, complete and drop the
+    leftovers, write the files, remove the stale ones, check what the board
+    now holds, drop the texel modules and (not on the virtual board) soft-reset.
+    On any failure: start the display again (_recover) and raise DeployFailed
+    saying what the board holds (a Ctrl-C is said, then raised again)."""
     dev = on_board(board)
+    report = plan.report
     done = 0
     current = "the survey"
     try:
         # stop a playing display (flash writes stall the timer IRQ on an RP2040)
-        if was is not None:
+        if plan.was is not None:
             current = "stopping the display"
-            say("stopping the display on %s while the image is written" % was[0])
+            say("stopping the display on %s while the image is written" % plan.was[0])
             board.stop()
-        for f in complete:
+        for f in plan.complete:
             current = f.remote
             board.link.exec(protocol.replace_file(dev(f.remote), dev(f.remote) + TMP))
-        if drop:
+        if plan.drop:
             current = "removing leftover .new files"
-            board.link.exec(protocol.remove_files([dev(p) for p in drop]))
-        for f in todo:
+            board.link.exec(protocol.remove_files([dev(p) for p in plan.drop]))
+        for f in plan.todo:
             current = f.remote
-            path = dev(f.remote)
-            _mkdirs(board, path)
-            tmp = path + TMP
 
             def step(n: int, f: image.ImageFile = f) -> None:
                 if bar:
-                    bar(done + n, total, f.remote)
-            board.link.write_file(tmp, f.data, progress=step)
-            board.link.exec(protocol.replace_file(path, tmp))
+                    bar(done + n, plan.total, f.remote)
+            _write_file(board, dev(f.remote), f.data, step)
             done += f.size
             report["written"] += 1
             report["bytes_written"] += f.size
-        if stale:
+        if plan.stale:
             current = "removing stale files"
-            board.link.exec(protocol.remove_files([dev(p) for p in stale]))
+            board.link.exec(protocol.remove_files([dev(p) for p in plan.stale]))
         # the new image: check what the board now holds
         current = "checking the new image"
-        hashes, present, _ = survey(board, files)
-        bad = [f.remote for f in files if hashes.get(f.remote) not in (f.sha256, "")]
-        bad += [p for p, h in hashes.items() if p.endswith(TMP) and h is not None]
-        if bad:
-            raise LinkError("%d files did not arrive intact (%s)" % (len(bad), ", ".join(bad[:3])))
+        _check_written(board, plan.files)
         board.link.exec(protocol.PURGE)
         if board.firmware["platform"] not in UNIX_PLATFORMS:     # not the virtual board
             # A clean heap for the new image: deploying leaves a board's heap
@@ -274,18 +327,39 @@ def deploy(board: Any, source: bool = False, include_main: bool = True, dry_run:
             say("soft reset of %s: a clean heap for the new image" % board.port)
             board.link.soft_reset()
     except BaseException as e:
-        state = _recover(board, was, report, len(todo) + len(complete))
+        state = _recover(board, plan.was, report, len(plan.todo) + len(plan.complete))
         text = "deploy to %s failed at %s: %s. %s" % (board.port, current, _one_line(e), state)
         if not isinstance(e, Exception):            # Ctrl-C: say it, then let it end the run
             say(text)
             raise
         raise DeployFailed(text) from None
 
-    if was is not None:
-        report["restarted"] = _restart(board, was, say)
-    report["playing"] = report["restarted"]
-    report["seconds"] = time.perf_counter() - t_start
-    return report
+
+def _write_file(board: Any, path: str, data: bytes, progress: Callable[[int], None]) -> None:
+    """Write `data` as "<path>.new" beside the old copy and rename it over
+    `path`: the file is old or new, never half-written."""
+    _mkdirs(board, path)
+    tmp = path + TMP
+    board.link.write_file(tmp, data, progress=progress)
+    board.link.exec(protocol.replace_file(path, tmp))
+
+
+def _check_written(board: Any, files: list[image.ImageFile]) -> None:
+    """Raise LinkError unless every image file on the board has the image's
+    hash ('': the board cannot hash) and no ".new" is left."""
+    hashes, present, _ = survey(board, files)
+    bad = [f.remote for f in files if hashes.get(f.remote) not in (f.sha256, "")]
+    bad += [p for p, h in hashes.items() if p.endswith(TMP) and h is not None]
+    if bad:
+        raise LinkError("%d files did not arrive intact (%s)" % (len(bad), ", ".join(bad[:3])))
+
+
+def restart_what_played(board: Any, plan: Plan, say: Callable[[str], None]) -> None:
+    """Start the display again on the new image if it played; the report says
+    what plays now."""
+    if plan.was is not None:
+        plan.report["restarted"] = _restart(board, plan.was, say)
+    plan.report["playing"] = plan.report["restarted"]
 
 
 def _recover(board: Any, was: tuple | None, report: dict[str, Any], planned: int) -> str:
