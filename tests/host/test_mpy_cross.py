@@ -33,7 +33,8 @@ VIPER_FILES = mpy.viper_files()
 NATIVE_ONLY = {DEVICE / "texel" / "gen" / "engine_int_viper.py",
                DEVICE / "texel" / "gen" / "plan_int_viper.py",
                DEVICE / "texel" / "gen" / "brush_viper.py",
-               DEVICE / "texel" / "runtime" / "refresh_viper.py"}
+               DEVICE / "texel" / "runtime" / "refresh_viper.py",
+               DEVICE / "texel" / "runtime" / "scene_viper.py"}
 
 # mpy header byte 2 holds the native architecture in its upper 6 bits
 # (py/persistentcode.h: MP_NATIVE_ARCH_*).
@@ -58,6 +59,8 @@ def test_device_tree_and_native_files():
     assert 'native("texel.gen.plan_int_viper", "texels") or texels_py' in src
     src = (DEVICE / "texel" / "gen" / "brush.py").read_text()
     assert 'if native("texel.gen.brush_viper", "frame") is None:' in src
+    src = (DEVICE / "texel" / "runtime" / "scene.py").read_text()
+    assert 'native("texel.runtime.scene_viper", "fill") or False' in src
     src = (DEVICE / "texel" / "compat.py").read_text()
     assert "except (ImportError, SyntaxError, MemoryError, AttributeError)" in src
     app = (DEVICE / "texel" / "app.py").read_text()
