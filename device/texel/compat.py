@@ -147,4 +147,3 @@ def heap_free():
         return gc.mem_free()
     except (ImportError, AttributeError):
         return None
-

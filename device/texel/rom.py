@@ -62,6 +62,14 @@ def data_beside(module_file):
     return FROZEN_DATA + module_file
 
 
+def path_beside(module_file, name):
+    """The path of data file name beside the module module_file (its
+    __file__), where data_beside says it is read."""
+    here = data_beside(module_file)
+    cut = max(here.rfind("/"), here.rfind("\\"))
+    return here[:cut + 1] + name
+
+
 def const_table(module_file, name, raw, typecode):
     """A read-only table of little-endian values ("H": uint16, "i": int32):
     the texelpad firmware's copy of raw in its ROMFS partition (name beside
@@ -69,9 +77,8 @@ def const_table(module_file, name, raw, typecode):
     it there, aligned) as a rom_view - no RAM - where there is one; else
     array(typecode, raw), as on every other image."""
     if sys.platform == "rp2":
-        here = data_beside(module_file)
-        cut = here.rfind("/")
-        v = rom_view(here[:cut + 1] + name, typecode, len(raw) // (2 if typecode == "H" else 4))
+        v = rom_view(path_beside(module_file, name), typecode,
+                     len(raw) // (2 if typecode == "H" else 4))
         if v is not None:
             return v
     from array import array

@@ -7,6 +7,7 @@
 #   NORM    1025 values  -Phi^-1(u) in Q24 at 32 points per octave of u
 # 6,148 bytes. A literal, not computed: computing them needs float64 and an
 # accurate inverse normal, and the point is that every runtime has the same ints.
+import sys
 
 EXP_HI = 0          # offsets into table()
 EXP_MID = 256
@@ -14,8 +15,6 @@ NORM = 512
 NORM_PER_OCTAVE = 32
 NORM_SHIFT = 5      # log2(NORM_PER_OCTAVE)
 _table = None
-
-import sys
 
 _RAW = (
     b'\x00\x00\x00\x10\xfa\x1a\x0b\x10\xaa\x3d\x16\x10\x14\x68\x21\x10\x3e\x9a\x2c\x10\x2e\xd4\x37\x10\xe8\x15\x43\x10\x73\x5f\x4e\x10'
@@ -212,8 +211,6 @@ _RAW = (
     b'\x83\x45\x28\x00\x14\x34\x23\x00\x2b\x26\x1e\x00\x42\x1b\x19\x00\xd6\x12\x14\x00\x66\x0c\x0f\x00\x72\x07\x0a\x00\x7a\x03\x05\x00'
     b'\x00\x00\x00\x00'
 )
-
-
 
 
 def table():

@@ -256,13 +256,13 @@ def flash_u16(name, length_samples):
     flash (rom.rom_u16), or None where the image has no flash maps."""
     if name not in STUDY_NAMES or not 1 <= length_samples <= FLASH_SAMPLES:
         return None
-    from ..rom import rom_u16, data_beside
+    from ..rom import rom_u16, path_beside
     try:
-        here = data_beside(__file__)    # frozen (texelpad firmware): the ROMFS's maps
+        here = __file__
     except NameError:
         return None
-    cut = max(here.rfind("/"), here.rfind("\\"))
-    return rom_u16("%s%s/%s.u16" % (here[:cut + 1], FLASH_DIR, name), length_samples)
+    # frozen (texelpad firmware): the ROMFS's maps (rom.data_beside)
+    return rom_u16(path_beside(here, "%s/%s.u16" % (FLASH_DIR, name)), length_samples)
 
 
 def _swap16(buf, m):

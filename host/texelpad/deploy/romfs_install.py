@@ -29,8 +29,7 @@ from ..link.transport import LinkError
 CHUNK = 4096
 INFO_PATH = "/rom/firmware.json"
 
-FIRMWARE_INFO = """import sys
-_t = None
+FIRMWARE_INFO = """_t = None
 try:
  import vfs
  if hasattr(vfs, 'rom_ioctl'):

@@ -39,17 +39,27 @@ BOOT_MODULE = "lib/texel/main.mpy"
 CODE_SUFFIX = ".mpy"
 
 
+def code_files(target: image.Target | None = None) -> dict[str, bytes]:
+    """texelpad's code as the partition would carry it: the target's .mpy image
+    (rp2 unless given) under lib/, and lib/texel/main.mpy (the power-up)."""
+    target = target or image.TARGETS["rp2"]
+    out = {f.remote.lstrip("/"): f.data for f in image.build_image(target, include_main=False)
+           if f.remote.endswith(CODE_SUFFIX)}
+    out[BOOT_MODULE] = image.compile_module(image.MAIN_PY, "texel/main.py")
+    return out
+
+
 def romfs_files(target: image.Target | None = None, code: bool = True) -> dict[str, bytes]:
     """The partition's files: texelpad's package data (the shipped boards of
-    the port, reference_noise.bin) and the references' flash maps under
-    lib/texel/; with code, texelpad's .mpy image too (rp2 unless target says)
-    with lib/texel/main.mpy. The firmware freezes the code and carries the
-    data only; `texelpad deploy` adds the code when this host's differs."""
+    the port, reference_noise.bin), the references' flash maps and the
+    generator's tables under lib/texel/, the RAM modules; with code,
+    code_files() too. The firmware freezes the code and carries the data
+    only; `texelpad deploy` adds the code when this host's differs."""
     target = target or image.TARGETS["rp2"]
-    out = {f.remote.lstrip("/"): f.data for f in image.build_image(target, include_main=False)}
-    out[BOOT_MODULE] = image.compile_module(image.MAIN_PY, "texel/main.py")
-    if not code:
-        out = {k: v for k, v in out.items() if not k.endswith(CODE_SUFFIX)}
+    out = {f.remote.lstrip("/"): f.data for f in image.build_image(target, include_main=False)
+           if not f.remote.endswith(CODE_SUFFIX)}
+    if code:
+        out.update(code_files(target))
     out.update(ram_modules())
     out.update(reference_maps())
     out.update(const_tables())
@@ -57,15 +67,14 @@ def romfs_files(target: image.Target | None = None, code: bool = True) -> dict[s
 
 
 def code_digest(target: image.Target | None = None) -> str:
-    """sha256 of texelpad's code for the target (its .mpy image and main.mpy,
-    by path): what the firmware froze, recorded in its firmware.json, and what
-    deploy compares with this host's."""
+    """sha256 of texelpad's code for the target (code_files, by path): what
+    the firmware froze, recorded in its firmware.json, and what deploy
+    compares with this host's."""
     import hashlib
-    files = romfs_files(target, code=True)
+    files = code_files(target)
     h = hashlib.sha256()
     for k in sorted(files):
-        if k.endswith(CODE_SUFFIX) and not k.startswith("lib/%s/" % RAM_PACKAGE):
-            h.update(k.encode() + b"\0" + files[k])
+        h.update(k.encode() + b"\0" + files[k])
     return h.hexdigest()
 
 
@@ -107,7 +116,7 @@ def ram_modules() -> dict[str, bytes]:
     """lib/texel_ram/<name>.mpy for RAM_MODULES (armv6m), and the package's __init__."""
     import tempfile
     from pathlib import Path
-    out = {"lib/%s/__init__.mpy" % RAM_PACKAGE: b""}
+    out = {}
     with tempfile.TemporaryDirectory() as d:
         init = Path(d) / "__init__.py"
         init.write_text("# texelpad firmware: modules whose native code runs from RAM\n")
@@ -131,10 +140,11 @@ def frozen_sources(target: image.Target | None = None) -> dict[str, bytes]:
     for p in image.package_modules(target.port):
         inner = p.relative_to(image.PACKAGE_DIR).as_posix()
         rel = "texel/" + inner
-        out[rel] = p.read_bytes()
         if inner in RAM_MODULES:
             name = inner.rsplit("/", 1)[-1][:-3]
             out[rel] = RAM_SHIM % {b"pkg": RAM_PACKAGE.encode(), b"name": name.encode()}
+        else:
+            out[rel] = p.read_bytes()
     out["texel/main.py"] = image.MAIN_PY.read_bytes()
     return out
 
