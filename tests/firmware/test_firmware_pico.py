@@ -176,3 +176,23 @@ def test_deploy_finds_the_firmware_and_rewrites_only_its_romfs(pico, capsys):
     assert code == 0, err
     assert "ROMFS partition rewritten" in out and "the code is the firmware's, frozen" in out
     assert _texel_file(pico.port) == "texel/__init__.py"
+
+
+def test_a_partition_a_cut_off_deploy_left_is_repaired_by_the_next(pico, capsys):
+    # the partition's first block erased, as a deploy cut off right after its erase leaves it:
+    # no /rom, no firmware.json; the board still runs (its REPL), and deploy knows the
+    # firmware by its build name and writes the partition whole
+    from texelpad.link.board import connect
+    with connect(pico.port, timeout=60) as b:
+        b.stop()                        # as deploy does before it writes the partition
+        b.link.exec("import vfs\n_d = vfs.rom_ioctl(2, 0)\ntry:\n vfs.umount('/rom')\n"
+                    "except OSError:\n pass\n_d.ioctl(6, 0)")
+        b.link.soft_reset()
+        assert b.link.eval("import os\ntry:\n os.stat('/rom/firmware.json')\n print(True)\n"
+                           "except OSError:\n print(False)") is False
+    code, out, err = run_cli(capsys, "deploy", "--port", pico.port)
+    assert code == 0, err
+    assert "texelpad firmware found (board pico" in err and "ROMFS partition rewritten" in out
+    with connect(pico.port, timeout=60) as b:
+        st = b.start("pico")
+        assert st["running"] and st["scene"]["regions"][0]["mode"] == "map"   # 4sin from flash

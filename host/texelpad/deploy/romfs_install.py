@@ -29,7 +29,8 @@ from ..link.transport import LinkError
 CHUNK = 4096
 INFO_PATH = "/rom/firmware.json"
 
-FIRMWARE_INFO = """_t = None
+FIRMWARE_INFO = """import sys
+_t = None
 try:
  import vfs
  if hasattr(vfs, 'rom_ioctl'):
@@ -37,22 +38,28 @@ try:
    _t = _f.read()
 except OSError:
  pass
-print(repr(_t))
+print(repr((_t, getattr(sys.implementation, '_build', ''))))
 """ % INFO_PATH
 
 
 def firmware_info(board: Any) -> dict | None:
-    """The texelpad firmware's /rom/firmware.json, or None (stock firmware)."""
+    """The texelpad firmware's /rom/firmware.json, or None (stock firmware).
+    A texelpad firmware whose partition does not read (a deploy cut off
+    half-way: the board then boots to its REPL) is known by its build name
+    (texelpad.firmware.build.BUILD_PREFIX + the board): everything is unknown
+    but the board, so the next deploy writes the partition whole."""
+    from ..firmware.build import board_of_build
     if board.firmware.get("platform") != "rp2":
         return None
-    text = board.link.eval(FIRMWARE_INFO)
+    text, build = board.link.eval(FIRMWARE_INFO)
+    damaged = {"board": board_of_build(build), "image_sha256": None}
     if not text:
-        return None
+        return damaged if damaged["board"] else None
     try:
         info = json.loads(text)
     except ValueError:
-        return {"board": None, "image_sha256": None}    # damaged: rewrite it
-    return info if isinstance(info, dict) else {"board": None, "image_sha256": None}
+        return damaged
+    return info if isinstance(info, dict) else damaged
 
 
 def _board_json(board: Any, name: str) -> bytes:

@@ -43,6 +43,19 @@ FROZEN_BOOT = Path(__file__).with_name("frozen_boot.py")
 FIRMWARE_INFO = "firmware.json"       # at the ROMFS root: /rom/firmware.json on the board
 
 
+# The firmware's build name (sys.implementation._build on the board) is the
+# staged board folder's: BUILD_PREFIX + the board's name in capitals.
+BUILD_PREFIX = "TEXELPAD_"
+
+
+def board_of_build(build: str) -> str | None:
+    """The board a texelpad firmware was built for, from its build name
+    ("TEXELPAD_PICO_BRIDGE" -> "pico_bridge"), or None for another firmware."""
+    if not isinstance(build, str) or not build.startswith(BUILD_PREFIX):
+        return None
+    return build[len(BUILD_PREFIX):].lower() or None
+
+
 class FirmwareError(Exception):
     """One line: what is wrong and what to do."""
 
@@ -202,7 +215,7 @@ def build_firmware(board_dir: str | os.PathLike, out_dir: str | os.PathLike,
                             "bytes): raise MICROPY_HW_ROMFS_BYTES in %s/mpconfigboard.h"
                             % (format(len(img), ","), format(capacity, ","), board_dir))
     # the definition the build reads: a copy of the folder with the frozen power-up in it
-    stage = out / "board" / ("TEXELPAD_" + re.sub(r"[^A-Za-z0-9]", "_", name).upper())
+    stage = out / "board" / (BUILD_PREFIX + re.sub(r"[^A-Za-z0-9]", "_", name).upper())
     stage_board(board_dir, stage)
     _needs()
     log = out / "build.log"
