@@ -58,7 +58,7 @@ def test_device_tree_and_native_files():
     src = (DEVICE / "texel" / "gen" / "plan_int.py").read_text()
     assert 'native("texel.gen.plan_int_viper", "texels") or texels_py' in src
     src = (DEVICE / "texel" / "gen" / "brush.py").read_text()
-    assert 'if native("texel.gen.brush_viper", "frame") is None:' in src
+    assert 'if native("texel.gen.brush_viper", "frames") is None:' in src
     src = (DEVICE / "texel" / "runtime" / "scene.py").read_text()
     assert 'native("texel.runtime.scene_viper", "fill") or False' in src
     src = (DEVICE / "texel" / "compat.py").read_text()

@@ -1,99 +1,167 @@
 # The Tactile Paintbrush (seed 002, ../shared/seeds/002_*.txt; docs/brush.md):
 # a texture as a "brush" - per wavenumber of a space-frequency transform, the
 # Weibull distribution (shape k, scale lam) of the spectral magnitudes across
-# windows - painted onto a region by drawing magnitudes per window, seeded
-# phases, inverse transform and overlap-add.
+# windows - painted onto a region as the paper describes it: per window, a
+# magnitude drawn from the brush and a phase drawn at random for every
+# wavenumber (the phases are not part of the texture: seed 002 discards them),
+# an inverse FFT, Hann windows joined by overlap-add.
 #
 # Geometry, adapted from the paper's (1 mm windows every 0.25 mm, wavenumbers
 # 0 = mean .. 100 = 10 um, on a 5 um recording) to the display's 5.3 um sample:
-#   WINDOW = 188 samples = 0.9964 mm (a multiple of 4, so HOP = WINDOW / 4
+#   WINDOW = 192 samples = 1.0176 mm (3 x 2^6, so the inverse transform is a
+#            radix-3 and radix-2 FFT; a multiple of 4, so HOP = WINDOW / 4
 #            exactly and the periodic Hann window overlap-adds to a constant:
 #            sum over the 4 overlapping windows of w = 2 at every sample)
-#   HOP    = 47 samples = 0.2491 mm
-#   K      = 95 wavenumbers: k cycles per window, k = 0 (the window's mean
-#            friction) .. 94 (wavelength 2 samples = 10.6 um: the display's
-#            Nyquist); wavelength = 0.9964 mm / k
+#   HOP    = 48 samples = 0.2544 mm
+#   K      = 97 wavenumbers: k cycles per window, k = 0 (the window's mean
+#            friction) .. 96 (wavelength 2 samples = 10.6 um: the display's
+#            Nyquist); wavelength = 1.0176 mm / k
 # Magnitudes (the analysis, host/texelpad/brush/transform.py): with the
 # periodic Hann window w[n] = 0.5 - 0.5 cos(2 pi n / WINDOW) and W = sum w =
 # WINDOW / 2, m_0 = |sum x w| / W and m_k = 2 |sum x w e^(-2 pi i k n / WINDOW)| / W
 # for k >= 1, so a sinusoid of amplitude A at wavenumber k >= 1 gives m_k = A
 # and a constant c gives m_0 = c.
+#
+# Everything after the painting's setup (compensated(): floats, once) is in
+# integers, so the map is the same on every runtime: three ways to run it -
+# Python loops (any port), numpy (CPython: the host) and viper (brush_viper.py)
+# - give the same integers (tests/brush/test_paint.py).
 import math
 
 from .plan_int import exp2_m
 from .plan_int_tables import table
 
-WINDOW = 188
-HOP = 47
-K = 95
-FORMAT = "texelpad-brush/1"
+WINDOW = 192
+HOP = 48
+K = 97
+NYQ = K - 1
+FORMAT = "texelpad-brush/2"
+OLD_FORMATS = ("texelpad-brush/1",)
 
 # --- tables (tools/gen_brush_tables.py writes them; tests/brush/test_paint.py
 # checks them against its formulas): literals, so every runtime has the same
 # numbers (a float32 board could round a cosine the other way; it has no gamma).
-# COS[j] = round(16384 cos(2 pi j / WINDOW)), Q14; COS[j + 94] = -COS[j].
-COS = (
-    16384, 16375, 16347, 16302, 16238, 16156, 16056, 15938, 15802, 15648, 15477, 15289, 15084,
-    14862, 14623, 14368, 14097, 13810, 13508, 13190, 12858, 12512, 12151, 11777, 11390, 10990,
-    10578, 10154, 9719, 9272, 8816, 8350, 7874, 7389, 6897, 6396, 5889, 5374, 4854, 4329, 3798,
-    3263, 2725, 2184, 1640, 1094, 547, 0, -547, -1094, -1640, -2184, -2725, -3263, -3798, -4329,
-    -4854, -5374, -5889, -6396, -6897, -7389, -7874, -8350, -8816, -9272, -9719, -10154, -10578,
-    -10990, -11390, -11777, -12151, -12512, -12858, -13190, -13508, -13810, -14097, -14368,
-    -14623, -14862, -15084, -15289, -15477, -15648, -15802, -15938, -16056, -16156, -16238,
-    -16302, -16347, -16375, -16384, -16375, -16347, -16302, -16238, -16156, -16056, -15938,
-    -15802, -15648, -15477, -15289, -15084, -14862, -14623, -14368, -14097, -13810, -13508,
-    -13190, -12858, -12512, -12151, -11777, -11390, -10990, -10578, -10154, -9719, -9272, -8816,
-    -8350, -7874, -7389, -6897, -6396, -5889, -5374, -4854, -4329, -3798, -3263, -2725, -2184,
-    -1640, -1094, -547, 0, 547, 1094, 1640, 2184, 2725, 3263, 3798, 4329, 4854, 5374, 5889,
-    6396, 6897, 7389, 7874, 8350, 8816, 9272, 9719, 10154, 10578, 10990, 11390, 11777, 12151,
-    12512, 12858, 13190, 13508, 13810, 14097, 14368, 14623, 14862, 15084, 15289, 15477, 15648,
-    15802, 15938, 16056, 16156, 16238, 16302, 16347, 16375)
-# HANN[n] = 256 - round(256 cos(2 pi n / WINDOW)) for n < 94 and 256 + the
-# same for n + 94: the periodic Hann window in Q9 (512 = 1.0), rounded in
+# PHASE[p] = round(16384 cos(2 pi p / 256)), Q14: a window's phase p (its
+# draw's low byte); sin is PHASE[(p - 64) & 255].
+PHASE = (
+    16384, 16379, 16364, 16340, 16305, 16261, 16207, 16143, 16069, 15986, 15893, 15791, 15679,
+    15557, 15426, 15286, 15137, 14978, 14811, 14635, 14449, 14256, 14053, 13842, 13623, 13395,
+    13160, 12916, 12665, 12406, 12140, 11866, 11585, 11297, 11003, 10702, 10394, 10080, 9760,
+    9434, 9102, 8765, 8423, 8076, 7723, 7366, 7005, 6639, 6270, 5897, 5520, 5139, 4756, 4370,
+    3981, 3590, 3196, 2801, 2404, 2006, 1606, 1205, 804, 402, 0, -402, -804, -1205, -1606,
+    -2006, -2404, -2801, -3196, -3590, -3981, -4370, -4756, -5139, -5520, -5897, -6270, -6639,
+    -7005, -7366, -7723, -8076, -8423, -8765, -9102, -9434, -9760, -10080, -10394, -10702,
+    -11003, -11297, -11585, -11866, -12140, -12406, -12665, -12916, -13160, -13395, -13623,
+    -13842, -14053, -14256, -14449, -14635, -14811, -14978, -15137, -15286, -15426, -15557,
+    -15679, -15791, -15893, -15986, -16069, -16143, -16207, -16261, -16305, -16340, -16364,
+    -16379, -16384, -16379, -16364, -16340, -16305, -16261, -16207, -16143, -16069, -15986,
+    -15893, -15791, -15679, -15557, -15426, -15286, -15137, -14978, -14811, -14635, -14449,
+    -14256, -14053, -13842, -13623, -13395, -13160, -12916, -12665, -12406, -12140, -11866,
+    -11585, -11297, -11003, -10702, -10394, -10080, -9760, -9434, -9102, -8765, -8423, -8076,
+    -7723, -7366, -7005, -6639, -6270, -5897, -5520, -5139, -4756, -4370, -3981, -3590, -3196,
+    -2801, -2404, -2006, -1606, -1205, -804, -402, 0, 402, 804, 1205, 1606, 2006, 2404, 2801,
+    3196, 3590, 3981, 4370, 4756, 5139, 5520, 5897, 6270, 6639, 7005, 7366, 7723, 8076, 8423,
+    8765, 9102, 9434, 9760, 10080, 10394, 10702, 11003, 11297, 11585, 11866, 12140, 12406,
+    12665, 12916, 13160, 13395, 13623, 13842, 14053, 14256, 14449, 14635, 14811, 14978, 15137,
+    15286, 15426, 15557, 15679, 15791, 15893, 15986, 16069, 16143, 16207, 16261, 16305, 16340,
+    16364, 16379)
+# TW[j] = round(4096 cos(2 pi j / 192)), Q12: the FFT's twiddles; sin is
+# TW[(j + 144) % 192].
+TW = (
+    4096, 4094, 4087, 4076, 4061, 4041, 4017, 3989, 3956, 3920, 3879, 3833, 3784, 3731, 3674,
+    3612, 3547, 3478, 3406, 3329, 3250, 3166, 3080, 2990, 2896, 2800, 2701, 2598, 2493, 2386,
+    2276, 2163, 2048, 1931, 1812, 1690, 1567, 1443, 1317, 1189, 1060, 930, 799, 667, 535, 401,
+    268, 134, 0, -134, -268, -401, -535, -667, -799, -930, -1060, -1189, -1317, -1443, -1567,
+    -1690, -1812, -1931, -2048, -2163, -2276, -2386, -2493, -2598, -2701, -2800, -2896, -2990,
+    -3080, -3166, -3250, -3329, -3406, -3478, -3547, -3612, -3674, -3731, -3784, -3833, -3879,
+    -3920, -3956, -3989, -4017, -4041, -4061, -4076, -4087, -4094, -4096, -4094, -4087, -4076,
+    -4061, -4041, -4017, -3989, -3956, -3920, -3879, -3833, -3784, -3731, -3674, -3612, -3547,
+    -3478, -3406, -3329, -3250, -3166, -3080, -2990, -2896, -2800, -2701, -2598, -2493, -2386,
+    -2276, -2163, -2048, -1931, -1812, -1690, -1567, -1443, -1317, -1189, -1060, -930, -799,
+    -667, -535, -401, -268, -134, 0, 134, 268, 401, 535, 667, 799, 930, 1060, 1189, 1317, 1443,
+    1567, 1690, 1812, 1931, 2048, 2163, 2276, 2386, 2493, 2598, 2701, 2800, 2896, 2990, 3080,
+    3166, 3250, 3329, 3406, 3478, 3547, 3612, 3674, 3731, 3784, 3833, 3879, 3920, 3956, 3989,
+    4017, 4041, 4061, 4076, 4087, 4094)
+# HANN[n] = 256 - round(256 cos(2 pi n / WINDOW)) for n < 96 and 256 + the
+# same for n + 96: the periodic Hann window in Q9 (512 = 1.0), rounded in
 # pairs so the four windows over any sample sum to exactly 1024 (= 2.0):
 # overlap-add has no seams at all.
 HANN = (
-    0, 0, 1, 1, 2, 4, 5, 7, 9, 11, 14, 17, 20, 24, 28, 32, 36, 40, 45, 50, 55, 61, 66, 72, 78,
-    84, 91, 97, 104, 111, 118, 126, 133, 141, 148, 156, 164, 172, 180, 188, 197, 205, 213, 222,
-    230, 239, 247, 256, 265, 273, 282, 290, 299, 307, 315, 324, 332, 340, 348, 356, 364, 371,
-    379, 386, 394, 401, 408, 415, 421, 428, 434, 440, 446, 451, 457, 462, 467, 472, 476, 480,
-    484, 488, 492, 495, 498, 501, 503, 505, 507, 508, 510, 511, 511, 512, 512, 512, 511, 511,
-    510, 508, 507, 505, 503, 501, 498, 495, 492, 488, 484, 480, 476, 472, 467, 462, 457, 451,
-    446, 440, 434, 428, 421, 415, 408, 401, 394, 386, 379, 371, 364, 356, 348, 340, 332, 324,
-    315, 307, 299, 290, 282, 273, 265, 256, 247, 239, 230, 222, 213, 205, 197, 188, 180, 172,
-    164, 156, 148, 141, 133, 126, 118, 111, 104, 97, 91, 84, 78, 72, 66, 61, 55, 50, 45, 40, 36,
-    32, 28, 24, 20, 17, 14, 11, 9, 7, 5, 4, 2, 1, 1, 0)
-# The painting compensation (docs/brush.md, "Painting"): a re-analysed
-# window sees a weighted sum of the neighbouring windows' draws (weights
-# 0.0028 0.0625 0.2472 0.3750 0.2472 0.0625 0.0028, sum of squares S2 = 0.2707),
-# so each window draws with shape COMP_K and scale lam * COMP_LAM at the
-# brush's shape k (log-spaced grid of 57 points, 0.05 .. 1000; linear in log k
-# between them): the analysed magnitude then has the brush's mean and
-# coefficient of variation.
+    0, 0, 1, 1, 2, 3, 5, 7, 9, 11, 14, 16, 19, 23, 26, 30, 34, 39, 43, 48, 53, 58, 64, 69, 75,
+    81, 87, 94, 100, 107, 114, 121, 128, 135, 143, 150, 158, 166, 174, 182, 190, 198, 206, 214,
+    223, 231, 239, 248, 256, 264, 273, 281, 289, 298, 306, 314, 322, 330, 338, 346, 354, 362,
+    369, 377, 384, 391, 398, 405, 412, 418, 425, 431, 437, 443, 448, 454, 459, 464, 469, 473,
+    478, 482, 486, 489, 493, 496, 498, 501, 503, 505, 507, 509, 510, 511, 511, 512, 512, 512,
+    511, 511, 510, 509, 507, 505, 503, 501, 498, 496, 493, 489, 486, 482, 478, 473, 469, 464,
+    459, 454, 448, 443, 437, 431, 425, 418, 412, 405, 398, 391, 384, 377, 369, 362, 354, 346,
+    338, 330, 322, 314, 306, 298, 289, 281, 273, 264, 256, 248, 239, 231, 223, 214, 206, 198,
+    190, 182, 174, 166, 158, 150, 143, 135, 128, 121, 114, 107, 100, 94, 87, 81, 75, 69, 64, 58,
+    53, 48, 43, 39, 34, 30, 26, 23, 19, 16, 14, 11, 9, 7, 5, 3, 2, 1, 1, 0)
+# The painting's compensation (docs/brush.md, "Painting"; the derivation is
+# in tools/gen_brush_tables.py). Waves (k >= 1): a re-analysed window reads
+# LEAK_GAIN = 0.56247 of a unit wave's power painted with independent
+# phases, shared over wavenumber distances 0, 1, 2, 3 as LEAK (leakage()
+# deconvolves it); COMP_LK[i] = ln k', the shape to draw for the grid's
+# shape k_i (log-spaced, 57 points, 0.05 .. 1000; linear in ln k between them)
+# so the re-analysed magnitude fits (maximum likelihood) with shape k_i - it
+# reaches 2.089 at most (k' = 1000), about a Rayleigh's: sharper brushes read
+# back at that shape; COMP_LS[i] = log2(1 / S) at k' = k_i, S the fitted
+# scale of a re-analysis of draws of scale 1 (a seeded Monte Carlo). The
+# mean (k = 0) is a weighted sum of neighbouring windows' draws (weights
+# 0.0028 0.0625 0.2472 0.3750 0.2472 0.0625 0.0028;
+# S2 = 0.2707): COMP0_LK keeps its coefficient of variation, LG1 = ln Gamma(1 + 1/k)
+# on the grid its mean (compensated()).
 COMP_GRID = 57
 COMP_K_LO = 0.05
 COMP_K_HI = 1000.0
-COMP_K = (
-    0.05, 0.056431055, 0.0666306734, 0.0785148023, 0.0922975268, 0.108194279, 0.126410951,
-    0.147132708, 0.170519703, 0.196720428, 0.225910157, 0.25835127, 0.294463028, 0.334889049,
-    0.380559347, 0.432751828, 0.493160617, 0.563976214, 0.647978056, 0.748635813, 0.870213239,
-    1.01786931, 1.19775655, 1.41712533, 1.68445182, 2.00961248, 2.40412632, 2.88148004,
-    3.45754459, 4.15108838, 4.98439365, 5.98398711, 7.18150227, 8.61469775, 10.3286625,
-    12.3772463, 14.8247603, 17.748003, 21.2386743, 25.4062562, 30.3814488, 36.3202707,
-    43.4089532, 51.8697809, 61.9680628, 74.0204516, 88.404874, 105.572381, 126.061292,
-    150.514074, 179.69749, 214.526638, 256.09365, 305.701934, 364.907048, 435.565476, 519.892841)
-COMP_LAM = (
-    1.0, 0.0627727459, 0.0729120598, 0.0844849391, 0.0976304136, 0.112485592, 0.129196637,
-    0.147963373, 0.169131676, 0.193306303, 0.221411826, 0.254639219, 0.294275205, 0.341454811,
-    0.396877162, 0.460515158, 0.531363871, 0.607304962, 0.685183162, 0.761161213, 0.831327135,
-    0.892402637, 0.942319649, 0.98046523, 1.00754058, 1.02514582, 1.03528454, 1.0399521,
-    1.04088193, 1.03944265, 1.03663875, 1.03316427, 1.02947297, 1.02584456, 1.02243883,
-    1.01933644, 1.01656778, 1.01413279, 1.01201401, 1.01018507, 1.00861587, 1.00727581,
-    1.00613561, 1.00516825, 1.00434941, 1.00365756, 1.00307386, 1.00258201, 1.00216796,
-    1.00181967, 1.0015269, 1.00128093, 1.00107437, 1.00090097, 1.00075546, 1.00063337,
-    1.00053097)
+LEAK_GAIN = 0.562468634
+LEAK = (0.481188647, 0.235684508, 0.0232956768, 0.000425484618)
+# LEAK_Q14 = round(16384 / LEAK[0]), round(16384 LEAK[d] / LEAK[0]) for d = 1 .. 3
+# (leakage()'s integer sweeps)
+LEAK_Q14 = (34049, 8025, 793, 14)
+COMP_LK = (
+    -2.99573227, -2.99573227, -2.99573227, -2.99573227, -2.99573227, -2.99573227, -2.99573227,
+    -2.93382774, -2.75149104, -2.56727913, -2.38067575, -2.19118532, -1.99827261, -1.80131145,
+    -1.59977845, -1.39293734, -1.17852603, -0.954875856, -0.716569996, -0.443732078,
+    -0.0727216439, 1.26506404, 6.90775528, 6.90775528, 6.90775528, 6.90775528, 6.90775528,
+    6.90775528, 6.90775528, 6.90775528, 6.90775528, 6.90775528, 6.90775528, 6.90775528,
+    6.90775528, 6.90775528, 6.90775528, 6.90775528, 6.90775528, 6.90775528, 6.90775528,
+    6.90775528, 6.90775528, 6.90775528, 6.90775528, 6.90775528, 6.90775528, 6.90775528,
+    6.90775528, 6.90775528, 6.90775528, 6.90775528, 6.90775528, 6.90775528, 6.90775528,
+    6.90775528, 6.90775528)
+COMP_LS = (
+    -39.640889, -32.5534636, -26.6334983, -21.6934889, -17.5774772, -14.1543426, -11.3137605,
+    -8.96301456, -7.02432821, -5.43218387, -4.13048301, -3.07337286, -2.22130172, -1.54088875,
+    -1.00400981, -0.586096056, -0.265685466, -0.0250974935, 0.151553158, 0.27785812,
+    0.365570407, 0.423926699, 0.460776059, 0.482003174, 0.492251518, 0.495007996, 0.492815897,
+    0.487643027, 0.480771685, 0.473204061, 0.465488978, 0.458053298, 0.45104467, 0.444651505,
+    0.438921161, 0.433851659, 0.429389549, 0.425488241, 0.422127756, 0.419241302, 0.416772569,
+    0.414666979, 0.412877585, 0.411364397, 0.410083596, 0.408997884, 0.408085103, 0.407316009,
+    0.406666846, 0.406119082, 0.405658754, 0.40527228, 0.404947878, 0.404675632, 0.404447204,
+    0.404255577, 0.404094852)
+COMP0_LK = (
+    -2.99573227, -2.87473544, -2.70858999, -2.54446781, -2.38273758, -2.22382637, -2.06821667,
+    -1.91641974, -1.76890375, -1.62597092, -1.48761699, -1.35343407, -1.22260064, -1.09395467,
+    -0.96611165, -0.837589202, -0.706918534, -0.572741204, -0.433896282, -0.28950032,
+    -0.139014525, 0.0177141265, 0.18045297, 0.348633187, 0.521443018, 0.697944778, 0.877189447,
+    1.05830695, 1.24056155, 1.42337341, 1.60631459, 1.78908989, 1.97151137, 2.15347254,
+    2.33492553, 2.51586253, 2.69630147, 2.87627568, 3.05582644, 3.2349981, 3.41383483,
+    3.59237864, 3.77066834, 3.94873898, 4.12662175, 4.30434404, 4.48192971, 4.6593994,
+    4.83677083, 5.01405919, 5.19127742, 5.36843651, 5.54554579, 5.72261314, 5.89964525,
+    6.07664772, 6.2536253)
+LG1 = (
+    42.3356165, 32.8144754, 25.3029824, 19.3975759, 14.7727413, 11.1663162, 8.36750909,
+    6.2071393, 4.54969164, 3.28685467, 2.33227027, 1.61727168, 1.08742737, 0.699741374,
+    0.420387712, 0.222878723, 0.0865855292, -0.00445631593, -0.0625104334, -0.0969166611,
+    -0.114717182, -0.121160345, -0.12010505, -0.114344026, -0.105860739, -0.0960319676,
+    -0.0857859966, -0.0757247481, -0.0662168795, -0.0574677678, -0.0495713375, -0.0425478322,
+    -0.036370868, -0.0309864398, -0.0263259809, -0.0223150965, -0.0188792017, -0.0159469851,
+    -0.0134523728, -0.0113354826, -0.00954291853, -0.00802764976, -0.00674864386,
+    -0.00567036821, -0.00476223535, -0.00399804037, -0.00335541981, -0.00281534868,
+    -0.00236168393, -0.00198075699, -0.00166101476, -0.0013927064, -0.00116761204,
+    -0.000978809374, -0.000820473653, -0.000687707065, -0.000576393598)
 # LOG2[i] = round(log2(1 + i/256) 2^24), i = 0 .. 256 (the Weibull draws'
-# logarithms in Q24 octaves: magnitudes(); linear between entries, with the
+# logarithms in Q24 octaves: draws(); linear between entries, with the
 # 12-bit weight: within 4.1e-6 octave); LOG2_LN2 = round(log2(ln 2) 2^24).
 LOG2 = (
     0, 94364, 188362, 281996, 375270, 468185, 560745, 652952, 744810, 836320, 927485, 1018309,
@@ -140,6 +208,11 @@ LAM_MAX = 1000.0        # scale, in friction units (a range of 1e-3 .. 1e3 is al
 RANGE_MAX = 1e6
 MAG_CLIP = 16384        # a magnitude's amplitude, Q13: clipped at 2.0 (twice full scale)
 MEAN_CLIP = 32768       # the mean's amplitude, Q13: clipped to [-4, 4]
+SUM_MAX = 65536         # a window's wave magnitudes (k >= 1) sum to at most 8.0 (Q13): a
+                        # window above it is halved until it is not (draws(): it plays
+                        # clipped either way - 8.0 is a noise of RMS ~0.6 of full
+                        # scale); with the means (4.0 each) two windows' doubled FFT
+                        # values stay below 2^19, times a Q12 twiddle below 2^31 (fill)
 Q13 = 8192
 
 
@@ -164,6 +237,13 @@ def validate(brush, path="brush"):
         if key not in ("k", "lam", "range", "window", "hop", "wavenumbers", "format", "name",
                        "source", "dx_um", "seed"):
             raise ValueError("%s: unknown key %r" % (path, key))
+    f = brush.get("format", FORMAT)
+    if f != FORMAT:
+        if f in OLD_FORMATS:
+            raise ValueError("%s.format: %r brushes (188-sample windows) are not painted any "
+                             "more; fit or design it again (texelpad brush fit / design) for %r"
+                             % (path, f, FORMAT))
+        raise ValueError("%s.format: expected %r, got %r" % (path, FORMAT, f))
     for key, want in (("window", WINDOW), ("hop", HOP), ("wavenumbers", K)):
         if key in brush and brush[key] != want:
             raise ValueError("%s.%s: this display paints with %s = %d, got %r"
@@ -176,7 +256,15 @@ def validate(brush, path="brush"):
         if len(v) != K:
             raise ValueError("%s.%s: expected %d numbers (wavenumbers 0 .. %d), got %d"
                              % (path, key, K, K - 1, len(v)))
-        out[key] = [_num("%s.%s[%d]" % (path, key, i), x, lo, hi) for i, x in enumerate(v)]
+        vals = []
+        for i, x in enumerate(v):
+            # the common case without a call or a key path: a float in range
+            # (NaN and infinities fail the comparison and go to _num for the message)
+            if type(x) is float and lo <= x <= hi:
+                vals.append(x)
+            else:
+                vals.append(_num("%s.%s[%d]" % (path, key, i), x, lo, hi))
+        out[key] = vals
     r = brush.get("range", [0.0, 1.0])
     if not isinstance(r, (list, tuple)) or len(r) != 2:
         raise ValueError("%s.range: expected [a0, a1]" % path)
@@ -204,107 +292,13 @@ def region_texture(path, tex):
 
 def windows(n):
     """How many windows paint n samples: they start at (j - 3) * HOP so that
-    every sample of the region lies under four (overlap-add is whole there)."""
-    return (n + HOP - 1) // HOP + 3
+    every sample of the region lies under four (overlap-add is whole there),
+    an even count (the FFT synthesises two windows at once: pair())."""
+    w = (n + HOP - 1) // HOP + 3
+    return w + (w & 1)
 
 
-def phases(rng, ph):
-    """The start phase of each wavenumber k = 1 .. K-1 (a COS index 0 ..
-    WINDOW-1: (high 16 bits of one draw * WINDOW) >> 16), drawn once per
-    painting. Window j plays wavenumber k from ph[k] + j k HOP (advance()):
-    each wavenumber is one continuous wave along the region whose amplitude
-    the windows' magnitudes set - windows join without seams, and a window's
-    re-analysis sees its own magnitude (docs/brush.md: the round trip)."""
-    ph[0] = 0
-    for k in range(1, K):
-        hi, lo = rng.next_hi_lo()
-        ph[k] = (hi * WINDOW) >> 16
-    # Nyquist (k = 94): cos(pi n + phi) sampled is cos(phi) (-1)^n, so only a
-    # sign: phase 0 or pi (the draw's top bit); magnitudes() halves its
-    # magnitude, since the analysis reads A (-1)^n as 2A (transform.py)
-    ph[K - 1] = (WINDOW // 2) if ph[K - 1] >= WINDOW // 2 else 0
-
-
-def advance(ph):
-    """The phases one window (HOP samples) further along: + k HOP mod WINDOW."""
-    for k in range(1, K):
-        j = ph[k] + k * HOP
-        ph[k] = j % WINDOW
-
-
-def compensated(brush):
-    """Per wavenumber the integer constants of its draws (floats only here,
-    once per painting: 95 values):
-      invk[k]  round(4096 / k') - the compensated shape's inverse in Q12
-               (COMP_K interpolated linearly in log k), at least 1
-      ll[k]    round(log2(lam' * |scale|) * 2^24) - the compensated scale in
-               Q13 amplitude, as Q24 octaves (LL_NONE: scale 0)
-    and (sign of the range, the mean's offset -a0 * scale in Q13)."""
-    lo = math.log(COMP_K_LO)
-    step = (math.log(COMP_K_HI) - lo) / (COMP_GRID - 1)
-    a0, a1 = brush["range"]
-    scale = Q13 / (a1 - a0)
-    amp = abs(scale)
-    invk = array_i(K)
-    ll = array_i(K)
-    lam_fix = leakage(brush["lam"])
-    for k in range(K):
-        x = (math.log(brush["k"][k]) - lo) / step
-        i = int(x)
-        if i > COMP_GRID - 2:
-            i = COMP_GRID - 2
-        if i < 0:
-            i = 0
-        t = x - i
-        t = 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
-        kp = COMP_K[i] + t * (COMP_K[i + 1] - COMP_K[i])
-        q = int(4096.0 / kp + 0.5)
-        invk[k] = 1 if q < 1 else (INVK_MAX if q > INVK_MAX else q)
-        lam = brush["lam"][k] * lam_fix[k] * \
-            (COMP_LAM[i] + t * (COMP_LAM[i + 1] - COMP_LAM[i])) * amp
-        if lam * 4.0 < 1.0 / 65536.0:       # below 2^-18 of a Q13 unit: never a unit
-            ll[k] = LL_NONE
-        else:
-            lam = lam if lam < LAM_AMP_MAX else LAM_AMP_MAX
-            ll[k] = int(math.log(lam) / math.log(2.0) * 16777216.0 + 0.5) if lam >= 1.0 \
-                else -int(-math.log(lam) / math.log(2.0) * 16777216.0 + 0.5)
-    off = -a0 * scale
-    off = int(off + 0.5) if off >= 0 else -int(-off + 0.5)
-    off = MEAN_CLIP * 4 if off > MEAN_CLIP * 4 else (-MEAN_CLIP * 4 if off < -MEAN_CLIP * 4
-                                                       else off)
-    return invk, ll, (1 if scale > 0 else -1), off
-
-
-def leakage(lams):
-    """Per wavenumber the factor on lam that undoes the Hann analysis' leak:
-    a re-analysed window reads at k the wave at k plus 1/4 of the power of
-    its neighbours k - 1 and k + 1 (the periodic Hann window is the kernel
-    [-1/4, 1/2, -1/4] across bins; the phases are independent), so the
-    painted powers A >= 0 solve A_k + (A_{k-1} + A_{k+1}) / 4 = lam_k^2 over
-    k = 1 .. K-1 as nearly as non-negative powers can: projected
-    Gauss-Seidel, LEAK_SWEEPS sweeps (the system is diagonally dominant: each
-    sweep shrinks the error at least twofold; a lone line keeps its power,
-    its neighbours stay 0). The factor is sqrt(A_k) / lam_k (1 where lam_k =
-    0, and for the mean, k = 0, which the analysis takes out first). Floats,
-    once per painting. It matches mean powers, not shapes - a neighbour's
-    leak adds its own randomness (docs/brush.md: the round trip)."""
-    n = K - 1
-    p = [lams[i + 1] * lams[i + 1] for i in range(n)]
-    a = p[:]
-    for _ in range(LEAK_SWEEPS):
-        for i in range(n):
-            v = p[i] - 0.25 * ((a[i - 1] if i > 0 else 0.0) + (a[i + 1] if i < n - 1 else 0.0))
-            a[i] = v if v > 0.0 else 0.0
-    out = [1.0] * K
-    for i in range(n):
-        lam = lams[i + 1]
-        if lam > 0.0:
-            out[i + 1] = math.sqrt(a[i]) / lam
-    return out
-
-
-LEAK_SWEEPS = 16
-
+# --- the painting's setup: floats, once per painting -----------------------------------
 
 def array_i(n):
     from array import array
@@ -312,9 +306,168 @@ def array_i(n):
 
 
 INVK_MAX = 81920            # 1/k' <= 20 (k' >= 0.05): Q12
-LAM_AMP_MAX = 131072.0      # lam' at most 16 x full scale (Q13): draws beyond clip anyway
 LL_NONE = -(1 << 29)        # log2 of a zero scale: every draw rounds to 0
+LL_MAX = 17 << 24           # log2 of a scale of 16 x full scale (Q13): draws beyond clip anyway
+LEAK_SWEEPS = 24
 
+
+def _at(tab, x):
+    """tab on the shape grid at grid position x (linear between points, held
+    at the ends)."""
+    i = int(x)
+    i = 0 if i < 0 else (COMP_GRID - 2 if i > COMP_GRID - 2 else i)
+    t = x - i
+    t = 0.0 if t < 0.0 else (1.0 if t > 1.0 else t)
+    return tab[i] + t * (tab[i + 1] - tab[i])
+
+
+def _q24(f):
+    """round(f * 2^24) for a float f (log2 octaves in Q24)."""
+    return int(f * 16777216.0 + 0.5) if f >= 0 else -int(-f * 16777216.0 + 0.5)
+
+
+def _shape(kk, mean):
+    """(invk, the shape's factor on the scale as Q24 octaves) for a brush's
+    shape kk: the draws' shape k' = exp(COMP_LK) at kk (COMP0_LK for the
+    mean), as round(4096 / k') >= 1, and log2 of the factor on the scale
+    that a re-analysis takes away at k' (COMP_LS) - or, for the mean, what
+    keeps its mean lam Gamma(1 + 1/k): ln Gamma(1 + 1/k) - ln Gamma(1 + 1/k')."""
+    lo = math.log(COMP_K_LO)
+    step = (math.log(COMP_K_HI) - lo) / (COMP_GRID - 1)
+    x = (math.log(kk) - lo) / step
+    lk = _at(COMP0_LK if mean else COMP_LK, x)
+    q = int(4096.0 * math.exp(-lk) + 0.5)
+    xp = (lk - lo) / step
+    if mean:
+        f = (_at(LG1, x) - _at(LG1, xp)) / math.log(2.0)
+    else:
+        f = _at(COMP_LS, xp)
+    return (1 if q < 1 else (INVK_MAX if q > INVK_MAX else q)), _q24(f)
+
+
+def compensated(brush):
+    """Per wavenumber the integer constants of its draws:
+      invk[k]  round(4096 / k'), the draws' shape (_shape)
+      ll[k]    log2(lam') in Q24 octaves, lam' the draws' scale in Q13
+               amplitude (LL_NONE: scale 0): for a wave, half log2 of its
+               deconvolved power (leakage(): in integers, relative to the
+               brush's largest scale) plus the shape's factor (a flat brush
+               re-analyses to its own scale); for the mean, log2 lam_0 plus
+               its own; both times the range's scale
+    and (sign of the range, the mean's offset -a0 * scale in Q13). Floats
+    only for the range, the largest scale, the mean and once per distinct
+    shape (a designed brush has one): the rest is integers, so a float32
+    board rounds the same but for those few values."""
+    a0, a1 = brush["range"]
+    scale = Q13 / (a1 - a0)
+    l2amp = math.log(abs(scale)) / math.log(2.0)
+    invk = array_i(K)
+    ll = array_i(K)
+    shapes = {}
+    # the mean
+    ik, f = _shape(brush["k"][0], True)
+    invk[0] = ik
+    lam0 = brush["lam"][0]
+    ll[0] = LL_NONE
+    if lam0 > 0.0:
+        l2 = _q24(math.log(lam0) / math.log(2.0) + l2amp) + f
+        if l2 >= -(18 << 24):                   # below 2^-18 of a Q13 unit: never a unit
+            ll[0] = LL_MAX if l2 > LL_MAX else l2
+    # the waves
+    a, lmax = leakage(brush["lam"])
+    base = _q24(math.log(lmax) / math.log(2.0) + l2amp) - (14 << 24) if lmax > 0.0 else 0
+    for k in range(1, K):
+        kk = brush["k"][k]
+        s = shapes.get(kk)
+        if s is None:
+            s = shapes[kk] = _shape(kk, False)
+        invk[k] = s[0]
+        p = a[k + 2]
+        if p <= 0:
+            ll[k] = LL_NONE
+            continue
+        # p is the power in Q28 of lmax^2: log2 lam' = log2(p) / 2 - 14 + log2(lmax) + ..
+        l2 = (log2_q24(p) >> 1) + base + s[1]
+        ll[k] = LL_NONE if l2 < -(18 << 24) else (LL_MAX if l2 > LL_MAX else l2)
+    off = -a0 * scale
+    off = int(off + 0.5) if off >= 0 else -int(-off + 0.5)
+    off = MEAN_CLIP * 4 if off > MEAN_CLIP * 4 else (-MEAN_CLIP * 4 if off < -MEAN_CLIP * 4
+                                                       else off)
+    return invk, ll, (1 if scale > 0 else -1), off
+
+
+def _mulq(g, x):
+    """round-ish(g * x / 2^14) for a Q14 g and 0 <= x < 2^31, every partial
+    product below 2^31 (leakage)."""
+    return (x >> 14) * g + (((x & 16383) * g) >> 14)
+
+
+def leakage(lams):
+    """The waves' powers to paint, in integers: (a, lmax), a[k + 2] the power
+    of wavenumber k = 1 .. K-1 in Q28 of lmax^2 (lmax: the brush's largest
+    wave scale; a has 3 values of padding each side: the band's edges
+    mirrored). A re-analysed window
+    reads at k the power painted at k + d times LEAK[|d|] (d = -3 .. 3; with
+    independent phases powers add - the windows' and the Hann window's
+    leaks, tools/gen_brush_tables.py), so a solves sum_d LEAK[|d|] a_{k+d} =
+    lam_k^2 as nearly as non-negative powers can: projected Gauss-Seidel,
+    LEAK_SWEEPS sweeps from a = lam^2 (exact at once for a flat brush: the
+    kernel sums to 1; it is positive definite, so the sweeps converge; a lone
+    line keeps its own power and its neighbours 0), with LEAK_Q14's
+    coefficients (1 / LEAK[0], LEAK[d] / LEAK[0]). It treats neighbouring
+    wavenumbers' shapes as equal. The sweeps run in C or viper where the
+    board has them (the same integers)."""
+    n = K - 1
+    lmax = 0.0
+    for i in range(1, K):
+        if lams[i] > lmax:
+            lmax = lams[i]
+    a = array_i(n + 6)
+    if lmax <= 0.0:
+        return a, 0.0
+    q = array_i(n + 6)
+    inv0 = LEAK_Q14[0]
+    for i in range(n):
+        x = lams[i + 1] / lmax
+        p = int(x * x * 268435456.0 + 0.5)      # Q28
+        a[i + 3] = p
+        q[i + 3] = _mulq(inv0, p)
+    # beyond the band the brush goes on mirrored (fixed powers, not solved
+    # for): the sweeps treat the edges as the middle - a flat brush is its own
+    # solution everywhere, and no edge bin swings to make up for a neighbour
+    # the analysis would not have (wavenumber 0 is the mean's: drawn apart)
+    for d in range(1, 4):
+        a[3 - d] = a[3 + d]
+        a[n + 2 + d] = a[n + 2 - d]
+    c = _native_c()
+    if c is not None:
+        c.leak(q, a, n, LEAK_SWEEPS, _leak_c())
+        return a, lmax
+    v = _viper()
+    if v is not None:
+        v[0].leak(q, a, n, LEAK_SWEEPS, _leak_c())
+        return a, lmax
+    c1, c2, c3 = LEAK_Q14[1], LEAK_Q14[2], LEAK_Q14[3]
+    for _ in range(LEAK_SWEEPS):
+        for i in range(3, n + 3):
+            v = q[i] - _mulq(c1, a[i - 1] + a[i + 1]) - _mulq(c2, a[i - 2] + a[i + 2]) \
+                - _mulq(c3, a[i - 3] + a[i + 3])
+            a[i] = v if v > 0 else 0
+    return a, lmax
+
+
+_LEAKC = None
+
+
+def _leak_c():
+    global _LEAKC
+    if _LEAKC is None:
+        from array import array
+        _LEAKC = array("i", LEAK_Q14[1:])
+    return _LEAKC
+
+
+# --- the draws: integers from here on --------------------------------------------------
 
 def log2_q24(v):
     """round-ish(log2(v) * 2^24) for 1 <= v < 2^30: the top bit's position,
@@ -344,20 +497,20 @@ def log2_q24(v):
     return (n << 24) + lo + (((t[i + 1] - lo) * ((m >> 9) & 0xFFF)) >> 12)
 
 
-def weibull_q(hi, lo, invk, ll, tab):
+def weibull_q(hi, lo, invk, ll):
     """A magnitude of lam' (-ln u)^(1/k') as a Q24 octave z = log2(the Q13
-    value), from the 32-bit draw (hi, lo) - all in small ints:
-      u    = (x3 + 0.5) / 2^29, x3 = the draw's top 29 bits
-      a    = log2(1/u) in Q24 = 30 * 2^24 - log2(2 x3 + 1)          (> 0)
+    value), from the 32-bit draw (hi, lo)'s top 24 bits - all in small ints:
+      u    = (x + 0.5) / 2^24, x = the draw's top 24 bits
+      a    = log2(1/u) in Q24 = 25 * 2^24 - log2(2 x + 1)           (> 0)
       L    = log2(-ln u) = log2(a) - 24 + log2(ln 2)                (Q24)
       y    = L / k' = L * invk (Q12), in 12-bit limbs of L in Q20
       z    = ll + y
-    Returns z, or None for a magnitude that rounds to 0 (y below -2^25 / 16
-    octaves... far below a unit)."""
+    Returns z, or None for a magnitude that rounds to 0 (y below -32
+    octaves). The draw's low byte is the window's phase (draws())."""
     if ll == LL_NONE:
         return None
-    x3 = (hi << 13) | (lo >> 3)
-    a = 503316480 - log2_q24(2 * x3 + 1)    # 30 * 2^24
+    x = (hi << 8) | (lo >> 8)
+    a = 419430400 - log2_q24(2 * x + 1)     # 25 * 2^24
     if a < 1:
         a = 1
     L = (log2_q24(a) - 402653184 + LOG2_LN2) >> 4      # 24 * 2^24; Q20
@@ -379,108 +532,231 @@ def round_exp2(z, emax, tab):
     return (exp2_m(z & 0xFFFFFF, tab) + (1 << (27 - e))) >> (28 - e)
 
 
-def magnitudes(rng, mag, comp, tab):
-    """One window's magnitudes in Q13 amplitude, one draw per wavenumber
-    k = 0 .. K-1 in order: Weibull by its inverse CDF with the compensated
-    shape and scale (compensated()), in integers (weibull_q, round_exp2:
-    the same on every runtime once comp is); the mean (k = 0) through the
-    range's sign and offset; clipped (MEAN_CLIP, MAG_CLIP)."""
+def draws(rng, mag, ph, comp, tab):
+    """One window: for k = 0 .. K-1 in order, one 32-bit draw - a Weibull
+    magnitude by its inverse CDF from its top 24 bits with the compensated
+    shape and scale (weibull_q, round_exp2: the same on every runtime once
+    comp is), in Q13 amplitude, and the phase 2 pi ph[k] / 256 from its low
+    byte. The mean (k = 0) through the range's sign and offset, clipped to
+    +-MEAN_CLIP; the waves clipped at MAG_CLIP, the Nyquist's halved (the
+    analysis reads A (-1)^n as 2A: transform.py) and played as a sign (its
+    phase's top bit); then halved together while they sum above SUM_MAX."""
     invk, ll, sign, off = comp
+    s = 0
     for k in range(K):
         hi, lo = rng.next_hi_lo()
-        z = weibull_q(hi, lo, invk[k], ll[k], tab)
+        ph[k] = lo & 0xFF
+        z = weibull_q(hi, lo, invk[k], ll[k])
         if k == 0:
             v = 0 if z is None else round_exp2(z, 16, tab)
             v = sign * v + off
             mag[0] = MEAN_CLIP if v > MEAN_CLIP else (-MEAN_CLIP if v < -MEAN_CLIP else v)
         else:
-            mag[k] = 0 if z is None else round_exp2(z, 14, tab)     # 2^14 = MAG_CLIP
-    mag[K - 1] = (mag[K - 1] + 1) >> 1          # Nyquist: phases() says why
+            v = 0 if z is None else round_exp2(z, 14, tab)     # 2^14 = MAG_CLIP
+            if k == NYQ:
+                v = (v + 1) >> 1
+            mag[k] = v
+            s += v
+    while s > SUM_MAX:
+        s = 0
+        for k in range(1, K):
+            mag[k] >>= 1
+            s += mag[k]
 
 
-def frame_py(mag, ph, frame):
-    """frame[n] = mag[0] + sum_k (mag[k] * COS[(ph[k] + k n) mod WINDOW]) >> 14,
-    n = 0 .. WINDOW-1: the window's signal in Q13 amplitude. Every term is
-    below 2^14 and the sum below 2^21 (small ints everywhere)."""
-    cos = COS
-    m0 = mag[0]
-    for n in range(WINDOW):
-        frame[n] = m0
-    for k in range(1, K):
-        m = mag[k]
-        if not m:
-            continue
-        j = ph[k]
-        for n in range(WINDOW):
-            frame[n] += (m * cos[j]) >> 14
-            j += k
-            if j >= WINDOW:
-                j -= WINDOW
+# --- two windows' frames by one inverse FFT ------------------------------------------
 
+def _positions():
+    """Where the FFT reads spectrum entry k: sub-transform k % 3 (64 entries
+    each), at the bit-reversed index of k // 3 (ifft())."""
+    out = [0] * WINDOW
+    for k in range(WINDOW):
+        m = k // 3
+        r = 0
+        for _ in range(6):
+            r = (r << 1) | (m & 1)
+            m >>= 1
+        out[k] = 64 * (k % 3) + r
+    return tuple(out)
+
+
+POS = _positions()
+SQRT3_2 = 3547              # round(4096 sqrt(3) / 2), Q12
+
+
+def fill(ma, pa, mb, pb, re, im):
+    """The spectrum of two windows a and b for one complex inverse FFT,
+    twice over (the overlap-add halves it: one rounding less): Z[k] = c_a +
+    i c_b and Z[N-k] = conj(c_a) + i conj(c_b), c = m e^(2 pi i p / 256),
+    so the transform's real part is twice window a's frame and its imaginary
+    part twice window b's (the means at Z[0], the Nyquist's signed
+    magnitudes at Z[96]); written at POS (ifft's order). Q13; the real part
+    of c is (m * PHASE[p] + 8192) >> 14, rounded: the same integers
+    everywhere. Every |Z| sums to at most 2 (2 SUM_MAX + 2 MEAN_CLIP) < 2^19,
+    which bounds every value inside the FFT."""
+    P = PHASE
+    re[0] = 2 * ma[0]
+    im[0] = 2 * mb[0]
+    for k in range(1, NYQ):
+        m = ma[k]
+        p = pa[k]
+        ca = (m * P[p] + 8192) >> 14
+        sa = (m * P[(p - 64) & 255] + 8192) >> 14
+        m = mb[k]
+        p = pb[k]
+        cb = (m * P[p] + 8192) >> 14
+        sb = (m * P[(p - 64) & 255] + 8192) >> 14
+        j = POS[k]
+        re[j] = ca - sb
+        im[j] = sa + cb
+        j = POS[WINDOW - k]
+        re[j] = ca + sb
+        im[j] = cb - sa
+    j = POS[NYQ]
+    re[j] = 2 * (ma[NYQ] if pa[NYQ] < 128 else -ma[NYQ])
+    im[j] = 2 * (mb[NYQ] if pb[NYQ] < 128 else -mb[NYQ])
+
+
+def _cmul(br, bi, t):
+    """(br + i bi) e^(2 pi i t / 192), each of the four products rounded
+    (Q12 twiddles: each below 2^31 for values below 2^19)."""
+    wr = TW[t]
+    wi = TW[(t + 144) % WINDOW]
+    return (((br * wr + 2048) >> 12) - ((bi * wi + 2048) >> 12),
+            ((br * wi + 2048) >> 12) + ((bi * wr + 2048) >> 12))
+
+
+def ifft(re, im):
+    """x[n] = sum_k Z[k] e^(2 pi i k n / 192), in place, from fill()'s order
+    to natural order, in integers: three 64-point radix-2 transforms
+    (decimation in time, bit-reversed input), then one radix-3 pass with the
+    twiddles e^(2 pi i r n / 192). Twiddle 1 and i multiply exactly, so the
+    viper copy may skip them (brush_viper.ifft)."""
+    for base in (0, 64, 128):
+        s = 2
+        while s <= 64:
+            half = s >> 1
+            ts = WINDOW // s
+            for g in range(base, base + 64, s):
+                for j in range(half):
+                    a = g + j
+                    b = a + half
+                    xr, xi = _cmul(re[b], im[b], j * ts)
+                    ar = re[a]
+                    ai = im[a]
+                    re[b] = ar - xr
+                    im[b] = ai - xi
+                    re[a] = ar + xr
+                    im[a] = ai + xi
+            s <<= 1
+    for n in range(64):
+        f0r = re[n]
+        f0i = im[n]
+        f1r, f1i = _cmul(re[64 + n], im[64 + n], n)
+        f2r, f2i = _cmul(re[128 + n], im[128 + n], 2 * n)
+        sr = f1r + f2r
+        si = f1i + f2i
+        tr = ((f1r - f2r) * SQRT3_2 + 2048) >> 12
+        ti = ((f1i - f2i) * SQRT3_2 + 2048) >> 12
+        hr = f0r - (sr >> 1)
+        hi = f0i - (si >> 1)
+        re[n] = f0r + sr
+        im[n] = f0i + si
+        re[64 + n] = hr - ti
+        im[64 + n] = hi + tr
+        re[128 + n] = hr + ti
+        im[128 + n] = hi - tr
+
+
+def frames_py(ma, pa, mb, pb, re, im):
+    """Windows a and b's frames, doubled (Q13 amplitude, WINDOW samples
+    each) into re and im: fill() then ifft()."""
+    fill(ma, pa, mb, pb, re, im)
+    ifft(re, im)
+
+
+def ola_emit(frame, ring, start, n, out):
+    """Overlap-add one doubled frame (times HANN, Q9, halved: >> 10) into
+    the ring of partial sums (indexed by position mod WINDOW) and emit the HOP samples from start,
+    whole now: half the sum (the four windows' Hann weights sum to 2),
+    clipped to [0, 1] and scaled to uint16 (those inside 0 .. n-1 only);
+    their ring entries back to 0. Returns the next window's start."""
+    hann = HANN
+    r = start % WINDOW
+    for i in range(WINDOW):
+        ring[r] += (frame[i] * hann[i]) >> 10
+        r += 1
+        if r == WINDOW:
+            r = 0
+    r = start % WINDOW
+    for i in range(HOP):
+        p = start + i
+        if 0 <= p < n:
+            val = ring[r] >> 1
+            out[p] = 0 if val <= 0 else (65535 if val >= Q13 else (val * 65535 + 4096) >> 13)
+        ring[r] = 0
+        r += 1
+    return start + HOP
+
+
+# --- painting ------------------------------------------------------------------------
 
 _V = None                   # the viper loops and their tables (_viper())
-FBIAS = 1 << 21             # brush_viper.py: frame values held + FBIAS
+FB = 1 << 20                # brush_viper.py: FFT values held + FB (|value| < 2^19)
 RBIAS = 1 << 23             # ... the ring of partial sums + RBIAS
 MBIAS = 1 << 16             # ... the mean magnitude + MBIAS
 
 
+_T = None
+
+
+def _tables():
+    """(None, PHASE and TW as array('h'), HANN, LOG2, POS as array('i')): the
+    tables as the C and viper loops read them (made once)."""
+    global _T
+    if _T is None:
+        from array import array
+        _T = (None, array("h", PHASE), array("h", TW), array("i", HANN), array("i", LOG2),
+              array("i", POS))
+    return _T
+
+
 def _viper():
-    """(module brush_viper, cosp array, hann array, log2 array) or None where
-    the port has no native emitter."""
+    """(module brush_viper, _tables()' arrays) or None where the port has no
+    native emitter. A MemoryError while loading is not remembered: the next
+    painting tries again."""
     global _V
     if _V is None:
-        from ..compat import native
-        if native("texel.gen.brush_viper", "frame") is None:
+        from ..compat import HAS_VIPER, native
+        if not HAS_VIPER:
             _V = False
-        else:
-            from array import array
-            import texel.gen.brush_viper as mod
-            _V = (mod, array("i", [c + 16384 for c in COS]), array("i", HANN),
-                  array("i", LOG2))
+            return None
+        if native("texel.gen.brush_viper", "frames") is None:
+            return None
+        import texel.gen.brush_viper as mod
+        _V = (mod,) + _tables()[1:]
     return _V or None
 
 
-def frame_viper():
-    """The viper frame as frame(mag, ph, out) with frame_py's integers (for
-    tests: biases mag[0] in and the output out), or None without viper."""
-    v = _viper()
-    if v is None:
-        return None
-    mod, cosp = v[0], v[1]
-
-    def frame(mag, ph, out):
-        m0 = mag[0]
-        mag[0] = m0 + MBIAS
-        mod.frame(mag, ph, out, cosp)
-        mag[0] = m0
-        for i in range(WINDOW):
-            out[i] -= FBIAS
-    return frame
+_C = None                   # the firmware's C module (_native_c())
 
 
-def frame_numpy():
-    """frame_py's integers with numpy (the host: CPython), or None."""
-    from ..compat import numpy_mod as np
-    if np is None:
-        return None
-    cos = np.array(COS, dtype=np.int64)
-    kk = np.arange(1, K, dtype=np.int64)[:, None]
-    nn = np.arange(WINDOW, dtype=np.int64)[None, :]
-    step = (kk * nn) % WINDOW
-
-    def frame(mag, ph, out):
-        m = np.frombuffer(mag, dtype=np.int32).astype(np.int64)
-        p = np.frombuffer(ph, dtype=np.int32).astype(np.int64)
-        idx = (p[1:, None] + step) % WINDOW
-        f = m[0] + ((m[1:, None] * cos[idx]) >> 14).sum(axis=0)
-        np.frombuffer(out, dtype=np.int32)[:] = f
-    return frame
+def _native_c():
+    """The texelpad firmware's C painter (device/cmod/texelbrush: module
+    _texelbrush), or None where the board has no such module."""
+    global _C
+    if _C is None:
+        try:
+            import _texelbrush
+            _C = _texelbrush
+        except ImportError:
+            _C = False
+    return _C or None
 
 
-def best_frame():
-    """The fastest Python-path frame: numpy (CPython), else frame_py (where
-    viper exists, paint() runs the whole window in viper instead)."""
-    return frame_numpy() or frame_py
+def _numpy():
+    from ..compat import numpy_mod
+    return numpy_mod
 
 
 def prepare():
@@ -488,92 +764,191 @@ def prepare():
     loops' arrays): kept once made; scene.build calls this before it takes
     a region's chunks, while the heap still has blocks that size."""
     table()
-    _viper()
+    _tables()
+    if _native_c() is None:
+        _viper()
 
 
-def paint(brush, seed, n, out=None, frame=None, viper=None):
+def paint(brush, seed, n, out=None, how=None):
     """The region's map: n samples of uint16 amplitude (0..65535) painted
     from a validated brush and a seed, into out (an array('H') of n, upload
-    Chunks, or a new array). Windows overlap-add with the Q9 Hann window
-    (HANN: the four windows over a sample sum to 1024 exactly), the Q13 sum
-    halved, clipped to [0, 1] and scaled to uint16. Memory beyond out:
-    WINDOW-long work arrays (the ring of partial sums), whatever n is.
+    Chunks, or a new array). Windows in pairs: draws() for each, one inverse
+    FFT for both (fill, ifft), overlap-add with the Q9 Hann window (HANN:
+    the four windows over a sample sum to 1024 exactly: no seams), halved,
+    clipped to [0, 1], uint16. Memory beyond out: WINDOW-long work arrays.
 
-    viper: None (the default) runs every per-window loop in viper where the
-    port has it (brush_viper.py), else the Python loops with `frame`
-    (best_frame() by default: numpy or frame_py); False forces the Python
-    loops. All paths give the same integers."""
+    how: "c" (the texelpad firmware's _texelbrush, device/cmod/texelbrush),
+    "viper" (brush_viper.py: the port's native emitter), "numpy" (CPython:
+    every pair's FFT at once) or "python" (the loops here); None takes the
+    first the runtime has. All give the same integers."""
     from array import array
     from .rng import Rng
     if out is None:
         out = array("H", bytes(2 * n))
-    v = _viper() if viper is None or viper else None
-    if viper and v is None:
-        raise ValueError("viper: this port has no native emitter")
+    if how is None:
+        how = "c" if _native_c() is not None else (
+            "viper" if _viper() is not None else ("numpy" if _numpy() is not None
+                                                  else "python"))
+    if how not in ("c", "viper", "numpy", "python"):
+        raise ValueError("how: expected 'c', 'viper', 'numpy' or 'python', got %r" % (how,))
+    if how == "c" and _native_c() is None:
+        raise ValueError("how: this board has no C painter (_texelbrush: texelpad firmware)")
+    if how == "viper" and _viper() is None:
+        raise ValueError("how: this port has no native emitter (viper)")
+    if how == "numpy" and _numpy() is None:
+        raise ValueError("how: numpy is not here")
     rng = Rng(seed)
-    mag = array_i(K)
-    ph = array_i(K)
-    phases(rng, ph)
     comp = compensated(brush)
     tab = table()
+    if how == "c":
+        return _paint_c(rng, comp, tab, n, out)
+    if how == "viper":
+        return _paint_viper(_viper(), rng, comp, tab, n, out)
+    if how == "numpy":
+        return _paint_numpy(_numpy(), rng, comp, tab, n, out)
+    ma, pa, mb, pb = array_i(K), array_i(K), array_i(K), array_i(K)
+    re, im, ring = array_i(WINDOW), array_i(WINDOW), array_i(WINDOW)
     start = -3 * HOP
-    if v is not None:
-        return _paint_viper(v, rng, comp, tab, mag, ph, n, out)
-    if frame is None:
-        frame = best_frame()
-    buf = array_i(WINDOW)
-    ring = array_i(WINDOW)       # partial sums, indexed by position mod WINDOW
-    hann = HANN
-    for _ in range(windows(n)):
-        magnitudes(rng, mag, comp, tab)
-        frame(mag, ph, buf)
-        advance(ph)
-        for i in range(WINDOW):
-            ring[(start + i) % WINDOW] += (buf[i] * hann[i]) >> 9
-        # the first HOP samples of this window are whole now: emit them
-        for i in range(HOP):
-            p = start + i
-            r = p % WINDOW
-            if 0 <= p < n:
-                val = ring[r] >> 1
-                out[p] = 0 if val <= 0 else (65535 if val >= Q13 else (val * 65535 + 4096) >> 13)
-            ring[r] = 0
-        start += HOP
+    for _ in range(windows(n) // 2):
+        draws(rng, ma, pa, comp, tab)
+        draws(rng, mb, pb, comp, tab)
+        frames_py(ma, pa, mb, pb, re, im)
+        start = ola_emit(re, ring, start, n, out)
+        start = ola_emit(im, ring, start, n, out)
     return out
 
 
-def _paint_viper(v, rng, comp, tab, mag, ph, n, out):
-    """paint()'s loop with every per-window step in viper."""
+def _paint_numpy(np, rng, comp, tab, n, out):
+    """paint() on CPython: the draws as in Python, then fill, ifft and the
+    overlap-add of every window at once (int64: the same integer operations)."""
+    nw = windows(n)
+    mags = np.zeros((nw, K), dtype=np.int64)
+    phs = np.zeros((nw, K), dtype=np.int64)
+    m, p = array_i(K), array_i(K)
+    for w in range(nw):
+        draws(rng, m, p, comp, tab)
+        mags[w] = m
+        phs[w] = p
+    P = np.array(PHASE, dtype=np.int64)
+    ca, sa = (mags * P[phs] + 8192) >> 14, (mags * P[(phs - 64) & 255] + 8192) >> 14
+    a, b = slice(0, nw, 2), slice(1, nw, 2)
+    pos = np.array(POS)
+    ks = np.arange(1, NYQ)
+    re = np.zeros((nw // 2, WINDOW), dtype=np.int64)
+    im = np.zeros_like(re)
+    re[:, 0], im[:, 0] = 2 * mags[a, 0], 2 * mags[b, 0]
+    re[:, pos[ks]] = ca[a, 1:NYQ] - sa[b, 1:NYQ]
+    im[:, pos[ks]] = sa[a, 1:NYQ] + ca[b, 1:NYQ]
+    re[:, pos[WINDOW - ks]] = ca[a, 1:NYQ] + sa[b, 1:NYQ]
+    im[:, pos[WINDOW - ks]] = ca[b, 1:NYQ] - sa[a, 1:NYQ]
+    sgn = np.where(phs[:, NYQ] < 128, 2, -2) * mags[:, NYQ]
+    re[:, pos[NYQ]], im[:, pos[NYQ]] = sgn[a], sgn[b]
+    tw = np.array(TW, dtype=np.int64)
+
+    def cmul(br, bi, t):
+        wr, wi = tw[t], tw[(t + 144) % WINDOW]
+        return (((br * wr + 2048) >> 12) - ((bi * wi + 2048) >> 12),
+                ((br * wi + 2048) >> 12) + ((bi * wr + 2048) >> 12))
+    for base in (0, 64, 128):
+        s = 2
+        while s <= 64:
+            half = s >> 1
+            j = np.arange(half)
+            ia = (base + np.arange(0, 64, s)[:, None] + j[None, :]).ravel()
+            ib = ia + half
+            xr, xi = cmul(re[:, ib], im[:, ib], np.tile(j * (WINDOW // s), 64 // s))
+            ar, ai = re[:, ia], im[:, ia]
+            re[:, ib], im[:, ib] = ar - xr, ai - xi
+            re[:, ia], im[:, ia] = ar + xr, ai + xi
+            s <<= 1
+    k = np.arange(64)
+    f0r, f0i = re[:, :64].copy(), im[:, :64].copy()
+    f1r, f1i = cmul(re[:, 64:128], im[:, 64:128], k)
+    f2r, f2i = cmul(re[:, 128:], im[:, 128:], 2 * k)
+    sr, si = f1r + f2r, f1i + f2i
+    tr, ti = ((f1r - f2r) * SQRT3_2 + 2048) >> 12, ((f1i - f2i) * SQRT3_2 + 2048) >> 12
+    hr, hi = f0r - (sr >> 1), f0i - (si >> 1)
+    re[:, :64], im[:, :64] = f0r + sr, f0i + si
+    re[:, 64:128], im[:, 64:128] = hr - ti, hi + tr
+    re[:, 128:], im[:, 128:] = hr + ti, hi - tr
+    frames = np.empty((nw, WINDOW), dtype=np.int64)
+    frames[a], frames[b] = re, im
+    parts = (frames * np.array(HANN, dtype=np.int64)) >> 10     # (nw, WINDOW)
+    q = parts.reshape(nw, 4, HOP)
+    # hop h of the map (from -3 HOP) sums part 3 of window h-3 ... part 0 of window h
+    acc = np.zeros((nw + 3, HOP), dtype=np.int64)
+    for part in range(4):
+        acc[part:part + nw] += q[:, part]
+    val = acc[3:3 + (n + HOP - 1) // HOP].ravel()[:n] >> 1
+    u = np.where(val <= 0, 0, np.where(val >= Q13, 65535, (val * 65535 + 4096) >> 13))
     from array import array
-    mod, cosp, hann, log2t = v
+    if isinstance(out, array):
+        out[:] = array("H", u.astype(np.uint16).tobytes())
+    else:
+        for i in range(n):
+            out[i] = int(u[i])
+    return out
+
+
+def _paint_c(rng, comp, tab, n, out):
+    """paint()'s whole loop in C: the generator's state, the constants, the
+    tables and out's arrays (one, or a Chunks' 512-value chunks) handed over."""
+    from array import array
+    c = _native_c()
+    _, ptab, tw, hann, log2t, pos = _tables()
+    invk, ll, sign, off = comp
+    st = array("H", (rng.a_hi, rng.a_lo, rng.b_hi, rng.b_lo, rng.c_hi, rng.c_lo,
+                     rng.d_hi, rng.d_lo))
+    chunks = getattr(out, "chunks", None)
+    c.paint(st, invk, ll, sign, off, n, chunks if chunks is not None else (out,),
+            9 if chunks is not None else 30, tab, log2t, ptab, tw, hann, pos)
+    return out
+
+
+def _paint_viper(v, rng, comp, tab, n, out):
+    """paint()'s loop with every per-pair step in viper (brush_viper.py): the
+    draws of both windows, their frames (fill + ifft), and each window's
+    overlap-add and emission straight into out's memory (an array, or a
+    Chunks' arrays: a hop across two chunks goes through a 48-value array)."""
+    from array import array
+    mod, ptab, tw, hann, log2t, pos = v
     invk, ll, sign, off = comp
     llo = array_i(K)
     for k in range(K):
         llo[k] = ll[k] + (1 << 29)
+    so = array("i", (sign + 1, off + (1 << 20)))
     st = array("H", (rng.a_hi, rng.a_lo, rng.b_hi, rng.b_lo, rng.c_hi, rng.c_lo,
                      rng.d_hi, rng.d_lo))
-    buf = array_i(WINDOW)
-    ring = array_i(WINDOW)
+    ma, pa, mb, pb = array_i(K), array_i(K), array_i(K), array_i(K)
+    re, im, ring = array_i(WINDOW), array_i(WINDOW), array_i(WINDOW)
     for i in range(WINDOW):
         ring[i] = RBIAS
     tmp = array("H", bytes(2 * HOP))
-    chunked = not isinstance(out, array)
+    chunks = getattr(out, "chunks", None)
+    draw, frames, ola = mod.draws, mod.frames, mod.ola_emit
     start = -3 * HOP
-    for _ in range(windows(n)):
-        mod.magnitudes(st, invk, llo, mag, tab, log2t, sign, off)
-        mod.frame(mag, ph, buf, cosp)
-        advance(ph)
-        r0 = start % WINDOW
-        mod.ola(buf, hann, ring, r0)
-        mod.emit(ring, r0, tmp)
-        # the whole samples [start, start + HOP) into the region's part of it
-        a = 0 if start >= 0 else -start
-        b = HOP if start + HOP <= n else n - start
-        if a < b:
-            if chunked:
-                for i in range(a, b):
-                    out[start + i] = tmp[i]
+    for _ in range(windows(n) // 2):
+        draw(st, invk, llo, ma, pa, tab, log2t, so)
+        draw(st, invk, llo, mb, pb, tab, log2t, so)
+        frames(ma, pa, mb, pb, ptab, pos, re, im, tw)
+        for fr in (re, im):
+            r0 = start % WINDOW
+            a = 0 if start >= 0 else -start
+            b = HOP if start + HOP <= n else n - start
+            if b <= a:
+                ola(fr, hann, ring, r0, tmp, 0, 0, 0)
+            elif chunks is None:
+                ola(fr, hann, ring, r0, out, start + a, a, b)
             else:
-                out[start + a:start + b] = tmp[a:b]
-        start += HOP
+                p = start + a                   # upload.CHUNK_BITS: 512 values a chunk
+                c = chunks[p >> 9]
+                at = p & 511
+                if at + b - a <= len(c):
+                    ola(fr, hann, ring, r0, c, at, a, b)
+                else:                           # across two chunks
+                    ola(fr, hann, ring, r0, tmp, 0, a, b)
+                    m = len(c) - at
+                    c[at:] = tmp[:m]
+                    chunks[(p >> 9) + 1][:b - a - m] = tmp[m:b - a]
+            start += HOP
     return out

@@ -1,0 +1,46 @@
+// The brush painter's integer loops in C (device/texel/gen/brush.py: draws,
+// fill + ifft, ola_emit, leakage's sweeps), for the texelpad firmware's
+// _texelbrush module (modtexelbrush.c) and for the host's tests through
+// ctypes (tests/brush/test_paint_c.py): the same integers as the Python
+// loops, statement for statement. Plain C99, no MicroPython headers.
+// Assumes two's complement int32_t and an arithmetic >> on negative values
+// (gcc and arm-none-eabi-gcc), as Python's >> is.
+#ifndef TEXELPAD_BRUSH_CORE_H
+#define TEXELPAD_BRUSH_CORE_H
+#include <stdint.h>
+
+#define TB_WINDOW 192
+#define TB_HOP 48
+#define TB_K 97
+
+// The tables the Python module holds (gen/brush.py, gen/plan_int_tables.py),
+// handed in by the caller so there is one copy of each.
+typedef struct {
+    const int32_t *exp_tab;     // plan_int_tables.table(): EXP_HI at 0, EXP_MID at 256
+    const int32_t *log2t;       // brush.LOG2 (257)
+    const int16_t *phase;       // brush.PHASE (256), Q14
+    const int16_t *tw;          // brush.TW (192), Q12
+    const int32_t *hann;        // brush.HANN (192), Q9
+    const int32_t *pos;         // brush.POS (192)
+} tb_tables;
+
+// One window's K draws (brush.draws): st = the generator's state as eight
+// 16-bit halves (gen/rng.py), updated; ll in Q24 octaves (brush.LL_NONE: 0).
+void tb_draws(uint16_t st[8], const int32_t *invk, const int32_t *ll, int32_t sign,
+              int32_t off, const tb_tables *t, int32_t *mag, int32_t *ph);
+
+// Two windows' doubled frames into re and im (brush.fill, brush.ifft).
+void tb_frames(const int32_t *ma, const int32_t *pa, const int32_t *mb, const int32_t *pb,
+               const tb_tables *t, int32_t *re, int32_t *im);
+
+// brush.paint's loop: n samples into chunks (chunk i holds samples
+// i << chunk_bits ..), from the generator's state after the setup.
+void tb_paint(uint16_t st[8], const int32_t *invk, const int32_t *ll, int32_t sign,
+              int32_t off, const tb_tables *t, int32_t n, uint16_t *const *chunks,
+              int32_t chunk_bits);
+
+// brush.leakage's sweeps over a padded array (3 zeros each side): a[i] =
+// max(0, q[i] - C1 (a[i-1] + a[i+1]) - C2 (..) - C3 (..)), Q14 coefficients.
+void tb_leak(const int32_t *q, int32_t *a, int32_t n, int32_t sweeps, const int32_t *c);
+
+#endif

@@ -1,0 +1,12 @@
+# _texelbrush, a MicroPython user C module (docs/firmware.md): the brush
+# painter's loops in C. host/texelpad/firmware/build.py includes this file
+# beside ulab's.
+add_library(usermod_texelbrush INTERFACE)
+target_sources(usermod_texelbrush INTERFACE
+    ${CMAKE_CURRENT_LIST_DIR}/brush_core.c
+    ${CMAKE_CURRENT_LIST_DIR}/modtexelbrush.c
+)
+target_include_directories(usermod_texelbrush INTERFACE ${CMAKE_CURRENT_LIST_DIR})
+# -O2 for these two files' loops (the rp2 port builds with -Os)
+set_source_files_properties(${CMAKE_CURRENT_LIST_DIR}/brush_core.c PROPERTIES COMPILE_OPTIONS "-O2")
+target_link_libraries(usermod INTERFACE usermod_texelbrush)
