@@ -105,3 +105,17 @@ def test_a_board_folder_that_is_not_one_is_refused_saying_what_is_missing(tmp_pa
     (d / "board.json").write_text("[" * 50000)
     with pytest.raises(build.FirmwareError, match="board.json"):
         build.check_board_dir(d)
+
+
+def test_every_viper_module_runs_from_ram_not_from_the_freeze():
+    """romfs.RAM_MODULES is every module holding viper code: MicroPython's
+    mpy-tool aligns frozen armv6m code to 2 bytes while viper code loads its
+    constants as if it started on 4, so no native code may be frozen (the
+    firmware stopped booting when one function moved 2 bytes)."""
+    from texelpad.deploy import image
+    viper = {p.relative_to(image.PACKAGE_DIR).as_posix()
+             for p in image.PACKAGE_DIR.rglob("*.py") if "@micropython.viper" in p.read_text()}
+    assert viper and viper == set(romfs.RAM_MODULES)
+    frozen = romfs.frozen_sources()
+    for rel in romfs.RAM_MODULES:
+        assert b"@micropython.viper" not in frozen["texel/" + rel]

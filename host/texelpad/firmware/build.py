@@ -9,7 +9,8 @@ What it makes, in out_dir:
     texelpad-<name>.elf      the firmware's symbols (rp2emu --profile, arm-none-eabi-nm)
     build/                   CMake's folder (kept: a rebuild only relinks)
 
-The MicroPython build is the rp2 port of MicroPython v1.28.0 with ulab 6.12 as a user C module:
+The MicroPython build is the rp2 port of MicroPython v1.28.0 with ulab 6.12 and texelpad's brush
+painter (_texelbrush: device/cmod/texelbrush) as user C modules (user_modules):
 by default the offline kit in ../shared/instruments/mpfirmware (build.sh), or a MicroPython
 checkout of the user's (micropython=DIR: `git clone -b v1.28.0
 https://github.com/micropython/micropython`, `make -C mpy-cross`, `make -C ports/rp2 submodules`;
@@ -41,6 +42,10 @@ FLASH_BYTES = 2 * 1024 * 1024         # a Pico's W25Q16 (PICO_FLASH_SIZE_BYTES f
 FROZEN_MAIN = Path(__file__).with_name("frozen_main.py")
 FROZEN_BOOT = Path(__file__).with_name("frozen_boot.py")
 FIRMWARE_INFO = "firmware.json"       # at the ROMFS root: /rom/firmware.json on the board
+# The brush painter's C loops (MicroPython module _texelbrush: texel.gen.brush
+# paints with it where the firmware has it): device/cmod/texelbrush in a
+# checkout, beside the texel package.
+TEXELBRUSH_DIR = image.PACKAGE_DIR.parent / "cmod" / "texelbrush"
 
 
 # The firmware's build name (sys.implementation._build on the board) is the
@@ -196,6 +201,25 @@ def _run(args: list[str], log: Path, env: dict | None = None) -> None:
                             % (p.returncode, log, "\n  ".join(tail)))
 
 
+def user_modules(out: Path, ulab_cmake: Path | None, say: Callable[[str], None]) -> Path:
+    """The user C modules' CMake file for the build (out/usermods.cmake):
+    ulab's (when given) and texelpad's _texelbrush (when its sources are
+    here: a checkout; without them the firmware paints brushes in viper)."""
+    lines = ["# written by texelpad firmware (host/texelpad/firmware/build.py)"]
+    if ulab_cmake is not None:
+        lines.append("include(%s)" % Path(ulab_cmake).as_posix())
+    if (TEXELBRUSH_DIR / "micropython.cmake").is_file():
+        lines.append("include(%s)" % (TEXELBRUSH_DIR / "micropython.cmake").as_posix())
+    else:
+        say("no %s: the firmware paints brushes in viper, without the C painter"
+            % TEXELBRUSH_DIR)
+    f = out / "usermods.cmake"
+    text = "\n".join(lines) + "\n"
+    if not f.is_file() or f.read_text() != text:    # unchanged: CMake keeps its cache
+        f.write_text(text)
+    return f
+
+
 def build_firmware(board_dir: str | os.PathLike, out_dir: str | os.PathLike,
                    micropython: str | os.PathLike | None = None,
                    ulab: str | os.PathLike | None = None,
@@ -227,21 +251,22 @@ def build_firmware(board_dir: str | os.PathLike, out_dir: str | os.PathLike,
             raise FirmwareError("no MicroPython source tree: give --micropython DIR (MicroPython "
                                 "v%s, see docs/firmware.md), or put the offline kit at "
                                 "../shared/instruments/mpfirmware" % MICROPYTHON_VERSION)
+        mods = user_modules(out, kit / "ulab" / "code" / "micropython.cmake", say)
         say("building MicroPython v%s + ulab with the offline kit (about 2 min the first time; "
             "log: %s)" % (MICROPYTHON_VERSION, log))
-        _run(["bash", str(kit / "build.sh"), str(stage), str(fw)], log)
+        _run(["bash", str(kit / "build.sh"), str(stage), str(fw), str(mods)], log)
         bin_, uf2, elf = fw / "firmware.bin", fw / "firmware.uf2", fw / "firmware.elf"
     else:
         mp = Path(micropython).resolve()
         port = mp / "ports" / "rp2"
         if not (port / "Makefile").is_file():
             raise FirmwareError("%s: not a MicroPython source tree (no ports/rp2/Makefile)" % mp)
-        mods = []
+        cm = None
         if ulab is not None:
             cm = Path(ulab).resolve() / "code" / "micropython.cmake"
             if not cm.is_file():
                 raise FirmwareError("%s: not a ulab checkout (no code/micropython.cmake)" % ulab)
-            mods = ["USER_C_MODULES=%s" % cm]
+        mods = ["USER_C_MODULES=%s" % user_modules(out, cm, say)]
         say("building MicroPython from %s (log: %s)" % (mp, log))
         jobs = "-j%d" % (os.cpu_count() or 2)
         _run(["make", "-C", str(mp / "mpy-cross"), jobs], log)

@@ -78,13 +78,21 @@ def code_digest(target: image.Target | None = None) -> str:
     return h.hexdigest()
 
 
-# Viper modules whose machine code the refresh interrupt runs at 8,333 Hz: not
-# frozen (frozen native code runs from flash through the RP2040's XIP cache,
-# which the emulated Pico does not model, and hw/rp2.py's PWM-wrap vector wants
-# the code in RAM) but loaded from the ROMFS as texel_ram.<name>, which copies
-# their native code into RAM at import; the frozen texel.runtime.<name> hands
-# that module's names on (RAM_SHIM). Their relative imports become absolute.
-RAM_MODULES = ("runtime/refresh_viper.py",)
+# Every viper module: not frozen but loaded from the ROMFS as texel_ram.<name>,
+# which copies its native code into RAM at import; the frozen
+# texel.runtime.<name> / texel.gen.<name> hands that module's names on
+# (RAM_SHIM). Frozen native code would run from flash through the RP2040's XIP
+# cache (slower on misses; the emulated Pico does not model it; hw/rp2.py's
+# PWM-wrap vector wants the refresh in RAM) and, worse, MicroPython v1.28's
+# mpy-tool aligns a frozen armv6m function to 2 bytes only, while the viper
+# code loads its 32-bit constants PC-relative as if it started on 4: a
+# function that lands 2 bytes off reads wrong constants and the board
+# crashes (found when the brush's viper code grew and moved the generator's
+# functions 2 bytes: the firmware no longer booted). Code loaded into RAM is
+# word-aligned. tests/firmware/test_romfs.py checks the list is every viper
+# module. Their relative imports become absolute.
+RAM_MODULES = ("runtime/refresh_viper.py", "runtime/scene_viper.py", "gen/engine_int_viper.py",
+               "gen/plan_int_viper.py", "gen/brush_viper.py")
 RAM_PACKAGE = "texel_ram"
 RAM_SHIM = b"""# texelpad firmware: this module's viper code runs from RAM, loaded from the ROMFS partition as
 # %(pkg)s.%(name)s (host/texelpad/firmware/romfs.py RAM_MODULES); its names are handed on here.
