@@ -16,8 +16,8 @@ from support.pico import emulated_pico  # noqa: F401
 
 pytestmark = [pytest.mark.slow, pytest.mark.instruments]
 
-_BRUSH = {"k": [8.0] + [1.5 + 0.1 * (i % 20) for i in range(94)],
-          "lam": [0.5] + [0.05 / (1 + 0.04 * i) for i in range(94)], "range": [0.0, 1.0]}
+_BRUSH = {"k": [8.0] + [1.5 + 0.1 * (i % 20) for i in range(96)],
+          "lam": [0.5] + [0.05 / (1 + 0.04 * i) for i in range(96)], "range": [0.0, 1.0]}
 
 
 @pytest.fixture(scope="module")
@@ -134,6 +134,38 @@ def test_a_full_screen_reference_and_a_brush_after_a_series_of_pushes(pico):
         assert st["overruns"] == 0
     print("\nheap free after each of %d pushes: min %s, max %s bytes"
           % (len(frees), format(min(frees), ","), format(max(frees), ",")))
+
+
+def test_the_firmware_paints_a_full_screen_brush_in_c_as_the_host_does(pico, capsys):
+    """The firmware's C painter (_texelbrush, device/cmod/texelbrush) paints a
+    full-screen brush region (seed 002, issue 21) into the map CPython paints:
+    the same integers once the painting's float setup is (float32 here: within
+    one PWM step, 8 u16 measured), with no viper module loaded for it; the
+    push's cost on the chip's own clock is printed (the benchmark reports it:
+    python -m texelpad.bench.firmware)."""
+    import ast
+    from texel.gen import brush as B
+    host = B.paint(B.validate(_BRUSH), 21, 19200)
+    with _connect(pico.port) as b:
+        b.push({"regions": [{"start_mm": 0, "end_mm": 101.76,
+                             "texture": {"kind": "constant", "level": 0.5}}]})
+        st = b.push({"regions": [{"start_mm": 0, "end_mm": 101.76, "texture": {
+            "kind": "brush", "brush": _BRUSH, "seed": 21}}]})
+        lp = st["last_push"]
+        out = b.link.exec("import sys\nfrom texel.gen import brush as _B\nimport texel.app as _A\n"
+                          "print(repr((_B._native_c() is not None, "
+                          "'texel_ram.brush_viper' in sys.modules, "
+                          "[_A._rt.refresh.scene.amp(p) for p in range(0, 19200, 61)])))",
+                          timeout=60)
+        c, viper_loaded, got = ast.literal_eval(out.strip().splitlines()[-1])
+    want = [host[p] for p in range(0, 19200, 61)]
+    diff = [abs(a - w) for a, w in zip(got, want)]
+    print("\nfull-screen brush on the firmware (C painter): validate %.1f + build %.1f ms; "
+          "%d of %d samples equal CPython's, worst %d u16"
+          % (lp["validate_us"] / 1e3, lp["build_us"] / 1e3, diff.count(0), len(diff), max(diff)))
+    assert c is True and viper_loaded is False and st["faults"] == 0
+    assert len(got) == len(want) and max(diff) <= 65535 // 3676
+    assert diff.count(0) >= 0.8 * len(diff)
 
 
 def test_a_bad_push_is_refused_and_the_scene_kept(pico):

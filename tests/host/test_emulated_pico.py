@@ -526,13 +526,14 @@ def test_format2_plan_bit_for_bit_on_the_chip_and_a_refused_push_changes_nothing
         assert st2["refreshes"] > n0 and st2["overruns"] == st["overruns"]
 
 
-_BRUSH = {"k": [8.0] + [1.5 + 0.1 * (i % 20) for i in range(94)],
-          "lam": [0.5] + [0.05 / (1 + 0.04 * i) for i in range(94)], "range": [0.0, 1.0]}
+_BRUSH = {"k": [8.0] + [1.5 + 0.1 * (i % 20) for i in range(96)],
+          "lam": [0.5] + [0.05 / (1 + 0.04 * i) for i in range(96)], "range": [0.0, 1.0]}
 
 
 def test_a_brush_region_paints_on_the_chip_as_on_the_host(capsys, port):
     """A Tactile Paintbrush region (seed 002) sent as its ~200 numbers is
-    painted by the RP2040 (every per-window loop in armv6m viper) into the
+    painted by the RP2040 (stock MicroPython: every per-pair loop in armv6m
+    viper, brush_viper.py) into the
     map CPython paints: the per-window integers are the same, only the
     painting's float setup (texel.gen.brush.compensated, float32 here) can
     round a constant the other way - within one PWM step (8 u16 = 0.45
@@ -550,7 +551,7 @@ def test_a_brush_region_paints_on_the_chip_as_on_the_host(capsys, port):
         st = b.push({"regions": [region]})
         lp = st["last_push"]
         assert st["scene"]["regions"][0]["kind"] == "brush" and st["faults"] == 0
-        _say(capsys, "\nbrush half screen (9,600 samples, 207 windows) on the chip: validate "
+        _say(capsys, "\nbrush half screen (9,600 samples, 204 windows) on the chip: validate "
              "%.1f + build %.1f + swap %.1f ms (its own clock); mem_free %d"
              % (lp["validate_us"] / 1e3, lp["build_us"] / 1e3, lp["swap_us"] / 1e3,
                 st["mem_free"]))
@@ -565,7 +566,7 @@ def test_a_brush_region_paints_on_the_chip_as_on_the_host(capsys, port):
         assert viper is True and len(got) == len(want) and max(diff) <= 65535 // 3676
         assert diff.count(0) >= 0.9 * len(diff)
         bad = dict(_BRUSH, lam=_BRUSH["lam"][:-1] + [float("nan")])
-        with pytest.raises(ValueError, match=r"brush.lam\[94\]: nan is not finite"):
+        with pytest.raises(ValueError, match=r"brush.lam\[96\]: nan is not finite"):
             b.push({"regions": [dict(region, texture=dict(region["texture"], brush=bad))]})
         st2 = b.status()
         assert st2["pushes"] == st["pushes"] and st2["scene"]["regions"][0]["kind"] == "brush"

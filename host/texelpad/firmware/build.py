@@ -217,6 +217,16 @@ def user_modules(out: Path, ulab_cmake: Path | None, say: Callable[[str], None])
     text = "\n".join(lines) + "\n"
     if not f.is_file() or f.read_text() != text:    # unchanged: CMake keeps its cache
         f.write_text(text)
+    # the rp2 Makefile runs CMake only when its build folder has no Makefile, so a
+    # folder configured with other user modules (an older texelpad's: ulab alone)
+    # would silently keep them: have it configured again
+    cmake_dir = out / "build" / "build"
+    cache = cmake_dir / "CMakeCache.txt"
+    if cache.is_file():
+        want = "USER_C_MODULES:UNINITIALIZED=%s" % f
+        if want not in cache.read_text(errors="replace").splitlines():
+            say("the build folder was configured with other C modules: configuring it again")
+            (cmake_dir / "Makefile").unlink(missing_ok=True)
     return f
 
 
