@@ -4,6 +4,7 @@ plays, show, compare; bad input is one line naming it and changes nothing."""
 from __future__ import annotations
 
 import json
+import struct
 
 import numpy as np
 import pytest
@@ -13,6 +14,8 @@ from texelpad.brush import document as D
 
 from support.cli import run_cli
 from support.vboard import virtual_board
+
+TPB_BYTES = 4 + 2 + 8 + 8 * B.K         # the binary brush (document.to_bytes): 790
 
 
 def _recording(path, seed=0):
@@ -38,13 +41,15 @@ def test_fit_design_paint_show_compare(capsys, tmp_path):
     doc = D.load(out)
     assert doc["range"][0] > doc["range"][1]            # high friction plays low amplitude
     assert doc["fit"]["windows"] > 100 and len(doc["k"]) == B.K
-    # the 4 c/mm line (wavenumber 4 of a 0.9964 mm window) stands out
+    # the 4 c/mm line stands out at wavenumber 4 (3.93 c/mm: 4 cycles of a 1.0176 mm
+    # window; 4 c/mm is wavenumber 4.07)
     lam = np.array(doc["lam"])
     assert np.argmax(lam[1:]) + 1 == 4 and abs(lam[4] - 0.08) < 0.02
     d2 = tmp_path / "d.tpb"
     code, o, e = run_cli(capsys, "brush", "design", "--shape", "pink", "--level", "0.03",
                          "--out", str(d2))
-    assert code == 0, e and len(d2.read_bytes()) == 774
+    assert code == 0, e
+    assert len(d2.read_bytes()) == TPB_BYTES
     m, s = tmp_path / "m.csv", tmp_path / "s.json"
     code, o, e = run_cli(capsys, "brush", "paint", str(out), "--seed", "5", "--length-mm",
                          "20", "--out", str(m), "--scene", str(s))
@@ -60,7 +65,8 @@ def test_fit_design_paint_show_compare(capsys, tmp_path):
     code, o, e = run_cli(capsys, "brush", "show", str(out), "--out", str(png), "--original",
                          str(rec))
     assert code == 0, e
-    assert png.stat().st_size > 20000 and "774 binary" in o
+    assert png.stat().st_size > 20000 and "%d binary" % TPB_BYTES in o
+    assert "wavenumbers 1..%d:" % B.NYQ in o
     code, o, e = run_cli(capsys, "brush", "compare", str(out), str(d2))
     assert code == 0 and "braycurtis distance" in o and "ranges differ" in e
 
@@ -95,6 +101,12 @@ def test_fit_design_paint_show_compare(capsys, tmp_path):
     (["brush", "design", "--shape", "nan", "--out", "OUT/b.json"], "--shape: a slope"),
     (["brush", "design", "--shape", "400", "--out", "OUT/b.json"], "--shape: brush.lam[5]"),
     (["brush", "design", "--band", "0", "3", "--out", "OUT/b.json"], "--band: band"),
+    (["brush", "design", "--band", "1", str(B.K), "--out", "OUT/b.json"], "--band: band"),
+    # a brush of the old geometry (texelpad-brush/1: 188-sample windows, 95 wavenumbers)
+    (["brush", "paint", "OLD.json", "--out", "OUT/m.csv"],
+     "'texelpad-brush/1' brushes (188-sample windows) are not painted any more"),
+    (["brush", "paint", "OLD.tpb", "--out", "OUT/m.csv"],
+     "95 wavenumbers; this display paints %d" % B.K),
 ])
 def test_bad_input_is_one_line_and_writes_nothing(capsys, tmp_path, argv, fragment):
     (tmp_path / "BAD.csv").write_text("position_mm,friction\n0,0.5\n0.1,abc\n")
@@ -106,10 +118,16 @@ def test_bad_input_is_one_line_and_writes_nothing(capsys, tmp_path, argv, fragme
     good = D.design("white")
     broken = dict(good, lam=good["lam"][:3] + [float("nan")] + good["lam"][4:])
     (tmp_path / "BROKEN.json").write_text(json.dumps(broken))
+    (tmp_path / "OLD.json").write_text(json.dumps({
+        "format": "texelpad-brush/1", "window": 188, "hop": 47, "wavenumbers": 95,
+        "dx_um": 5.3, "range": [0.0, 1.0], "k": [2.0] * 95, "lam": [0.01] * 95}))
+    (tmp_path / "OLD.tpb").write_bytes(D.MAGIC + struct.pack("<H2f95f95f", 95, 0.0, 1.0,
+                                                             *[2.0] * 95, *[0.01] * 95))
     (tmp_path / "OUT").mkdir()
     argv = [a.replace("OUT/", str(tmp_path / "OUT") + "/") for a in argv]
     argv = [str(tmp_path / a) if a in ("BAD.csv", "BROKEN.json", "NOPOS.csv", "DEEP.json",
-                                       "GOOD.json", "FAR.csv") else a for a in argv]
+                                       "GOOD.json", "FAR.csv", "OLD.json", "OLD.tpb") else a
+            for a in argv]
     code, o, e = run_cli(capsys, *argv)
     assert code == 2 and fragment in e and len(e.strip().splitlines()) == 1, (code, e)
     assert not list((tmp_path / "OUT").iterdir())
@@ -148,7 +166,8 @@ def test_fit_reads_texelpad_render_csv_by_column_name(capsys, tmp_path):
     assert code == 0, e
     got = D.load(tmp_path / "b.json")
     want = D.fit([np.load(tmp_path / "m.npy")], "friction")
-    assert got["fit"]["windows"] == want["fit"]["windows"] == 60   # 3000 samples, not 565,000
+    # 3000 samples (59 windows), not 565,000
+    assert got["fit"]["windows"] == want["fit"]["windows"] == 1 + (3000 - B.WINDOW) // B.HOP
     assert np.allclose(got["lam"], want["lam"], rtol=1e-4, atol=1e-7)
     assert np.allclose(got["k"], want["k"], rtol=1e-3)
     # brush paint's own CSV (position_mm,friction) reads back by name too, and a

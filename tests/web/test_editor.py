@@ -317,7 +317,7 @@ def test_refused_requests_change_nothing_and_write_no_file(lab, tmp_path):
          "regions[1].texture.pitch_db"),
         (region(0, 10, {"kind": "constant", "level": 1.5}), "regions[1].texture.level"),
         # brush numbers
-        (region(0, 10, {"kind": "brush", "brush": {"k": [2.0] * 95, "lam": lam,
+        (region(0, 10, {"kind": "brush", "brush": {"k": [2.0] * B.K, "lam": lam,
                                                    "range": [0, 1]}, "seed": 1}),
          "regions[1].texture.brush.lam[3]"),
         (region(0, 10, {"kind": "brush", "brush": k_short}), "regions[1].texture.brush.k"),

@@ -9,12 +9,12 @@ the paper's comparison.
 What it does (texelpad.brush: swipes, transform, fits, compare):
 - swipes: --swipes per texture (default 10) of texelpad.brush.swipes.TEXTURES
   (the nine references and two texel renderings, a full screen each) under
-  the default SwipeModel (9,600 samples = 201 windows; start, 3 % slow warp,
+  the default SwipeModel (9,600 samples = 197 windows; start, 3 % slow warp,
   5 % gain, 0.02 friction noise; swipes.py's docstring), seeded by --seed;
 - per swipe: the space-frequency transform (transform.stft_magnitudes) and
   fits.fit_swipe per model, timed (wall clock, perf_counter; the transform
   once, each model's fits and K-S separately), plus one full-screen swipe
-  (19,200 samples, 405 windows) for the scale the issue quotes;
+  (19,200 samples, 397 windows) for the scale the issue quotes;
 - prints the fit time per swipe, the K-S table per texture and model (mean
   over swipes; all wavenumbers and per band, compare.BANDS; "best" = the
   share of (swipe, wavenumber) cells where the model has the lowest K-S),
@@ -118,7 +118,7 @@ def run(swipes_per_texture: int = S.SWIPES_PER_TEXTURE, seed: int = 0, names=S.T
     labels = [s.texture for s in sw]
     full = None
     if full_screen:
-        # one full-screen swipe (19,200 samples: 405 windows), the size the issue quotes
+        # one full-screen swipe (19,200 samples: 397 windows), the size the issue quotes
         rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(10**6,)))
         fs = S.swipe(S.texture("white", 2 * S.SCREEN_SAMPLES), rng,
                      S.SwipeModel(length_samples=S.SCREEN_SAMPLES))

@@ -5,16 +5,17 @@ brush.
 
     .venv/bin/python -m texelpad.bench.brush_paint [--chip] [--json PATH] [--figure PATH]
 
-- synthesis time of a full-screen region (19,200 samples, 412 windows) on
-  CPython (the numpy frame; and the Python loops), the MicroPython unix port
-  (viper, and the Python loops: a 1,880-sample region, scaled per window),
+- synthesis time of a full-screen region (19,200 samples, 404 windows) on
+  CPython (texel.gen.brush.paint how="numpy"; and how="python", the Python
+  loops), the MicroPython unix port (how="viper", and how="python": a
+  1,880-sample region, scaled per window),
   and with --chip the emulated RP2040 (../shared/instruments/rp2emu: a
   half-screen brush scene pushed, the build time on the chip's own clock);
 - bytes: the brush as JSON, binary (.tpb), the region as sent to a board
   (the scene's JSON text), against the uint16 map of the same region;
 - the round trip: designed brushes (white, pink, brown; shapes 2 and 5)
   painted over 10 full screens, re-analysed and fitted (document.fit): the
-  ratio fitted / designed of the scale and the shape at wavenumbers 1 .. 93,
+  ratio fitted / designed of the scale and the shape at wavenumbers 1 .. 95,
   median and 5th - 95th percentile; and three textures we have (the pink
   and sawtooth references, a texel rendering) fitted, painted, refitted;
 - --figure: docs/img/brush-fit.png - each texture's map beside the brush's
@@ -52,16 +53,16 @@ def _time(fn, repeat=3) -> float:
 def synthesis(chip: bool) -> dict:
     doc = D.design("pink", 0.04)
     v = B.validate({"k": doc["k"], "lam": doc["lam"], "range": doc["range"]})
-    out = {"cpython_numpy_s": _time(lambda: B.paint(v, 1, FULL, viper=False)),
-           "cpython_python_s": _time(lambda: B.paint(v, 1, FULL, viper=False,
-                                                     frame=B.frame_py), 1)}
+    out = {"cpython_numpy_s": _time(lambda: B.paint(v, 1, FULL, how="numpy")),
+           "cpython_python_s": _time(lambda: B.paint(v, 1, FULL, how="python"), 1)}
     code = """
 import time
 from texel.gen import brush as B
 b = B.validate(%r)
-t0 = time.ticks_us(); B.paint(b, 1, %d); t1 = time.ticks_us()
-B.paint(b, 1, 1880, viper=False); t2 = time.ticks_us()
-print(B._viper() is not None, time.ticks_diff(t1, t0), time.ticks_diff(t2, t1))
+viper = B._viper() is not None
+t0 = time.ticks_us(); B.paint(b, 1, %d, how="viper" if viper else "python"); t1 = time.ticks_us()
+B.paint(b, 1, 1880, how="python"); t2 = time.ticks_us()
+print(viper, time.ticks_diff(t1, t0), time.ticks_diff(t2, t1))
 """ % ({"k": v["k"], "lam": v["lam"], "range": v["range"]}, FULL)
     p = toolchain.run(code, path=[str(Path(B.__file__).parents[2])], timeout=600)
     viper, t_full, t_small = p.stdout.split()
@@ -114,8 +115,10 @@ def sizes() -> dict:
 
 
 def _ratios(doc: dict, fitted: dict) -> dict:
-    ks = np.array(fitted["k"][1:94]) / np.array(doc["k"][1:94])
-    lam = np.array(fitted["lam"][1:94]) / np.array(doc["lam"][1:94])
+    # wavenumbers 1 .. NYQ - 1 (the Nyquist bin is real: m_NYQ = 2 A |cos phi|,
+    # brush/transform.py)
+    ks = np.array(fitted["k"][1:B.NYQ]) / np.array(doc["k"][1:B.NYQ])
+    lam = np.array(fitted["lam"][1:B.NYQ]) / np.array(doc["lam"][1:B.NYQ])
     q = lambda a: [round(float(np.percentile(a, p)), 3) for p in (50, 5, 95)]   # noqa: E731
     return {"lam": q(lam), "k": q(ks), "mean_lam": round(fitted["lam"][0] / doc["lam"][0], 3)}
 
@@ -197,7 +200,7 @@ def main(argv: list[str] | None = None) -> int:
     print("bytes: brush %(brush_json_bytes)d as JSON, %(brush_binary_bytes)d binary; the region as "
           "sent %(region_sent_bytes)d; the map it paints %(map_u16_bytes)d" % sz)
     print("round trip, designed brushes painted over 10 screens and refitted (fitted / designed "
-          "at wavenumbers 1..93: median [5th, 95th percentile]):")
+          "at wavenumbers 1..%d: median [5th, 95th percentile]):" % (B.NYQ - 1))
     rt = round_trip()
     for k, v in rt.items():
         print("  %-12s scale %s  shape %s  mean's scale %s" % (k, v["lam"], v["k"], v["mean_lam"]))

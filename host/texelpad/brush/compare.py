@@ -10,8 +10,8 @@ Fig. 4, Fig. 5, Table II), on fit_swipe results (texelpad.brush.fits):
   seed 002 saw "the first two coefficients in each texel" poorly fit by
   Rayleigh - the bands keep k = 0 and k = 1 apart for that reason.
 - consistency: every swipe becomes a parameter vector per model
-  (param_vector: rayleigh sigma_0..94 - 95 numbers; rice nu_0..94 then
-  sigma_0..94 and weibull k_0..94 then lam_0..94 - 190 numbers; seed 002 has
+  (param_vector: rayleigh sigma_0..96 - 97 numbers; rice nu_0..96 then
+  sigma_0..96 and weibull k_0..96 then lam_0..96 - 194 numbers; seed 002 has
   101 and 202), distances between swipes under the paper's four metrics
   (METRICS: "Euclidean, standardized Euclidean, Canberra, and Bray-Curtis",
   scipy.spatial.distance's definitions), the silhouette score of the
@@ -42,16 +42,16 @@ from typing import Mapping, Sequence
 import numpy as np
 from scipy.spatial.distance import pdist, squareform
 
-from texel.gen.brush import K
+from texel.gen.brush import K, NYQ
 
 from .fits import MODELS
 
 METRICS = ("euclidean", "seuclidean", "canberra", "braycurtis")
 METRIC_LABELS = {"euclidean": "Euclidean", "seuclidean": "standardized Euclidean",
                  "canberra": "Canberra", "braycurtis": "Bray-Curtis"}
-# wavenumber bands [lo, hi): the mean, its Hann leak, then wavelengths 0.50-0.11 mm,
-# 0.100-0.032 mm, 31-10.6 um (0.9964 mm / k)
-BANDS = (("0", 0, 1), ("1", 1, 2), ("2-9", 2, 10), ("10-31", 10, 32), ("32-94", 32, K))
+# wavenumber bands [lo, hi): the mean, its Hann leak, then wavelengths 0.51-0.11 mm,
+# 0.102-0.033 mm, 32-10.6 um (1.0176 mm / k; the last band ends at the Nyquist, NYQ)
+BANDS = (("0", 0, 1), ("1", 1, 2), ("2-9", 2, 10), ("10-31", 10, 32), ("32-%d" % NYQ, 32, K))
 MDS_RANDOM_STATE = 0
 
 
@@ -191,7 +191,7 @@ def consistency(fits: Sequence[Mapping], labels: Sequence[str], models=MODELS, m
 
 
 def brush_vector(brush: Mapping) -> np.ndarray:
-    """A brush's Weibull vector k_0..94 then lam_0..94 (the order of
+    """A brush's Weibull vector k_0..96 then lam_0..96 (the order of
     param_vector(fit, "weibull")). ValueError naming the key for a missing
     key, a wrong length, a non-finite value, k <= 0 or lam < 0."""
     parts = []

@@ -2,13 +2,13 @@
 fits, designs, saves, shows, compares and paints, and what a scene region
 carries to a board.
 
-    {"format": "texelpad-brush/1", "name": "...", "source": "...",
-     "window": 188, "hop": 47, "wavenumbers": 95, "dx_um": 5.3,
-     "range": [a0, a1], "k": [95 shapes], "lam": [95 scales],
-     "fit": {"windows": n, "ks": [95 K-S statistics]}?}
+    {"format": "texelpad-brush/2", "name": "...", "source": "...",
+     "window": 192, "hop": 48, "wavenumbers": 97, "dx_um": 5.3,
+     "range": [a0, a1], "k": [97 shapes], "lam": [97 scales],
+     "fit": {"windows": n, "ks": [97 K-S statistics]}?}
 
 k, lam: the Weibull distribution (shape, scale) of the spectral magnitude at
-each wavenumber 0 (the window's mean) .. 94 (10.6 um), in the recording's
+each wavenumber 0 (the window's mean) .. 96 (10.6 um), in the recording's
 units (device/texel/gen/brush.py has the geometry); range: the value a0 plays
 as amplitude 0 and a1 as amplitude 1. A friction recording maps high
 friction to low ultrasonic amplitude (the plate's friction reduction), so a
@@ -17,7 +17,7 @@ a map already in amplitude units (a reference texture, a texel rendering)
 has [0, 1].
 
 Sizes (measured by the tests and the benchmark): the JSON is ~4 KB, the
-binary form (to_bytes: b"TPB1", K, the range and k, lam as float32) 774
+binary form (to_bytes: b"TPB1", K, the range and k, lam as float32) 790
 bytes, the region a board receives (k, lam, range as repr'd floats) ~3 KB -
 against the 38,400 bytes of the full-screen map it paints.
 
@@ -59,9 +59,8 @@ def check(doc: Any, where: str = "brush") -> dict[str, Any]:
     if bad:
         raise ValueError("%s: unknown key %r (allowed: %s)" % (where, bad[0],
                                                                ", ".join(sorted(DOC_KEYS))))
-    if doc.get("format", FORMAT) != FORMAT:
-        raise ValueError("%s.format: expected %r, got %r" % (where, FORMAT, doc.get("format")))
-    core = {k: doc[k] for k in ("k", "lam", "range", "window", "hop", "wavenumbers")
+    # the format too: validate says why an old format (texelpad-brush/1) is refused
+    core = {k: doc[k] for k in ("format", "k", "lam", "range", "window", "hop", "wavenumbers")
             if k in doc}
     v = B.validate(core, where)
     dx = doc.get("dx_um", round(DX_MM * 1000, 6))
@@ -119,7 +118,7 @@ def save(doc: dict[str, Any], path: str | os.PathLike) -> Path:
 
 def to_bytes(doc: dict[str, Any]) -> bytes:
     """The compact form: MAGIC, K (uint16), the range, k and lam as float32
-    little-endian: 4 + 2 + 8 + 8 K = 774 bytes. float32 keeps 7 digits:
+    little-endian: 4 + 2 + 8 + 8 K = 790 bytes. float32 keeps 7 digits:
     from_bytes(to_bytes(b)) paints within a Q13 unit of b (tests)."""
     return MAGIC + struct.pack("<H2f%df%df" % (B.K, B.K), B.K, *doc["range"], *doc["k"],
                                *doc["lam"])
@@ -127,10 +126,14 @@ def to_bytes(doc: dict[str, Any]) -> bytes:
 
 def from_bytes(data: bytes, where: str = "brush") -> dict[str, Any]:
     n = 4 + 2 + 8 + 8 * B.K
+    k_count = struct.unpack_from("<H", data, 4)[0] if len(data) >= 6 else B.K
+    if data[:4] == MAGIC and k_count != B.K and len(data) == 4 + 2 + 8 + 8 * k_count:
+        # a whole binary brush of another geometry (95 wavenumbers: texelpad-brush/1)
+        raise ValueError("%s: %d wavenumbers; this display paints %d (fit or design it again)"
+                         % (where, k_count, B.K))
     if len(data) != n or data[:4] != MAGIC:
         raise ValueError("%s: a binary brush is %d bytes starting %r, got %d bytes"
                          % (where, n, MAGIC, len(data)))
-    (k_count,) = struct.unpack_from("<H", data, 4)
     if k_count != B.K:
         raise ValueError("%s: %d wavenumbers; this display paints %d" % (where, k_count, B.K))
     vals = struct.unpack_from("<2f%df%df" % (B.K, B.K), data, 6)

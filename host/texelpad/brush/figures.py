@@ -22,7 +22,7 @@ def brush_figure(doc: dict[str, Any], out: str | os.PathLike, seed: int = 0,
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    wl = wavelengths_mm()[1:] * 1000.0          # um, wavenumbers 1 .. 94
+    wl = wavelengths_mm()[1:] * 1000.0          # um, wavenumbers 1 .. 96 (NYQ)
     lam = np.array(doc["lam"][1:])
     k = np.array(doc["k"][1:])
     fig = plt.figure(figsize=(9, 6.2))

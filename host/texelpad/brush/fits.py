@@ -29,7 +29,7 @@ How the fits are run (the why of each step):
 - the K-S statistic by the probability integral transform: kstest(F(x),
   "uniform") on every column of a model at once equals kstest(x, F) (F is
   continuous and increasing; the test suite checks the two agree), at a
-  third of the cost of 95 separate calls.
+  third of the cost of 97 separate calls.
 
 Degenerate columns, and what comes back for them (never an exception, never
 a NaN parameter):

@@ -17,7 +17,7 @@ Eleven textures, as in the paper's Table I, ten swipes each: 110 swipes.
 
 The swipe model (SwipeModel; a fingertip swiping across the display as the
 paper's tribometer recorded it, resampled to position):
-1. length: `length_samples` = 9,600 samples (50.88 mm, 201 windows): the
+1. length: `length_samples` = 9,600 samples (50.88 mm, 197 windows): the
    study's half screen; the paper kept "only the constant-velocity sections".
 2. start: uniform over the positions where the whole (warped) swipe fits on
    the texture (real-valued, in samples).
@@ -37,7 +37,7 @@ paper's tribometer recorded it, resampled to position):
 6. noise: additive white Gaussian friction noise of SD `noise_sd` = 0.02
    (2 % of the display's range; force-sensor noise). In the transform that
    is a Rayleigh floor with sigma = noise_sd * sqrt(3 / (2 W)) ~ 0.0025 per
-   wavenumber (W = 94: the periodic Hann's sum; transform.py), so m_k ~
+   wavenumber (W = 96: the periodic Hann's sum; transform.py), so m_k ~
    0.003 where a texture has nothing.
    The recording is not clipped (a tribometer's friction is not bounded by
    the display's range).
@@ -77,7 +77,7 @@ SWIPES_PER_TEXTURE = 10         # seed 002 §III-B: "ten cycles of back-and-fort
 @dataclass(frozen=True)
 class SwipeModel:
     """The noise model of a fingertip swipe (module docstring)."""
-    length_samples: int = 9600      # 50.88 mm: 201 windows
+    length_samples: int = 9600      # 50.88 mm: 197 windows
     warp_sd: float = 0.03           # SD of the local speed ratio e(s) (3 %)
     warp_corr_mm: float = 10.0      # SD of the Gaussian smoothing the warp, mm
     gain_sd: float = 0.05           # SD of ln(gain)

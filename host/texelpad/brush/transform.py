@@ -6,35 +6,35 @@ sample (texel.gen.params.DX_MM).
 Geometry, fixed in device/texel/gen/brush.py and imported from there (the
 painting on host and board uses the same constants):
 
-    WINDOW = 188 samples = 0.9964 mm   (the paper's 1 mm)
-    HOP    =  47 samples = 0.2491 mm   (the paper's 0.25 mm; 4 windows overlap)
-    K      =  95 wavenumbers 0 .. 94   (k cycles per window: wavelength
-                                        0.9964 mm / k; 94 = 10.6 um, the
-                                        display's Nyquist; the paper's 101 on
-                                        5 um went to 10 um)
+    WINDOW = 192 samples = 1.0176 mm   (the paper's 1 mm)
+    HOP    =  48 samples = 0.2544 mm   (the paper's 0.25 mm; 4 windows overlap)
+    K      =  97 wavenumbers 0 .. 96   (k cycles per window: wavelength
+                                        1.0176 mm / k; 96 = NYQ = 10.6 um,
+                                        the display's Nyquist; the paper's
+                                        101 on 5 um went to 10 um)
 
 Window: the periodic Hann w[n] = 0.5 - 0.5 cos(2 pi n / WINDOW), n = 0 ..
 WINDOW-1 (periodic, not symmetric, so that the four windows overlapping at a
 sample add to exactly 2: the synthesis' overlap-add has no ripple);
-W = sum w = WINDOW / 2 = 94.
+W = sum w = WINDOW / 2 = 96.
 
 Magnitudes (brush.py): X_k = sum_n x[n] w[n] e^(-2 pi i k n / WINDOW) (numpy's
-rfft of the windowed samples: exactly K = WINDOW/2 + 1 = 95 bins), and
+rfft of the windowed samples: exactly K = WINDOW/2 + 1 = 97 bins), and
 
     m_0 = |X_0| / W          the window's (Hann-weighted) mean friction
-    m_k = 2 |X_k| / W        k = 1 .. 94
+    m_k = 2 |X_k| / W        k = 1 .. 96
 
 so a constant c gives m_0 = |c| and a sinusoid A sin(2 pi k n / WINDOW + phi)
-at a whole wavenumber 1 <= k <= 93 gives m_k = A. The exception is k = 94,
+at a whole wavenumber 1 <= k <= 95 gives m_k = A. The exception is k = 96,
 the Nyquist bin: there the sampled sinusoid is A cos(phi) (-1)^n, the bin is
-real and has no negative-frequency twin, so m_94 = 2 A |cos phi| (anything
-from 0 to 2A); a painter that draws m_94 and a random phase must halve it
-(or draw the sign only) to get amplitude m_94 / 2 back. A wavenumber between
+real and has no negative-frequency twin, so m_96 = 2 A |cos phi| (anything
+from 0 to 2A); a painter that draws m_96 and a random phase must halve it
+(or draw the sign only) to get amplitude m_96 / 2 back. A wavenumber between
 bins leaks into its neighbours by the Hann main lobe (4 bins wide).
 
 Windows start at samples 0, HOP, 2 HOP, ... while a whole window fits: a map
 of N >= WINDOW samples gives 1 + (N - WINDOW) // HOP windows, and its last
-(N - WINDOW) % HOP samples (fewer than HOP = 0.25 mm) are not analysed -
+(N - WINDOW) % HOP samples (fewer than HOP = 0.2544 mm) are not analysed -
 never padded, since zero padding would put a false step into the last window.
 
 Recordings (a tribometer's CSV, position in mm and friction, any step, as
@@ -57,10 +57,10 @@ from texel.gen.brush import HOP, K, WINDOW
 from texel.gen.params import DX_MM, LENGTH_MAX
 
 DX_UM = round(DX_MM * 1000.0, 9)        # 5.3 um: the display's map sample
-WINDOW_MM = WINDOW * DX_MM              # 0.9964 mm
-HOP_MM = HOP * DX_MM                    # 0.2491 mm
+WINDOW_MM = WINDOW * DX_MM              # 1.0176 mm
+HOP_MM = HOP * DX_MM                    # 0.2544 mm
 # Sanity of the imported geometry: rfft of WINDOW samples has WINDOW/2 + 1 bins,
-# and that is the brush's K (brush.py: 0 = mean .. 94 = Nyquist).
+# and that is the brush's K (brush.py: 0 = mean .. 96 = NYQ, the Nyquist).
 assert K == WINDOW // 2 + 1 and WINDOW % 4 == 0 and HOP * 4 == WINDOW, (WINDOW, HOP, K)
 
 
@@ -71,7 +71,7 @@ def window() -> np.ndarray:
 
 
 _W = window()
-_WSUM = float(_W.sum())                 # = WINDOW / 2 = 94 (to rounding)
+_WSUM = float(_W.sum())                 # = WINDOW / 2 = 96 (to rounding)
 # m_0 = |X_0| / W, m_k = 2 |X_k| / W: one scale per bin
 _SCALE = np.full(K, 2.0 / _WSUM)
 _SCALE[0] = 1.0 / _WSUM
@@ -94,7 +94,7 @@ def stft_magnitudes(x, demean: bool = False) -> np.ndarray:
     shape (n_windows, K), windows at samples 0, HOP, 2 HOP ... (module
     docstring: the tail of fewer than HOP samples after the last whole window
     is not analysed). Raises ValueError for anything but a 1-D array of
-    finite numbers at least WINDOW (188 samples = 0.9964 mm) long.
+    finite numbers at least WINDOW (192 samples = 1.0176 mm) long.
 
     demean: the k >= 1 magnitudes of each window minus its own m_0 (the
     Hann-weighted mean), so the mean does not leak into k = 1. The paper's
@@ -134,7 +134,7 @@ def resample(positions_mm: Sequence[float], friction: Sequence[float],
     The transform's geometry assumes the display's 5.3 um (the default):
     another dx_um is for other uses. Raises ValueError when the inputs are
     not two 1-D sequences of the same length, hold a NaN or an infinity, or
-    span less than one window (188 samples of dx) or more than LENGTH_MAX
+    span less than one window (192 samples of dx) or more than LENGTH_MAX
     (texel.gen.params) samples."""
     p = np.asarray(positions_mm, dtype=float)
     f = np.asarray(friction, dtype=float)

@@ -28,6 +28,8 @@ METRICS = ("euclidean", "canberra", "braycurtis")
 
 
 def add_brush(p: argparse.ArgumentParser) -> None:
+    from texel.gen.brush import NYQ
+
     from .common import _Parser
     p.description = ("The Tactile Paintbrush (seed 002): a texture as the Weibull distribution "
                      "of its spectral magnitudes per wavenumber - fitted from a recording, "
@@ -57,8 +59,8 @@ def add_brush(p: argparse.ArgumentParser) -> None:
     s.add_argument("--level", type=float, default=0.05, help="scale at n = 4 (amplitude units)")
     s.add_argument("--mean", type=float, default=0.5, help="the mean's scale (amplitude)")
     s.add_argument("--k", type=float, default=2.0, help="shape of every wavenumber (2: Rayleigh)")
-    s.add_argument("--band", type=int, nargs=2, default=(1, 94), metavar=("LOW", "HIGH"),
-                   help="wavenumbers painted (default 1 94)")
+    s.add_argument("--band", type=int, nargs=2, default=(1, NYQ), metavar=("LOW", "HIGH"),
+                   help="wavenumbers painted (default 1 %d: the Nyquist)" % NYQ)
     s.add_argument("--name", default="")
     s.add_argument("--out", required=True, metavar="FILE")
     s.set_defaults(func=cmd_brush_design)
@@ -262,12 +264,12 @@ def cmd_brush_show(args: argparse.Namespace) -> int:
             raise CliError("--original", str(e)) from None
     from ..brush.figures import brush_figure
     write_output("--out", out, lambda: brush_figure(doc, out, seed=args.seed, original=original))
-    print("brush %s: range %s; mean scale %.4g (k %.3g); wavenumbers 1..94: scale %.3g .. %.3g, "
+    print("brush %s: range %s; mean scale %.4g (k %.3g); wavenumbers 1..%d: scale %.3g .. %.3g, "
           "shape %.3g .. %.3g; %d bytes as JSON, %d binary, a full screen map 38,400; wrote %s"
           % (doc.get("name") or args.brush, [round(x, 4) for x in doc["range"]],
-             doc["lam"][0], doc["k"][0], min(doc["lam"][1:]), max(doc["lam"][1:]),
-             min(doc["k"][1:]), max(doc["k"][1:]), len(json.dumps(doc)), len(to_bytes(doc)),
-             out))
+             doc["lam"][0], doc["k"][0], len(doc["k"]) - 1, min(doc["lam"][1:]),
+             max(doc["lam"][1:]), min(doc["k"][1:]), max(doc["k"][1:]), len(json.dumps(doc)),
+             len(to_bytes(doc)), out))
     return EXIT_OK
 
 

@@ -98,7 +98,7 @@ DESIGN_KEYS = {"shape", "level", "mean", "k"}
 SAVE_KEYS = {"name", "design", "replace"}
 BRUSH_SUFFIXES = (".json", ".tpb")
 PAINT_MAX = 64              # regions in one request, in painting order (later ones cut)
-BRUSH_FILE_MAX = 262144     # bytes: a brush is ~4 KB as JSON (document.py), 774 as .tpb
+BRUSH_FILE_MAX = 262144     # bytes: a brush is ~4 KB as JSON (document.py), 790 as .tpb
 BRUSH_FILES_MAX = 200       # files listed by the palette
 # designed brushes (document.design): the scale at wavenumber 4 and the mean
 # are amplitudes (0..1 is the display's whole range; the painter clips a
@@ -252,7 +252,7 @@ def designed(d: dict[str, Any], path: str, name: str = "") -> dict[str, Any]:
     """The brush document of a checked design (document.design)."""
     try:
         return D.design(d["shape"], d["level"], d["mean"], d["k"], name=name)
-    except ValueError as e:         # the board's bounds, by key path (brush.lam[94]: ...)
+    except ValueError as e:         # the board's bounds, by key path (brush.lam[96]: ...)
         raise Refused("%s: %s" % (path, e)) from None
 
 
