@@ -43,7 +43,7 @@ def phase_table():
 
 def twiddle_table():
     """TW[j] = round(4096 cos(2 pi j / 192)): the FFT's twiddles in Q12 (sin is
-    TW[(j + 144) % 192]). Q12, not more: an FFT value (< 2^18, brush.SUM_MAX)
+    TW[(j + 144) % 192]). Q12, not more: an FFT value (< 2^19, brush.fill)
     times a twiddle stays below 2^31 on a 32-bit board."""
     return [int(math.floor(4096 * math.cos(2 * math.pi * j / N) + 0.5)) for j in range(N)]
 

@@ -376,3 +376,39 @@ def test_the_integer_log2_is_within_its_stated_bound():
     vs = list(range(1, 5000)) + [int(x) for x in rng.integers(1, 2 ** 30 - 1, 20000)]
     worst = max(abs(B.log2_q24(v) / 2 ** 24 - math.log2(v)) for v in vs)
     assert worst < 4.1e-6, worst
+
+
+@pytest.mark.parametrize("kt", [0.05, 0.1, 0.15, 0.3])
+def test_a_heavy_tailed_brush_still_paints_its_waves(kt):
+    """A review found shapes below ~0.2 painted silent: their draws' scale
+    fell below a fixed "never a unit" cut although a heavy-tailed draw
+    reaches 4.12 / k' octaves above it. The cut follows the shape now
+    (brush._shape): every wave of a heavy-tailed brush is drawn, the map
+    varies, and Python, numpy and C still agree."""
+    b = B.validate({"k": [1000.0] + [kt] * (B.K - 1), "lam": [0.5] + [0.01] * (B.K - 1)})
+    _, ll, _, _ = B.compensated(b)
+    assert all(x != B.LL_NONE for x in ll)
+    m = B.paint(b, 1, 4800, how="python")
+    assert np.std(np.array(m, float)) > 500
+    assert B.paint(b, 1, 4800, how="numpy") == m
+    if brush_c.available():
+        assert brush_c.paint(b, 1, 4800) == list(m)
+
+
+def test_paint_refuses_an_out_too_short_and_a_range_too_narrow():
+    """paint() checks out's length before any loop writes (the viper loop
+    would write past it), and a range narrower than RANGE_MIN is refused by
+    key path (its scale overflows a float32 board; 1e-310 even CPython's)."""
+    from array import array
+    v = B.validate(brushes()[0])
+    for how in ("python", "numpy"):
+        with pytest.raises(ValueError, match="out: 16 values, too few for n = 400"):
+            B.paint(v, 1, 400, array("H", bytes(32)), how=how)
+    out = array("H", bytes(2 * 500))
+    B.paint(v, 1, 400, out, how="numpy")
+    assert len(out) == 500 and out[400:] == array("H", bytes(200))
+    for r in ([0.0, 1e-310], [0.0, 1e-36], [5.0, 5.0 + 1e-9]):
+        with pytest.raises(ValueError, match=r"brush.range: a0 and a1 must differ by at least"):
+            B.validate(dict(brushes()[0], range=r))
+    with pytest.raises(ValueError, match=r"brush.lam\[3\]: inf is not finite"):
+        B.validate(dict(brushes()[0], lam=[0.1] * 3 + [10 ** 400] + [0.1] * (B.K - 4)))

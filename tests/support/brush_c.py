@@ -62,9 +62,11 @@ def paint(brush: dict, seed: int, n: int, chunk_bits: int = 9) -> list[int]:
     size = 1 << chunk_bits
     chunks = [array("H", bytes(2 * min(size, n - o))) for o in range(0, n, size)]
     ptrs = (ctypes.c_void_p * len(chunks))(*(_ptr(c) for c in chunks))
+    work = array("i", bytes(4 * (4 * B.K + 3 * B.WINDOW)))
     lib().tb_paint(ctypes.c_void_p(_ptr(st)), ctypes.c_void_p(_ptr(invk)),
                    ctypes.c_void_p(_ptr(ll)), ctypes.c_int32(sign), ctypes.c_int32(off),
-                   ctypes.byref(t), ctypes.c_int32(n), ptrs, ctypes.c_int32(chunk_bits))
+                   ctypes.byref(t), ctypes.c_int32(n), ptrs, ctypes.c_int32(chunk_bits),
+                   ctypes.c_void_p(_ptr(work)))
     del keep
     return [v for c in chunks for v in c]
 

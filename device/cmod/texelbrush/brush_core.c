@@ -2,7 +2,7 @@
 // below 2^14, FFT values below 2^19, so every product here is below 2^31.
 #include "brush_core.h"
 
-#define LL_NONE (-(1 << 29))
+#define LL_NONE (-(3 << 29))
 
 static int32_t log2q(uint32_t v, const int32_t *t) {
     // brush.log2_q24 (1 <= v < 2^30): the top bit's position (found by
@@ -83,10 +83,11 @@ void tb_draws(uint16_t st[8], const int32_t *invk, const int32_t *ll, int32_t si
             int32_t L = (log2q((uint32_t)q, t->log2t) - 402653184 - 8871228) >> 4;
             int32_t hp = (L >> 12) * invk[k];
             if (hp >= -33554432) {
-                if (hp > 33554432) {
-                    hp = 33554432;
+                if (hp > 87031808) {        // 83 octaves
+                    hp = 87031808;
                 }
-                int32_t z = ll[k] + (hp << 4) + (((L & 0xFFF) * invk[k]) >> 8);
+                // * 16, not << 4: hp may be negative (C99 leaves that shift undefined)
+                int32_t z = ll[k] + hp * 16 + (((L & 0xFFF) * invk[k]) >> 8);
                 v = round_exp2(z, k == 0 ? 16 : 14, t->exp_tab);
             }
         }
@@ -201,9 +202,11 @@ void tb_frames(const int32_t *ma, const int32_t *pa, const int32_t *mb, const in
 
 void tb_paint(uint16_t st[8], const int32_t *invk, const int32_t *ll, int32_t sign,
               int32_t off, const tb_tables *t, int32_t n, uint16_t *const *chunks,
-              int32_t chunk_bits) {
-    int32_t ma[TB_K], pa[TB_K], mb[TB_K], pb[TB_K];
-    int32_t re[TB_WINDOW], im[TB_WINDOW], ring[TB_WINDOW];
+              int32_t chunk_bits, int32_t *work) {
+    // the work arrays in the caller's buffer (TB_WORK values): 3.8 KB would be
+    // half a Pico's 8 KB stack, which MicroPython's stack check does not see
+    int32_t *ma = work, *pa = ma + TB_K, *mb = pa + TB_K, *pb = mb + TB_K;
+    int32_t *re = pb + TB_K, *im = re + TB_WINDOW, *ring = im + TB_WINDOW;
     int32_t mask = (1 << chunk_bits) - 1;
     for (int i = 0; i < TB_WINDOW; i++) {
         ring[i] = 0;

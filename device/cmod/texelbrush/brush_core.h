@@ -12,6 +12,7 @@
 #define TB_WINDOW 192
 #define TB_HOP 48
 #define TB_K 97
+#define TB_WORK (4 * TB_K + 3 * TB_WINDOW)     // tb_paint's work buffer, int32 values
 
 // The tables the Python module holds (gen/brush.py, gen/plan_int_tables.py),
 // handed in by the caller so there is one copy of each.
@@ -34,12 +35,13 @@ void tb_frames(const int32_t *ma, const int32_t *pa, const int32_t *mb, const in
                const tb_tables *t, int32_t *re, int32_t *im);
 
 // brush.paint's loop: n samples into chunks (chunk i holds samples
-// i << chunk_bits ..), from the generator's state after the setup.
+// i << chunk_bits ..), from the generator's state after the setup; work:
+// TB_WORK int32 values of scratch.
 void tb_paint(uint16_t st[8], const int32_t *invk, const int32_t *ll, int32_t sign,
               int32_t off, const tb_tables *t, int32_t n, uint16_t *const *chunks,
-              int32_t chunk_bits);
+              int32_t chunk_bits, int32_t *work);
 
-// brush.leakage's sweeps over a padded array (3 zeros each side): a[i] =
+// brush.leakage's sweeps over a padded array (3 values each side): a[i] =
 // max(0, q[i] - C1 (a[i-1] + a[i+1]) - C2 (..) - C3 (..)), Q14 coefficients.
 void tb_leak(const int32_t *q, int32_t *a, int32_t n, int32_t sweeps, const int32_t *c);
 

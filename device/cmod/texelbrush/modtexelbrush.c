@@ -4,7 +4,7 @@
 #include "py/runtime.h"
 #include "brush_core.h"
 
-#define MAX_CHUNKS 256
+#define MAX_CHUNKS 128          // 65,536 values of 512 (a full screen is 38 chunks)
 
 static void *buf(mp_obj_t o, size_t want, int flags, const char *what) {
     mp_buffer_info_t b;
@@ -46,7 +46,9 @@ static mp_obj_t texelbrush_paint(size_t n_args, const mp_obj_t *args) {
         buf(args[12], 4 * TB_WINDOW, MP_BUFFER_READ, "hann"),
         buf(args[13], 4 * TB_WINDOW, MP_BUFFER_READ, "pos"),
     };
-    tb_paint(st, invk, ll, sign, off, &t, n, chunks, bits);
+    int32_t *work = m_new(int32_t, TB_WORK);   // on the heap, not the 8 KB stack
+    tb_paint(st, invk, ll, sign, off, &t, n, chunks, bits, work);
+    m_del(int32_t, work, TB_WORK);
     return mp_const_none;
 }
 static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(texelbrush_paint_obj, 14, 14, texelbrush_paint);

@@ -206,6 +206,8 @@ K_MIN = 0.05            # shape: below this the draws span > 10^26: no texture
 K_MAX = 1000.0          # shape: 1000 is a constant magnitude to 0.1 %
 LAM_MAX = 1000.0        # scale, in friction units (a range of 1e-3 .. 1e3 is allowed)
 RANGE_MAX = 1e6
+RANGE_MIN = 1e-6        # |a1 - a0| at least: the range's scale 8192 / (a1 - a0) stays a
+                        # float32 number (a float32 board overflows below ~2e-35)
 MAG_CLIP = 16384        # a magnitude's amplitude, Q13: clipped at 2.0 (twice full scale)
 MEAN_CLIP = 32768       # the mean's amplitude, Q13: clipped to [-4, 4]
 SUM_MAX = 65536         # a window's wave magnitudes (k >= 1) sum to at most 8.0 (Q13): a
@@ -219,7 +221,10 @@ Q13 = 8192
 def _num(path, v, lo, hi):
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise ValueError("%s: expected a number, got %r" % (path, v))
-    v = float(v)
+    try:
+        v = float(v)
+    except OverflowError:                   # an int beyond a double (CPython)
+        v = float("inf")
     if not (v == v) or v in (float("inf"), float("-inf")):
         raise ValueError("%s: %r is not finite" % (path, v))
     if not lo <= v <= hi:
@@ -269,8 +274,9 @@ def validate(brush, path="brush"):
     if not isinstance(r, (list, tuple)) or len(r) != 2:
         raise ValueError("%s.range: expected [a0, a1]" % path)
     r = [_num("%s.range[%d]" % (path, i), x, -RANGE_MAX, RANGE_MAX) for i, x in enumerate(r)]
-    if r[0] == r[1]:
-        raise ValueError("%s.range: a0 and a1 must differ, got %r" % (path, r))
+    if not abs(r[1] - r[0]) >= RANGE_MIN:
+        raise ValueError("%s.range: a0 and a1 must differ by at least %r, got %r"
+                         % (path, RANGE_MIN, r))
     out["range"] = r
     return out
 
@@ -306,7 +312,8 @@ def array_i(n):
 
 
 INVK_MAX = 81920            # 1/k' <= 20 (k' >= 0.05): Q12
-LL_NONE = -(1 << 29)        # log2 of a zero scale: every draw rounds to 0
+LL_NONE = -(3 << 29)        # log2 of a zero scale: every draw rounds to 0 (below any ll:
+                            # the cut is -(2 + 4.2 / k') >= -86 octaves, -1.44e9 in Q24)
 LL_MAX = 17 << 24           # log2 of a scale of 16 x full scale (Q13): draws beyond clip anyway
 LEAK_SWEEPS = 24
 
@@ -327,7 +334,7 @@ def _q24(f):
 
 
 def _shape(kk, mean):
-    """(invk, the shape's factor on the scale as Q24 octaves) for a brush's
+    """(invk, the shape's factor on the scale as Q24 octaves, the cut) for a brush's
     shape kk: the draws' shape k' = exp(COMP_LK) at kk (COMP0_LK for the
     mean), as round(4096 / k') >= 1, and log2 of the factor on the scale
     that a re-analysis takes away at k' (COMP_LS) - or, for the mean, what
@@ -342,7 +349,11 @@ def _shape(kk, mean):
         f = (_at(LG1, x) - _at(LG1, xp)) / math.log(2.0)
     else:
         f = _at(COMP_LS, xp)
-    return (1 if q < 1 else (INVK_MAX if q > INVK_MAX else q)), _q24(f)
+    q = 1 if q < 1 else (INVK_MAX if q > INVK_MAX else q)
+    # the cut: a scale below which no draw reaches half a Q13 unit - the
+    # largest draw is lam' (-ln u)^(1/k') with -ln u <= 17.33 (u's 24 bits),
+    # 4.12 / k' octaves above lam' (82 octaves at k' = 0.05)
+    return q, _q24(f), -_q24(2.0 + 4.2 * q / 4096.0)
 
 
 def compensated(brush):
@@ -355,32 +366,31 @@ def compensated(brush):
                re-analyses to its own scale); for the mean, log2 lam_0 plus
                its own; both times the range's scale
     and (sign of the range, the mean's offset -a0 * scale in Q13). Floats
-    only for the range, the largest scale, the mean and once per distinct
-    shape (a designed brush has one): the rest is integers, so a float32
+    only for the range, the largest scale, the mean and once per
+    run of one shape (a designed brush has one): the rest is integers, so a float32
     board rounds the same but for those few values."""
     a0, a1 = brush["range"]
     scale = Q13 / (a1 - a0)
     l2amp = math.log(abs(scale)) / math.log(2.0)
     invk = array_i(K)
     ll = array_i(K)
-    shapes = {}
     # the mean
-    ik, f = _shape(brush["k"][0], True)
+    ik, f, cut = _shape(brush["k"][0], True)
     invk[0] = ik
     lam0 = brush["lam"][0]
     ll[0] = LL_NONE
     if lam0 > 0.0:
         l2 = _q24(math.log(lam0) / math.log(2.0) + l2amp) + f
-        if l2 >= -(18 << 24):                   # below 2^-18 of a Q13 unit: never a unit
+        if l2 >= cut:
             ll[0] = LL_MAX if l2 > LL_MAX else l2
     # the waves
     a, lmax = leakage(brush["lam"])
     base = _q24(math.log(lmax) / math.log(2.0) + l2amp) - (14 << 24) if lmax > 0.0 else 0
+    s = kk = None
     for k in range(1, K):
-        kk = brush["k"][k]
-        s = shapes.get(kk)
-        if s is None:
-            s = shapes[kk] = _shape(kk, False)
+        if brush["k"][k] != kk:                 # a run of one shape: computed once (a
+            kk = brush["k"][k]                  # dict of them would want a block the
+            s = _shape(kk, False)               # region's chunks may have taken)
         invk[k] = s[0]
         p = a[k + 2]
         if p <= 0:
@@ -388,7 +398,7 @@ def compensated(brush):
             continue
         # p is the power in Q28 of lmax^2: log2 lam' = log2(p) / 2 - 14 + log2(lmax) + ..
         l2 = (log2_q24(p) >> 1) + base + s[1]
-        ll[k] = LL_NONE if l2 < -(18 << 24) else (LL_MAX if l2 > LL_MAX else l2)
+        ll[k] = LL_NONE if l2 < s[2] else (LL_MAX if l2 > LL_MAX else l2)
     off = -a0 * scale
     off = int(off + 0.5) if off >= 0 else -int(-off + 0.5)
     off = MEAN_CLIP * 4 if off > MEAN_CLIP * 4 else (-MEAN_CLIP * 4 if off < -MEAN_CLIP * 4
@@ -506,7 +516,9 @@ def weibull_q(hi, lo, invk, ll):
       y    = L / k' = L * invk (Q12), in 12-bit limbs of L in Q20
       z    = ll + y
     Returns z, or None for a magnitude that rounds to 0 (y below -32
-    octaves). The draw's low byte is the window's phase (draws())."""
+    octaves; y is at most 83 octaves: 4.12 / k', k' >= 0.05, so z stays
+    within +-2^31 for ll from the cut, -86 octaves, to LL_MAX). The draw's low
+    byte is the window's phase (draws())."""
     if ll == LL_NONE:
         return None
     x = (hi << 8) | (lo >> 8)
@@ -517,8 +529,8 @@ def weibull_q(hi, lo, invk, ll):
     hp = (L >> 12) * invk
     if hp < -33554432:                      # y < -32 octaves: 0
         return None
-    if hp > 33554432:
-        hp = 33554432
+    if hp > 87031808:                       # 83 octaves (never reached: the bound stated)
+        hp = 87031808
     return ll + (hp << 4) + (((L & 0xFFF) * invk) >> 8)
 
 
@@ -785,6 +797,8 @@ def paint(brush, seed, n, out=None, how=None):
     from .rng import Rng
     if out is None:
         out = array("H", bytes(2 * n))
+    elif len(out) < n:
+        raise ValueError("out: %d values, too few for n = %d" % (len(out), n))
     if how is None:
         how = "c" if _native_c() is not None else (
             "viper" if _viper() is not None else ("numpy" if _numpy() is not None
@@ -883,7 +897,7 @@ def _paint_numpy(np, rng, comp, tab, n, out):
     u = np.where(val <= 0, 0, np.where(val >= Q13, 65535, (val * 65535 + 4096) >> 13))
     from array import array
     if isinstance(out, array):
-        out[:] = array("H", u.astype(np.uint16).tobytes())
+        out[:n] = array("H", u.astype(np.uint16).tobytes())
     else:
         for i in range(n):
             out[i] = int(u[i])
@@ -901,8 +915,22 @@ def _paint_c(rng, comp, tab, n, out):
                      rng.d_hi, rng.d_lo))
     chunks = getattr(out, "chunks", None)
     c.paint(st, invk, ll, sign, off, n, chunks if chunks is not None else (out,),
-            9 if chunks is not None else 30, tab, log2t, ptab, tw, hann, pos)
+            _chunk_bits(chunks), tab, log2t, ptab, tw, hann, pos)
     return out
+
+
+def _chunk_bits(chunks):
+    """log2 of a Chunks' chunk length (upload.CHUNK: 512; every chunk but the
+    last is that long), 30 for one array."""
+    if chunks is None or len(chunks) < 2:
+        return 30
+    size = len(chunks[0])
+    bits = 0
+    while (1 << bits) < size:               # (MicroPython's int has no bit_length)
+        bits += 1
+    if size != 1 << bits:
+        raise ValueError("out: chunks of %d values (a power of two expected)" % size)
+    return bits
 
 
 def _paint_viper(v, rng, comp, tab, n, out):
@@ -915,7 +943,7 @@ def _paint_viper(v, rng, comp, tab, n, out):
     invk, ll, sign, off = comp
     llo = array_i(K)
     for k in range(K):
-        llo[k] = ll[k] + (1 << 29)
+        llo[k] = ll[k] + (3 << 29)              # >= 0 (LL_NONE: 0)
     so = array("i", (sign + 1, off + (1 << 20)))
     st = array("H", (rng.a_hi, rng.a_lo, rng.b_hi, rng.b_lo, rng.c_hi, rng.c_lo,
                      rng.d_hi, rng.d_lo))
@@ -925,6 +953,8 @@ def _paint_viper(v, rng, comp, tab, n, out):
         ring[i] = RBIAS
     tmp = array("H", bytes(2 * HOP))
     chunks = getattr(out, "chunks", None)
+    cb = _chunk_bits(chunks)
+    mask = (1 << cb) - 1
     draw, frames, ola = mod.draws, mod.frames, mod.ola_emit
     start = -3 * HOP
     for _ in range(windows(n) // 2):
@@ -940,15 +970,15 @@ def _paint_viper(v, rng, comp, tab, n, out):
             elif chunks is None:
                 ola(fr, hann, ring, r0, out, start + a, a, b)
             else:
-                p = start + a                   # upload.CHUNK_BITS: 512 values a chunk
-                c = chunks[p >> 9]
-                at = p & 511
+                p = start + a
+                c = chunks[p >> cb]
+                at = p & mask
                 if at + b - a <= len(c):
                     ola(fr, hann, ring, r0, c, at, a, b)
                 else:                           # across two chunks
                     ola(fr, hann, ring, r0, tmp, 0, a, b)
                     m = len(c) - at
                     c[at:] = tmp[:m]
-                    chunks[(p >> 9) + 1][:b - a - m] = tmp[m:b - a]
+                    chunks[(p >> cb) + 1][:b - a - m] = tmp[m:b - a]
             start += HOP
     return out

@@ -3,7 +3,7 @@
 # where the machine word is 64 bits (the unix port), so nothing stored and
 # loaded again may be negative: FFT values are held + FB (2^20 > 2 x their
 # largest |value|, < 2^19: brush.SUM_MAX, brush.fill), the ring of partial sums + RBIAS
-# (2^23), the mean magnitude + MBIAS (2^16), ll + 2^29. Every product is below
+# (2^23), the mean magnitude + MBIAS (2^16), ll + 3 * 2^29. Every product is below
 # 2^31: the same integers on 32- and 64-bit words (tests/brush/test_paint.py
 # compares them with the Python loops on every interpreter). The log2 and 2^x
 # of a draw are written out in draws() rather than called: a viper function
@@ -21,11 +21,16 @@ def draws(st: ptr16, invk: ptr32, llo: ptr32, mag: ptr32, ph: ptr32, tab: ptr32,
     step is plan_int_viper.texels' statement for statement), the phase from
     the low byte, the Weibull quantile in integers (weibull_q: log2_q24
     twice, round_exp2 once, inline), the sum bound. so = [sign, off] of the
-    range; llo holds ll + 2^29; mag[0] is written + MBIAS (65536)."""
+    range; llo holds ll + 3 * 2^29 (LL_NONE: 0); mag[0] is written + MBIAS
+    (65536)."""
     a_hi = int(st[0]); a_lo = int(st[1]); b_hi = int(st[2]); b_lo = int(st[3])
     c_hi = int(st[4]); c_lo = int(st[5]); d_hi = int(st[6]); d_lo = int(st[7])
     sign = int(so[0]) - 1
     off = int(so[1]) - 1048576
+    b3 = 536870912                          # 3 * 2^29, added up: a literal (or a folded
+    b3 += 536870912                         # constant) that large is no small int on a
+    b3 += 536870912                         # 32-bit port, and viper cannot use it
+    nb3 = 0 - b3
     s = 0
     k = 0
     while k < 97:
@@ -53,9 +58,9 @@ def draws(st: ptr16, invk: ptr32, llo: ptr32, mag: ptr32, ph: ptr32, tab: ptr32,
         d_hi = ((hi << 11) | (d_lo >> 5)) & 0xFFFF
         d_lo = ((d_lo << 11) | (hi >> 5)) & 0xFFFF
         ph[k] = x_lo & 0xFF
-        ll = int(llo[k]) - 536870912        # 2^29: LL_NONE is -2^29
+        ll = int(llo[k]) - b3               # LL_NONE is -b3
         v = 0
-        if ll != -536870912:
+        if ll != nb3:
             # a = 25 * 2^24 - log2_q24(2 x + 1), x = the top 24 bits
             w = (((x_hi << 8) | (x_lo >> 8)) << 1) | 1
             y = w
@@ -105,8 +110,8 @@ def draws(st: ptr16, invk: ptr32, llo: ptr32, mag: ptr32, ph: ptr32, tab: ptr32,
             ik = int(invk[k])
             hp = (L >> 12) * ik
             if hp >= -33554432:
-                if hp > 33554432:
-                    hp = 33554432
+                if hp > 87031808:           # 83 octaves
+                    hp = 87031808
                 z = ll + (hp << 4) + (((L & 0xFFF) * ik) >> 8)
                 # round_exp2(z, emax): 16 for the mean, 14 (MAG_CLIP) for a wave
                 emax = 14
