@@ -14,7 +14,7 @@ import pytest
 
 from texel.gen import brush as B
 from texel.gen.params import DX_MM
-from texelpad.bench import brush_painting as BP
+from texelpad.bench import brush_painting as BP, jsonable
 from texelpad.brush import compare as C
 from texelpad.brush import swipes as S
 
@@ -117,7 +117,7 @@ def test_tables_json_and_figure(res, tmp_path):
     for word in ("Bray-Curtis", "standardized Euclidean", "Perceptual distance",
                  "Autocorrelation", "|r|<=0.1", "pink", "texel-p15-i-5"):
         assert word in text
-    doc = json.loads(json.dumps(BP._listify(res), allow_nan=False))
+    doc = json.loads(json.dumps(jsonable(res), allow_nan=False))
     assert "_map" not in doc["sources"]["pink"] and "_paintings" not in doc["sources"]["pink"]
     assert len(doc["sources"]["pink"]["painted_swipes"][0]["vector"]) == 2 * B.K
     out = tmp_path / "painting.png"

@@ -47,6 +47,7 @@ import numpy as np
 
 from texel.gen.brush import HOP, K, WINDOW
 
+from . import jsonable
 from ..brush import compare as C
 from ..brush import fits as F
 from ..brush import swipes as S
@@ -82,24 +83,10 @@ def _fit_timed(friction: np.ndarray) -> tuple[dict, dict]:
     return fit, secs
 
 
-def _listify(x):
-    if isinstance(x, dict):
-        return {k: _listify(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_listify(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _listify(x.tolist())
-    if isinstance(x, (np.floating, float)):
-        return None if not math.isfinite(float(x)) else float(x)
-    if isinstance(x, (np.integer, np.bool_)):
-        return x.item()
-    return x
-
-
 def run(swipes_per_texture: int = S.SWIPES_PER_TEXTURE, seed: int = 0, names=S.TEXTURES,
         model: S.SwipeModel = S.SwipeModel(), jobs: int = 1, full_screen: bool = True,
         mds: bool = True, progress: Progress | None = None) -> dict:
-    """The whole report as a dict (numpy arrays inside; _listify for JSON)."""
+    """The whole report as a dict (numpy arrays inside; jsonable for JSON)."""
     t_start = time.perf_counter()
     say = progress or (lambda msg: None)
     sw = S.make_swipes(swipes_per_texture, seed=seed, names=names, model=model)
@@ -327,7 +314,7 @@ def main(argv: list[str] | None = None) -> int:
     print("\n%d swipes in %.1f s" % (len(res["swipes"]), res["seconds"]))
     if a.json:
         with open(a.json, "w") as f:
-            json.dump(_listify(res), f)
+            json.dump(jsonable(res), f)
     if a.figure_dir:
         ks_figure(res, os.path.join(a.figure_dir, FIGURE_NAMES[0]))
         mds_figure(res, os.path.join(a.figure_dir, FIGURE_NAMES[1]))

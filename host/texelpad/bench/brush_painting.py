@@ -82,6 +82,7 @@ from texel.gen import brush as B
 from texel.gen.params import DX_MM
 
 from ..analysis import perception as P
+from . import jsonable
 from ..brush import compare as C
 from ..brush import document as D
 from ..brush import fits as F
@@ -308,7 +309,7 @@ def run(names: Sequence[str] = S.TEXTURES, swipes: int = S.SWIPES_PER_TEXTURE,
         paint_seeds: Sequence[int] = tuple(range(DEFAULT_PAINT_SEEDS)), seed: int = 0,
         model: S.SwipeModel = S.SwipeModel(), samples: int = S.SCREEN_SAMPLES,
         progress: Progress | None = None) -> dict:
-    """The whole report as a dict (numpy arrays and the maps inside: _listify
+    """The whole report as a dict (numpy arrays and the maps inside: jsonable
     for JSON leaves the maps out)."""
     names = list(names)
     paint_seeds = [int(s) for s in paint_seeds]
@@ -350,20 +351,6 @@ def run(names: Sequence[str] = S.TEXTURES, swipes: int = S.SWIPES_PER_TEXTURE,
 
 
 # --- the report -----------------------------------------------------------------------
-def _listify(x):
-    if isinstance(x, dict):
-        return {k: _listify(v) for k, v in x.items() if not str(k).startswith("_")}
-    if isinstance(x, (list, tuple)):
-        return [_listify(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _listify(x.tolist())
-    if isinstance(x, (np.floating, float)):
-        return None if not math.isfinite(float(x)) else float(x)
-    if isinstance(x, (np.integer, np.bool_)):
-        return x.item()
-    return x
-
-
 def _lag_columns(lags: dict[str, int]) -> list[str]:
     """The lags printed: 1, 2 and 10 windows (those there are), 2 mm, 10 mm."""
     return [k for k in ("1W", "2W", "10W") if k in lags] + ["%gmm" % mm for mm in MM_LAGS]
@@ -603,7 +590,7 @@ def main(argv: list[str] | None = None) -> int:
           % (len(names), 2 * swipes * len(names), res["seconds"]))
     if a.json:
         with open(a.json, "w") as f:
-            json.dump(_listify(res), f, allow_nan=False)
+            json.dump(jsonable(res), f, allow_nan=False)
         print("wrote", a.json)
     if a.figure:
         figure(res, a.figure)
