@@ -170,7 +170,6 @@ def test_the_integer_fft_is_near_exact_arithmetic(capsys):
     magnitudes up to 0.1 (a loud brush: 97 of them sum to ~4.8), phases
     uniform. The integer transform's error, RMS and worst, in Q13 units and
     PWM steps (one Q13 unit is 8 u16 = 0.45 PWM step)."""
-    from array import array
     rng = np.random.default_rng(3)
     n = np.arange(B.WINDOW)
     errs = []
@@ -206,22 +205,12 @@ def test_the_leakage_sweeps_agree_everywhere():
     assert abs(a[40 + 2] - B.LEAK_Q14[0] * (1 << 14)) < 1 << 10
     assert a[39 + 2] == a[41 + 2] == 0
     if brush_c.available():
-        from array import array
         rng = np.random.default_rng(2)
         lams = [0.3] + list(rng.uniform(0, 0.05, B.K - 1) * (rng.uniform(size=B.K - 1) < 0.4))
         a, lmax = B.leakage(lams)
-        n = B.K - 1
-        q, c = B.array_i(n + 6), array("i", B.LEAK_Q14[1:])
-        a2 = B.array_i(n + 6)
-        for i in range(n):
-            x = lams[i + 1] / lmax
-            p = int(x * x * 268435456.0 + 0.5)
-            a2[i + 3] = p
-            q[i + 3] = B._mulq(B.LEAK_Q14[0], p)
-        for d in range(1, 4):
-            a2[3 - d], a2[n + 2 + d] = a2[3 + d], a2[n + 2 - d]
-        brush_c.leak(q, a2, n, B.LEAK_SWEEPS, c)
-        assert list(a2) == list(a)
+        q, a2, lmax2 = B._leak_start(lams)
+        brush_c.leak(q, a2, B.K - 1, B.LEAK_SWEEPS, array("i", B.LEAK_Q14[1:]))
+        assert lmax2 == lmax and list(a2) == list(a)
 
 
 RUNTIMES = [None, "micropython-ulab-f32", "circuitpython"]
@@ -399,7 +388,6 @@ def test_paint_refuses_an_out_too_short_and_a_range_too_narrow():
     """paint() checks out's length before any loop writes (the viper loop
     would write past it), and a range narrower than RANGE_MIN is refused by
     key path (its scale overflows a float32 board; 1e-310 even CPython's)."""
-    from array import array
     v = B.validate(brushes()[0])
     for how in ("python", "numpy"):
         with pytest.raises(ValueError, match="out: 16 values, too few for n = 400"):

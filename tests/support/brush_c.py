@@ -57,8 +57,7 @@ def paint(brush: dict, seed: int, n: int, chunk_bits: int = 9) -> list[int]:
     t = Tables(*(_ptr(a) for a in (tab, log2t, ptab, tw, hann, pos)))
     rng = Rng(seed)
     invk, ll, sign, off = B.compensated(brush)
-    st = array("H", (rng.a_hi, rng.a_lo, rng.b_hi, rng.b_lo, rng.c_hi, rng.c_lo,
-                     rng.d_hi, rng.d_lo))
+    st = B.state(rng)
     size = 1 << chunk_bits
     chunks = [array("H", bytes(2 * min(size, n - o))) for o in range(0, n, size)]
     ptrs = (ctypes.c_void_p * len(chunks))(*(_ptr(c) for c in chunks))

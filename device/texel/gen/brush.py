@@ -428,27 +428,9 @@ def leakage(lams):
     wavenumbers' shapes as equal. The sweeps run in C or viper where the
     board has them (the same integers)."""
     n = K - 1
-    lmax = 0.0
-    for i in range(1, K):
-        if lams[i] > lmax:
-            lmax = lams[i]
-    a = array_i(n + 6)
-    if lmax <= 0.0:
-        return a, 0.0
-    q = array_i(n + 6)
-    inv0 = LEAK_Q14[0]
-    for i in range(n):
-        x = lams[i + 1] / lmax
-        p = int(x * x * 268435456.0 + 0.5)      # Q28
-        a[i + 3] = p
-        q[i + 3] = _mulq(inv0, p)
-    # beyond the band the brush goes on mirrored (fixed powers, not solved
-    # for): the sweeps treat the edges as the middle - a flat brush is its own
-    # solution everywhere, and no edge bin swings to make up for a neighbour
-    # the analysis would not have (wavenumber 0 is the mean's: drawn apart)
-    for d in range(1, 4):
-        a[3 - d] = a[3 + d]
-        a[n + 2 + d] = a[n + 2 - d]
+    q, a, lmax = _leak_start(lams)
+    if q is None:
+        return a, lmax
     c = _native_c()
     if c is not None:
         c.leak(q, a, n, LEAK_SWEEPS, _leak_c())
@@ -464,6 +446,35 @@ def leakage(lams):
                 - _mulq(c3, a[i - 3] + a[i + 3])
             a[i] = v if v > 0 else 0
     return a, lmax
+
+
+def _leak_start(lams):
+    """leakage()'s sweeps' input: (q, a, lmax) - a the target powers (Q28
+    of lmax^2, padded: 3 values each side), q = a / LEAK[0] (Q14 product) -
+    or (None, zeros, 0.0) for a brush without waves."""
+    n = K - 1
+    lmax = 0.0
+    for i in range(1, K):
+        if lams[i] > lmax:
+            lmax = lams[i]
+    a = array_i(n + 6)
+    if lmax <= 0.0:
+        return None, a, 0.0
+    q = array_i(n + 6)
+    inv0 = LEAK_Q14[0]
+    for i in range(n):
+        x = lams[i + 1] / lmax
+        p = int(x * x * 268435456.0 + 0.5)      # Q28
+        a[i + 3] = p
+        q[i + 3] = _mulq(inv0, p)
+    # beyond the band the brush goes on mirrored (fixed powers, not solved
+    # for): the sweeps treat the edges as the middle - a flat brush is its own
+    # solution everywhere, and no edge bin swings to make up for a neighbour
+    # the analysis would not have (wavenumber 0 is the mean's: drawn apart)
+    for d in range(1, 4):
+        a[3 - d] = a[3 + d]
+        a[n + 2 + d] = a[n + 2 - d]
+    return q, a, lmax
 
 
 _LEAKC = None
@@ -714,9 +725,7 @@ def ola_emit(frame, ring, start, n, out):
 # --- painting ------------------------------------------------------------------------
 
 _V = None                   # the viper loops and their tables (_viper())
-FB = 1 << 20                # brush_viper.py: FFT values held + FB (|value| < 2^19)
-RBIAS = 1 << 23             # ... the ring of partial sums + RBIAS
-MBIAS = 1 << 16             # ... the mean magnitude + MBIAS
+RBIAS = 1 << 23             # brush_viper.py: the ring of partial sums held + RBIAS
 
 
 _T = None
@@ -904,15 +913,21 @@ def _paint_numpy(np, rng, comp, tab, n, out):
     return out
 
 
+def state(rng):
+    """The texture generator's state as the C and viper loops step it: its
+    eight 16-bit halves (gen/rng.py), array('H'); they write it back."""
+    from array import array
+    return array("H", (rng.a_hi, rng.a_lo, rng.b_hi, rng.b_lo, rng.c_hi, rng.c_lo,
+                       rng.d_hi, rng.d_lo))
+
+
 def _paint_c(rng, comp, tab, n, out):
     """paint()'s whole loop in C: the generator's state, the constants, the
     tables and out's arrays (one, or a Chunks' 512-value chunks) handed over."""
-    from array import array
     c = _native_c()
     _, ptab, tw, hann, log2t, pos = _tables()
     invk, ll, sign, off = comp
-    st = array("H", (rng.a_hi, rng.a_lo, rng.b_hi, rng.b_lo, rng.c_hi, rng.c_lo,
-                     rng.d_hi, rng.d_lo))
+    st = state(rng)
     chunks = getattr(out, "chunks", None)
     c.paint(st, invk, ll, sign, off, n, chunks if chunks is not None else (out,),
             _chunk_bits(chunks), tab, log2t, ptab, tw, hann, pos)
@@ -945,8 +960,7 @@ def _paint_viper(v, rng, comp, tab, n, out):
     for k in range(K):
         llo[k] = ll[k] + (3 << 29)              # >= 0 (LL_NONE: 0)
     so = array("i", (sign + 1, off + (1 << 20)))
-    st = array("H", (rng.a_hi, rng.a_lo, rng.b_hi, rng.b_lo, rng.c_hi, rng.c_lo,
-                     rng.d_hi, rng.d_lo))
+    st = state(rng)
     ma, pa, mb, pb = array_i(K), array_i(K), array_i(K), array_i(K)
     re, im, ring = array_i(WINDOW), array_i(WINDOW), array_i(WINDOW)
     for i in range(WINDOW):
