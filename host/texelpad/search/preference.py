@@ -10,7 +10,7 @@ the other two in random order (from the search's own seeded generator) - and
 the ranking is CMA-ES's fitness (0, 1, 2). "save" keeps a candidate; the
 search stops when the participant says so (stop()).
 
-Dimensions: "pitch" and "irregularity" always (texelpad.study.space's u, v),
+Dimensions: "pitch" and "irregularity" always (texelpad.space's u, v),
 optionally "texel_length" (0..1 -> 0.05 .. 2 mm, log scale) and "level" (the
 map's gain 0.2 .. 1). Candidates become format-2 texel parameter sets (the
 same texture on every board). The library is `cma` (N. Hansen); nothing of
@@ -28,7 +28,7 @@ import numpy as np
 
 from texel.gen.params import DX_MM, FORMAT_NEW
 
-from ..study.space import Point, texel_params
+from ..space import Point, texel_params
 
 DIMENSIONS = ("pitch", "irregularity", "texel_length", "level")
 SIGMA0 = 0.15
