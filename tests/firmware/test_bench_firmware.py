@@ -8,7 +8,7 @@ import json
 import pytest
 
 from texelpad.bench import firmware as bench
-from texelpad.link.emulated import why_not
+from texelpad.sim.emulated import why_not
 
 pytestmark = [pytest.mark.instruments, pytest.mark.slow]
 

@@ -27,7 +27,7 @@ def fw():
 
 @pytest.fixture(scope="module")
 def pico(fw):
-    from texelpad.link.emulated import EmulatedPico, why_not
+    from texelpad.sim.emulated import EmulatedPico, why_not
     why = why_not()
     if why:
         pytest.skip(why)

@@ -39,7 +39,7 @@ from hypothesis import given, strategies as st
 import fuzzlib
 import texelpad.link.board
 import texelpad.link.transport
-import texelpad.link.virtual
+import texelpad.sim.virtual
 from texel.gen import params as P
 from texelpad import cli
 from test_scene_fuzz import deep, inputs as scene_inputs
@@ -378,7 +378,7 @@ def paths():
     try:
         with mock.patch.object(texelpad.link.transport, "ports", lambda: []), \
                 mock.patch.object(texelpad.link.board, "ports", lambda: []), \
-                mock.patch.object(texelpad.link.virtual, "running_boards", lambda: []):
+                mock.patch.object(texelpad.sim.virtual, "running_boards", lambda: []):
             yield Paths(root)
     finally:
         os.chdir(cwd)

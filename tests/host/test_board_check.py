@@ -13,7 +13,7 @@ import pytest
 import texelpad
 from texel.runtime import boards
 from texelpad.deploy import boardcheck as bc
-from texelpad.link.virtual import VirtualBoard
+from texelpad.sim.virtual import VirtualBoard
 from support.cli import run_cli
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -14,7 +14,7 @@ from contextlib import redirect_stderr, redirect_stdout
 import pytest
 
 from texelpad import cli
-from texelpad.link.emulated import why_not
+from texelpad.sim.emulated import why_not
 
 pytestmark = [pytest.mark.instruments, pytest.mark.slow]
 

@@ -13,7 +13,7 @@ import sys
 import pytest
 
 import texelpad
-from texelpad.link.virtual import VirtualBoard
+from texelpad.sim.virtual import VirtualBoard
 from support.vboard import mpremote
 from support.cli import run_cli
 

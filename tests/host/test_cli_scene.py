@@ -21,7 +21,7 @@ import texel.runtime.scene as scene_mod
 import texelpad
 from texelpad.cli import common
 from texelpad.link.board import host_check
-from texelpad.link.virtual import VirtualBoard
+from texelpad.sim.virtual import VirtualBoard
 from support.cli import run_cli
 
 ROOT = Path(__file__).resolve().parents[2]

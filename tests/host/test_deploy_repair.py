@@ -17,7 +17,7 @@ from texelpad.cli.deploy import next_step
 from texelpad.deploy import image
 from texelpad.deploy.install import DeployFailed, deploy
 from texelpad.link import protocol
-from texelpad.link.virtual import VirtualBoard
+from texelpad.sim.virtual import VirtualBoard
 from support.cli import run_cli
 
 pytestmark = [pytest.mark.vboard]

@@ -241,12 +241,12 @@ def test_unwritable_output_found_before_the_work(argv, flag, bad, tmp_path, caps
     import texelpad.bench.engines
     import texelpad.bench.link
     import texelpad.bench.refresh
-    import texelpad.link.virtual
+    import texelpad.sim.virtual
     monkeypatch.setattr(texel, "render", _boom)
     monkeypatch.setattr(texelpad.bench.engines, "run", _boom)
     monkeypatch.setattr(texelpad.bench.refresh, "run", _boom)
     monkeypatch.setattr(texelpad.bench.link, "run", _boom)
-    monkeypatch.setattr(texelpad.link.virtual, "open_virtual", _boom)
+    monkeypatch.setattr(texelpad.sim.virtual, "open_virtual", _boom)
     if bad == "missing":
         d = tmp_path / "no" / "such"
     else:
@@ -268,12 +268,12 @@ def test_unwritable_output_found_before_the_work(argv, flag, bad, tmp_path, caps
 def test_output_suffix_checked_before_the_work(argv, flag, tmp_path, capsys, monkeypatch):
     import texelpad.bench.engines
     import texelpad.bench.refresh
-    import texelpad.link.virtual
+    import texelpad.sim.virtual
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(texel, "render", _boom)
     monkeypatch.setattr(texelpad.bench.engines, "run", _boom)
     monkeypatch.setattr(texelpad.bench.refresh, "run", _boom)
-    monkeypatch.setattr(texelpad.link.virtual, "open_virtual", _boom)
+    monkeypatch.setattr(texelpad.sim.virtual, "open_virtual", _boom)
     rc, out, err = _run(argv, capsys)
     assert rc == 2 and "%s: unsupported file type" % flag in _one_line(err)
     assert list(tmp_path.iterdir()) == []
@@ -389,7 +389,7 @@ def test_broken_pipe_not_on_stdout_is_one_line(capsys, monkeypatch):
 
 @pytest.fixture(scope="module")
 def board():
-    from texelpad.link.virtual import VirtualBoard
+    from texelpad.sim.virtual import VirtualBoard
     with VirtualBoard(image="source") as v:
         with texelpad.connect(v.port) as b:
             b.start("virtual", None, realtime=True)

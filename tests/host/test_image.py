@@ -31,7 +31,7 @@ import texelpad
 from texelpad import toolchain
 from texelpad.deploy import image as image
 from texelpad.deploy.image import TARGETS, ImageError, target_for
-from texelpad.link.virtual import VirtualBoard
+from texelpad.sim.virtual import VirtualBoard
 
 ROOT = mpy.ROOT
 PKG = ROOT / "device" / "texel"

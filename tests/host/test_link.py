@@ -13,7 +13,7 @@ import texelpad
 from texelpad.link import board as board_mod
 from texelpad.link import (DeviceError, ImageTooOld, LinkTimeout, LiteralError, NoBoard,
                            NotTexelpad, PortBusy, literal)
-from texelpad.link.virtual import VirtualBoard
+from texelpad.sim.virtual import VirtualBoard
 
 pytestmark = [pytest.mark.vboard]
 

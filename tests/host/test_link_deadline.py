@@ -148,7 +148,7 @@ def test_a_request_whose_output_never_ends_times_out_and_resync_recovers(tmp_pat
     deadline with LinkTimeout, though bytes never stop arriving; resync()
     (Ctrl-C, raw REPL) then gets the board back. (The unix port takes Ctrl-C
     only at its prompt, so the program here ends by itself after 4 s.)"""
-    from texelpad.link.virtual import VirtualBoard
+    from texelpad.sim.virtual import VirtualBoard
     with VirtualBoard(tmp_path / "flash", image="source") as vb:
         with texelpad.connect(vb.port, timeout=1.0, check=False) as b:
             _, err, _ = bounded(lambda: b.link.exec(

@@ -7,7 +7,7 @@ import pytest
 
 import texelpad
 from texelpad.link.board import Board
-from texelpad.link.virtual import VirtualBoard
+from texelpad.sim.virtual import VirtualBoard
 from support.cli import run_cli
 
 pytestmark = [pytest.mark.vboard]

@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 import texelpad
-from texelpad.link.virtual import VirtualBoard, running_boards
+from texelpad.sim.virtual import VirtualBoard, running_boards
 from support.vboard import mpremote
 from support.cli import run_cli
 
@@ -174,7 +174,7 @@ def test_stop_on_signals_cleans_up_a_bench_board(tmp_path):
     script = tmp_path / "b.py"
     script.write_text(
         "import os, signal, sys\n"
-        "from texelpad.link.virtual import VirtualBoard, stop_on_signals\n"
+        "from texelpad.sim.virtual import VirtualBoard, stop_on_signals\n"
         "with stop_on_signals(), VirtualBoard(image='source') as vb:\n"
         "    print(vb.proc.pid, vb.flash, flush=True)\n"
         "    signal.pause()\n")

@@ -1,7 +1,7 @@
 """The texelpad firmware for tests: built once per test session with the offline kit
 (../shared/instruments/mpfirmware) into a cache folder kept between runs (a rebuild of an
 unchanged tree only relinks: seconds), and booted on the emulated Pico as if the .uf2 were
-dragged onto it (texelpad.link.emulated.EmulatedPico(firmware=...)).
+dragged onto it (texelpad.sim.emulated.EmulatedPico(firmware=...)).
 
 Skips where the machine cannot build it (no arm-none-eabi-gcc, no kit) - except under CI
 (CI=true), where .ci/run installs the toolchain: there a missing toolchain fails the test.

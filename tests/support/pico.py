@@ -1,4 +1,4 @@
-"""The emulated Raspberry Pi Pico (texelpad.link.emulated: rp2040js running
+"""The emulated Raspberry Pi Pico (texelpad.sim.emulated: rp2040js running
 the real MicroPython v1.28 firmware, from ../shared/instruments/rp2emu) for
 tests: a context manager that skips when this machine cannot run it, and a
 module-scoped fixture (one emulator per test module: everything on it runs
@@ -16,7 +16,7 @@ from typing import Iterator
 
 import pytest
 
-from texelpad.link.emulated import EmulatedPico, group_members, why_not  # noqa: F401
+from texelpad.sim.emulated import EmulatedPico, group_members, why_not  # noqa: F401
 
 
 def processes_mentioning(text: str) -> list[tuple[int, str]]:

@@ -6,12 +6,12 @@ import subprocess
 import sys
 from contextlib import contextmanager
 
-from texelpad.link.virtual import VirtualBoard
+from texelpad.sim.virtual import VirtualBoard
 
 
 @contextmanager
 def virtual_board():
-    """The host's own virtual board (texelpad.link.virtual) with this checkout's
+    """The host's own virtual board (texelpad.sim.virtual) with this checkout's
     device/ on its path; yields its serial port."""
     with VirtualBoard(image="source") as vb:
         yield vb.port

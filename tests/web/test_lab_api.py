@@ -269,7 +269,7 @@ def test_the_server_survives_a_board_that_disappears_and_says_so(tmp_path):
     requests answer 503 saying so, nothing is written, the server goes on; the
     board comes back (a new one on the owner's port, as a replugged board
     reappears on its port) and the session goes on where it stopped."""
-    from texelpad.link.virtual import VirtualBoard
+    from texelpad.sim.virtual import VirtualBoard
     vb = VirtualBoard(image="source")
     vb.__enter__()
     owner = BoardOwner(vb.port, "virtual", realtime=True, timeout=5.0)

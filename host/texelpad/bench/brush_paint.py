@@ -77,7 +77,7 @@ print(viper, time.ticks_diff(t1, t0), time.ticks_diff(t2, t1))
 def _chip(doc: dict) -> dict:
     from ..deploy.install import deploy
     from ..link.board import connect
-    from ..link.emulated import EmulatedPico, why_not
+    from ..sim.emulated import EmulatedPico, why_not
     why = why_not()
     if why:
         return {"chip": "skipped: %s" % why}

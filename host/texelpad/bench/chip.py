@@ -1,6 +1,6 @@
 """`texelpad bench-refresh --chip rp2040`: the refresh measured on the emulated
 Raspberry Pi Pico (../shared/instruments/rp2emu: rp2040js running the real
-MicroPython v1.28 firmware, time from cycle counts; texelpad.link.emulated).
+MicroPython v1.28 firmware, time from cycle counts; texelpad.sim.emulated).
 
 One emulator session on a pty, as `texelpad bench-link --chip rp2040` runs it:
 boot, deploy the image (armv6m .mpy), start board file 'pico' playing the
@@ -53,7 +53,7 @@ EXCEPTION_CYCLES = 30
 
 # The finger, as rp2emu's --adc-js function of emulated seconds since power-on
 # (12-bit counts on ADC channel 0 = GPIO26): every CYCLE_S a sweep from end to
-# end and back (SWEEP_S, texelpad.link.emulated.FINGERS["sweep"]), then a hold
+# end and back (SWEEP_S, texelpad.sim.emulated.FINGERS["sweep"]), then a hold
 # of HOLD_S at each of the hold counts.
 CYCLE_S = 2.6
 SWEEP_S = 2.0
@@ -141,7 +141,7 @@ def run(soak_s: float = CHIP_SOAK_S, irq_reps: int = IRQ_REPS,
         progress: Progress | None = None, flash: str | None = None) -> dict[str, Any]:
     """The whole chip measurement (module docstring); a dict of figures.
     Raises ChipBenchError (or the link's errors) when the chip cannot be run."""
-    from ..link.emulated import EmulatedPico, why_not
+    from ..sim.emulated import EmulatedPico, why_not
     from ..link.board import connect
     from ..deploy.install import deploy
     from texel.runtime import boards

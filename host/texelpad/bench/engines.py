@@ -350,12 +350,12 @@ def bench_micropython(runtime: str, exe: str, case_names: list[str], repeat: int
 
 
 def bench_chip(repeat: int, ref: Reference, progress: Progress) -> MpRun:
-    """mpbench.py on the emulated Pico (link/emulated.py: the real MicroPython
+    """mpbench.py on the emulated Pico (sim/emulated.py: the real MicroPython
     firmware, the chip's own clock): the image deployed, the script written to
     its flash and run there; timings only (no maps: cases are measured on the
     interpreters, whose float32 build is the board's float)."""
-    from ..link.emulated import why_not
-    from ..link.virtual import stop_on_signals
+    from ..sim.emulated import why_not
+    from ..sim.virtual import stop_on_signals
     why = why_not()
     if why:
         raise BenchError(why)
@@ -384,7 +384,7 @@ def _run_on_chip(job: dict[str, Any], progress: Progress) -> str:
     """mpbench.main(job) on a freshly deployed emulated Pico: its output."""
     from ..deploy.install import deploy
     from ..link.board import connect
-    from ..link.emulated import EmulatedPico
+    from ..sim.emulated import EmulatedPico
     from ..link.transport import LinkError
     emu = EmulatedPico()
     try:

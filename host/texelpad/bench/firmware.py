@@ -2,7 +2,7 @@
 `python -m texelpad.bench.firmware [--uf2 PATH] [--json OUT] [--stock] [--quick]`.
 
 The board is rp2emu (../shared/instruments: rp2040js, time from cycle counts)
-booting the .uf2 as if dragged onto a Pico (texelpad.link.emulated,
+booting the .uf2 as if dragged onto a Pico (texelpad.sim.emulated,
 EmulatedPico(firmware=...)): MicroPython 1.28 + ulab with texelpad in the
 ROMFS partition, playing its power-up scene. Every figure is on the board's
 own clock (time.ticks_us: emulated microseconds); the host's clock measures
@@ -286,8 +286,8 @@ def run_board(firmware: str | None, pushes: int, scenes: int | None, irq_reps: i
     `firmware` (a .uf2), or with None the stock path (stock MicroPython +
     texelpad deploy + start, as open_emulated)."""
     from ..link.board import connect
-    from ..link.emulated import EmulatedPico, finger_js, why_not
-    from ..link.virtual import stop_on_signals
+    from ..sim.emulated import EmulatedPico, finger_js, why_not
+    from ..sim.virtual import stop_on_signals
     from .engines import DEVICE_SCRIPTS
     why = why_not()
     if why:
@@ -360,7 +360,7 @@ def profile_push(uf2: str, scene: dict[str, Any], elf: str | None,
     playing since boot) and the PC histogram is folded onto the .elf's
     function symbols. None when it cannot run."""
     from ..link import protocol
-    from ..link.emulated import rp2emu_dir
+    from ..sim.emulated import rp2emu_dir
     from ..firmware import romfs
     nm = shutil.which("arm-none-eabi-nm")
     d = rp2emu_dir()
@@ -592,7 +592,7 @@ def notes(out: dict[str, Any]) -> list[str]:
 
 def uf2_sizes(uf2: str) -> dict[str, int]:
     from ..firmware import romfs
-    from ..link.emulated import FS_OFFSET
+    from ..sim.emulated import FS_OFFSET
     blocks = romfs.read_uf2(Path(uf2).read_bytes())
     low = sum(len(p) for a, p, _ in blocks if a - romfs.XIP_BASE < FS_OFFSET)
     high = b"".join(p for a, p, _ in sorted(blocks) if a - romfs.XIP_BASE >= FS_OFFSET)

@@ -23,7 +23,7 @@ import json
 import statistics
 import time
 
-from ..link.virtual import open_virtual, stop_on_signals
+from ..sim.virtual import open_virtual, stop_on_signals
 from ..study.free import Free
 from ..study.questions import slider_scene
 from ..web.owner import BoardOwner

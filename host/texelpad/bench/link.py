@@ -41,12 +41,12 @@ def slope_per_push(ys: list[float]) -> float:
 
 def _board(chip: str | None, deploy: bool) -> Any:
     """The board to measure, not started yet: the unix-port virtual board
-    (its `with` starts it) or the emulated chip (link/emulated.py; started
+    (its `with` starts it) or the emulated chip (sim/emulated.py; started
     by run())."""
     if chip:
-        from ..link.emulated import EmulatedPico
+        from ..sim.emulated import EmulatedPico
         return EmulatedPico()
-    from ..link.virtual import VirtualBoard
+    from ..sim.virtual import VirtualBoard
     return VirtualBoard(image=None if deploy else "source")
 
 
@@ -55,7 +55,7 @@ def run(pushes: int = 200, deploy: bool = True,
     """chip "rp2040": on the emulated Pico (its figures: the host's wall time
     for the link, the chip's own clock for what the board reports)."""
     from ..link.board import connect
-    from ..link.virtual import stop_on_signals
+    from ..sim.virtual import stop_on_signals
     say = progress or (lambda m: None)
     res: dict[str, Any] = {"pushes": pushes, "chip": chip}
     timeout = 60.0 if chip else 10.0        # the emulator runs ~3x slower than a chip

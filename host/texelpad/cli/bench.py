@@ -111,7 +111,7 @@ def cmd_bench_refresh(args: argparse.Namespace) -> int:
     if args.json:
         check_output("--json", args.json, (".json",))
     if args.chip:
-        from ..link.emulated import why_not
+        from ..sim.emulated import why_not
         why = why_not()
         if why:
             raise CliError("--chip", why, EXIT_FAIL)
@@ -145,7 +145,7 @@ def cmd_bench_link(args: argparse.Namespace) -> int:
     if args.json:
         check_output("--json", args.json, (".json",))
     if args.chip:
-        from ..link.emulated import why_not
+        from ..sim.emulated import why_not
         why = why_not()
         if why:
             raise CliError("--chip", why, EXIT_FAIL)

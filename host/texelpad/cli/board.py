@@ -414,7 +414,7 @@ def add_ports(p: argparse.ArgumentParser) -> None:
 
 def cmd_ports(args: argparse.Namespace) -> int:
     from ..link.transport import ports
-    from ..link.virtual import running_boards
+    from ..sim.virtual import running_boards
     found = ports()
     virtual = running_boards()
     if not found and not virtual:

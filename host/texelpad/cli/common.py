@@ -375,7 +375,7 @@ def _one_board(args: argparse.Namespace) -> None:
     if getattr(args, "port", None) is not None:
         return
     from ..link.transport import ports
-    from ..link.virtual import running_boards
+    from ..sim.virtual import running_boards
     found = [p["port"] for p in ports()] + [e["port"] + " (virtual)" for e in running_boards()]
     if len(found) > 1:
         raise CliError("--port", "%d boards found (%s): say which with --port"

@@ -67,7 +67,7 @@ def run(port: str | None = None, out: str = "texelpad-demo.png", scene: dict | N
     report: dict[str, Any] = {}
     try:
         if port is None:
-            from ..link.virtual import open_virtual
+            from ..sim.virtual import open_virtual
             progress("no --port: starting the virtual board (MicroPython unix port on a pty)")
             t0 = time.perf_counter()
             vb = open_virtual(flash, progress=progress)      # deployed, playing in real time

@@ -51,7 +51,7 @@ def cmd_lab(args: argparse.Namespace) -> int:
         raise CliError("--http-port", "expected 0 .. 65535, got %d" % args.http_port)
     import uvicorn
 
-    from ..link.virtual import open_virtual, stop_on_signals
+    from ..sim.virtual import open_virtual, stop_on_signals
     from ..study import configs as C
     from ..study.session import DataLock, SessionError
     from ..web.owner import BoardLost, BoardOwner

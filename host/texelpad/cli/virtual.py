@@ -1,6 +1,6 @@
 """`texelpad virtual`: a virtual board on a pty until Ctrl-C (or SIGTERM, SIGHUP):
 the device image under the MicroPython unix port, or with --chip rp2040 the
-emulated Raspberry Pi Pico (link/emulated.py: the real firmware on rp2040js)."""
+emulated Raspberry Pi Pico (sim/emulated.py: the real firmware on rp2040js)."""
 from __future__ import annotations
 
 import argparse
@@ -9,7 +9,7 @@ import time
 from pathlib import Path
 
 from ..link.transport import LinkError
-from ..link.virtual import open_virtual, stop_on_signals
+from ..sim.virtual import open_virtual, stop_on_signals
 from .common import EXIT_FAIL, EXIT_OK, CliError, _fail, _stderr, positive_float
 
 
@@ -53,7 +53,7 @@ def check_flash(flash: str | None, chip: str | None) -> None:
         return
     # the emulated Pico's flash file: its 2 MB flash from the filesystem area on,
     # 1,441,792 bytes (rp2emu refuses a file of another size: its README, --flash)
-    from ..link.emulated import FS_BYTES
+    from ..sim.emulated import FS_BYTES
     p = Path(flash)
     if not chip:
         if p.exists() and not p.is_dir():
@@ -110,7 +110,7 @@ def cmd_virtual(args: argparse.Namespace) -> int:
         try:
             try:
                 if args.chip:
-                    from ..link.emulated import open_emulated, why_not
+                    from ..sim.emulated import open_emulated, why_not
                     why = why_not()
                     if why:
                         raise CliError("--chip", why, EXIT_FAIL)

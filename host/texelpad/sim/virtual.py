@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterator
 
 from .. import toolchain
-from .transport import LinkError
+from ..link.transport import LinkError
 
 
 def device_source() -> Path:
@@ -462,7 +462,7 @@ def start_at_power_up(b: Any, flash: str | os.PathLike,
     boot), else board file "virtual" and the default scene. A power-up file
     the board refuses leaves it stopped, as main.py leaves a board ("texelpad:
     not started"), and says so through progress. The status, or None."""
-    from .transport import DeviceError
+    from ..link.transport import DeviceError
     say = progress or (lambda m: None)
     cfg = boot_config(flash)
     if not cfg:
@@ -471,8 +471,8 @@ def start_at_power_up(b: Any, flash: str | os.PathLike,
     scene = cfg.get("scene")
     try:
         # checked as the board checks it, for that board file's display, before it goes
-        from . import protocol
-        from .board import board_display
+        from ..link import protocol
+        from ..link.board import board_display
         display = board_display(b, board)
         if scene is not None:
             import texel.runtime.scene
@@ -495,7 +495,7 @@ def open_virtual(flash: str | None = None, source: bool = False, start: bool = T
     or the installed source) playing in real time what a board plays at
     power-up: the power-up scene of its flash (texelpad scene boot), else the
     default scene (start_at_power_up)."""
-    from .board import connect
+    from ..link.board import connect
     vb = VirtualBoard(flash, image="source" if source else None)
     vb.start()
     try:

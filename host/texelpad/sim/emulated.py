@@ -280,7 +280,7 @@ def open_emulated(flash: str | None = None, start: bool = True,
     (only what changed, when the flash file already holds an image) and,
     unless start=False, the board file 'pico' playing the default scene;
     finger: a FINGERS name or an --adc-js function."""
-    from .board import connect
+    from ..link.board import connect
     from ..deploy.install import deploy
     say = progress or (lambda m: None)
     emu = EmulatedPico(flash, extra_args=("--adc-js", finger_js(finger)))
