@@ -2,8 +2,9 @@
 import statement, also those inside functions), so the layers stay visible:
 the generator does not know the runtime, the runtime does not know a
 backend, device code knows nothing of the host or of test doubles, pure
-analysis never imports the link, the link never imports a command, and a
-command imports no other command."""
+analysis never imports the link, the link never imports a command, a
+command imports no other command, and the host's layers (a package each)
+import each other only downwards, in no cycle (issue 23)."""
 from __future__ import annotations
 
 import ast
@@ -127,3 +128,187 @@ def test_only_transport_imports_mpremote_and_serial():
 def test_device_scripts_are_not_host_modules():
     # the bench scripts that run under MicroPython are package data, not importable modules
     assert not (HOST / "bench" / "device" / "__init__.py").exists()
+
+
+# --- the host's layers as a graph (issue 23) -----------------------------------------------------
+# One node per unit of docs/architecture.md's table: a package of host/texelpad (texelpad.link,
+# texelpad.study, ...) or a top-level module (texelpad.toolchain); texelpad.deploy.image is a unit
+# of its own, as in the table (the offline image, below the firmware that is built from it; the
+# rest of deploy writes it over the link and repairs a ROMFS with the firmware's payload). Every
+# import counts, also one inside a function: a lazy import still makes the importer depend on the
+# module (the two cycles of issue 23 hid inside functions).
+
+UNITS = ("texelpad.deploy.image",)          # modules that are a unit of their own, not their package's
+
+# What each unit may import (besides texel and third-party libraries): docs/architecture.md's
+# "What may import what". The table itself must be a layering (acyclic), checked below.
+MAY_IMPORT: dict[str, set[str]] = {
+    "texelpad.toolchain": set(),
+    "texelpad.plate": set(),
+    "texelpad.scenes": set(),                   # package data: the shipped example scenes
+    "texelpad.space": set(),
+    "texelpad.analysis": set(),
+    "texelpad.deploy.image": {"texelpad.toolchain"},
+    "texelpad.link": {"texelpad.toolchain"},
+    "texelpad.search": {"texelpad.space", "texelpad.analysis"},
+    "texelpad.study": {"texelpad.space", "texelpad.search", "texelpad.analysis"},
+    "texelpad.brush": {"texelpad.analysis", "texelpad.space", "texelpad.search", "texelpad.study"},
+    "texelpad.firmware": {"texelpad.deploy.image", "texelpad.toolchain"},
+    "texelpad.deploy": {"texelpad.deploy.image", "texelpad.firmware", "texelpad.link",
+                        "texelpad.toolchain"},
+    "texelpad.sim": {"texelpad.link", "texelpad.deploy", "texelpad.deploy.image",
+                     "texelpad.firmware", "texelpad.toolchain"},
+    "texelpad.web": {"texelpad.link", "texelpad.study", "texelpad.search", "texelpad.brush",
+                     "texelpad.space", "texelpad.analysis", "texelpad.scenes", "texelpad.toolchain"},
+}
+_BELOW_BENCH = set(MAY_IMPORT)
+MAY_IMPORT["texelpad.bench"] = set(_BELOW_BENCH)                     # everything but a command
+MAY_IMPORT["texelpad.cli"] = _BELOW_BENCH | {"texelpad.bench"}
+MAY_IMPORT["texelpad.__main__"] = {"texelpad.cli"}
+
+
+def _unit(dotted: str) -> str | None:
+    """The unit a module belongs to; None for anything outside texelpad and
+    for the root package itself (texelpad/__init__.py: __version__ and lazy
+    entry points, see test_the_root_package_imports_nothing_when_imported)."""
+    parts = dotted.split(".")
+    if parts[0] != "texelpad" or len(parts) == 1:
+        return None
+    for u in UNITS:
+        if dotted == u or dotted.startswith(u + "."):
+            return u
+    return ".".join(parts[:2])
+
+
+def _is_module(dotted: str) -> bool:
+    rel = Path(*dotted.split(".")[1:])
+    return (HOST / rel).with_suffix(".py").is_file() or (HOST / rel / "__init__.py").is_file()
+
+
+def import_edges(path: Path) -> list[tuple[str, int]]:
+    """(imported texelpad module, line) for every import statement of the
+    file, wherever it stands (module level, a function, a method, a try).
+    `from a import b` is a.b when b is a module, a otherwise; `from texelpad
+    import __version__` reads the root's constant and is no edge."""
+    name = _module_name(path)
+    pkg = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            out += [(a.name, node.lineno) for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = pkg.split(".")
+                base = base[:len(base) - node.level + 1]
+                mod = ".".join(base + ([node.module] if node.module else []))
+            else:
+                mod = node.module or ""
+            for a in node.names:
+                sub = "%s.%s" % (mod, a.name)
+                if mod == "texelpad" and a.name == "__version__":
+                    continue
+                out.append((sub if _is_module(sub) else mod, node.lineno))
+    return [(m, line) for m, line in out if m.split(".")[0] == "texelpad"]
+
+
+def host_graph() -> dict[str, dict[str, list[str]]]:
+    """unit -> imported unit -> ["file:line", ...] (imports within a unit left out)."""
+    graph: dict[str, dict[str, list[str]]] = {}
+    for p in modules(HOST):
+        src = _unit(_module_name(p))
+        if src is None:
+            continue
+        graph.setdefault(src, {})
+        for mod, line in import_edges(p):
+            dst = _unit(mod)
+            where = "%s:%d" % (p.relative_to(HOST), line)
+            if dst is not None and dst != src and where not in graph[src].get(dst, ()):
+                graph[src].setdefault(dst, []).append(where)
+    return graph
+
+
+def cycles(graph: dict[str, dict]) -> list[list[str]]:
+    """The strongly connected components of more than one node (Tarjan), each
+    sorted: every cycle of the graph lies inside one of them."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    found: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in graph.get(v, {}):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                found.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def _explain(graph: dict[str, dict[str, list[str]]], comp: list[str]) -> str:
+    return "; ".join("%s -> %s (%s)" % (a, b, ", ".join(graph[a][b]))
+                     for a in comp for b in sorted(graph.get(a, {})) if b in comp)
+
+
+def test_the_graph_sees_imports_inside_functions():
+    g = host_graph()
+    # cli/virtual.py and cli/demo.py open a board only when the command runs
+    assert "texelpad.sim" in g["texelpad.cli"] or "texelpad.link" in g["texelpad.cli"]
+    assert "deploy/romfs_install.py:51" in g["texelpad.deploy"]["texelpad.firmware"]  # in a function
+    assert cycles({"a": {"b": []}, "b": {"c": []}, "c": {"a": []}, "d": {"a": []}}) == [["a", "b", "c"]]
+    assert cycles({"a": {"b": []}, "b": {}}) == []
+
+
+def test_the_host_packages_import_each_other_in_no_cycle():
+    g = host_graph()
+    found = cycles(g)
+    assert found == [], "import cycles among host packages: " + " | ".join(
+        _explain(g, c) for c in found)
+
+
+def test_the_documented_layers_are_a_layering():
+    assert cycles({k: dict.fromkeys(v) for k, v in MAY_IMPORT.items()}) == []
+    on_disk = {_unit(_module_name(p)) for p in modules(HOST)} - {None}
+    assert on_disk <= set(MAY_IMPORT), "a host unit the layers do not place: %s" % (
+        sorted(on_disk - set(MAY_IMPORT)),)
+
+
+def test_every_host_import_follows_the_layers():
+    g = host_graph()
+    bad = {"%s -> %s" % (a, b): where for a, out in g.items() for b, where in out.items()
+           if b not in MAY_IMPORT.get(a, set())}
+    assert bad == {}
+
+
+def test_the_link_is_only_the_connection():
+    """The simulated boards (texelpad.sim: the virtual board, the emulated
+    Pico) deploy into themselves; the link they connect through knows none
+    of them and nothing of deploy."""
+    g = host_graph()
+    assert set(g["texelpad.link"]) <= {"texelpad.toolchain"}, g["texelpad.link"]
+
+
+def test_the_root_package_imports_nothing_when_imported():
+    """`from texelpad import __version__` (link, deploy, study, firmware)
+    loads no layer: the root's own imports (connect, encode) are inside its
+    functions."""
+    tree = ast.parse((HOST / "__init__.py").read_text(encoding="utf-8"))
+    assert [n for n in tree.body if isinstance(n, (ast.Import, ast.ImportFrom))] == []
