@@ -273,3 +273,20 @@ def test_phase_steps_every_octave():
     got = PN.step_d(np.array(ys, dtype=np.int64), PN._tab())
     for i, y in enumerate(ys):
         assert tuple(int(g[i]) for g in got) == PI.step_d(y, tab), y
+
+
+def test_numpy_engine_reads_a_format2_plan_as_before():
+    """engine_numpy makes a PlanInt's float views itself (numpy); the plan's
+    own (cached) views come out the same, and a plan without log pitches
+    (keep_y=False, a board's) is refused as before."""
+    p = texel.validate(dict(HARD_CASES["study"][0], v=2))
+    fresh = PlanInt(p)
+    y = engine_numpy.render_y(fresh)
+    assert fresh._f is None                 # the engine did not fill the plan's cache
+    cached = PlanInt(p)
+    cached.f, cached.phi                    # noqa: B018 - fill the cache, then render from it
+    assert bits(engine_numpy.render_y(cached)) == bits(y)
+    assert bits(y) == bits(render_y_loop(PlanInt(p)))
+    bare = PlanInt(p, keep_y=False)
+    with pytest.raises(TypeError):
+        engine_numpy.render_y(bare)
