@@ -61,8 +61,13 @@ def test_expected_spectrum_is_the_mean_of_rendered_ones(params):
     mean = sum(P.periodogram(texel.render(dict(params, seed=s, length_samples=n)))[1]
                for s in range(seeds)) / seeds
     assert S.sum() == pytest.approx(mean.sum(), rel=0.03)      # ~ 1/8, a full-scale texel
-    # felt patterns of the expectation and of 40 renderings' mean spectrum
-    d = P.w2_db(P.pattern_of_spectrum(S, n), P.pattern_of_spectrum(mean, n))
+    # felt patterns of the expectation and of 40 renderings' mean spectrum, seen
+    # without the fingertip's viscous fall above 100 Hz: this checks the spectrum,
+    # and that lens keeps the 19 dB texture's main lobe (7 kHz at 86 mm/s) in view
+    # - with the fall, what is felt of it is its texel borders near DC, where the
+    # expectation leaves out the mean's removal
+    lens = P.Model(fingertip_corner_hz=None)
+    d = P.w2_db(P.pattern_of_spectrum(S, n, lens), P.pattern_of_spectrum(mean, n, lens))
     assert d < 0.3, d
 
 
@@ -107,9 +112,17 @@ IRREGS = (-30.0, -15.0, -10.0, -5.0, 0.0)
 QUANTS = (0.0, 1.0, 3.0)
 
 
-def _bound(pitch: float, irr: float, q: float) -> tuple[float, float | None]:
-    """(max |pitch error|, max |irregularity error| or None: not identifiable),
-    as docs/encoder.md states them."""
+SKIN_TOP_DB = 10.0 * math.log10(P.skin_band_hz()[1] / P.SPEED_MM_S)    # 11.3 dB
+
+
+def _bound(pitch: float, irr: float, q: float) -> tuple[float | None, float | None]:
+    """(max |pitch error|, max |irregularity error|; None: not identifiable),
+    as docs/encoder.md states them (method "w2")."""
+    if pitch > SKIN_TOP_DB and irr >= -5.0:
+        # above the skin's band (7 kHz at 86 mm/s) a wide texture is felt by its
+        # low tail and its texel borders only: the pitch is not identifiable by
+        # feel (test_the_encoder_is_never_farther_than_the_truth still holds)
+        return None, None
     if irr == 0.0:                  # a decade of spread: one half screen is a loose sample
         return 12.0, 5.5
     if q > 0.0 and irr <= -15.0:    # texels collapse onto one or two grid values
@@ -131,7 +144,7 @@ def trips() -> list[tuple]:
             for pitch in PITCHES:
                 for seed in (1, 2):
                     m = render(pitch, irr, q, seed)
-                    r = E.encode(m, quant_db=q, intervals=False)
+                    r = E.encode(m, quant_db=q, intervals=False, method="w2")
                     out.append((pitch, irr, q, seed, m, r))
     return out
 
@@ -142,9 +155,9 @@ def test_round_trip_within_the_stated_bounds(trips):
         bp, bi = _bound(pitch, irr, q)
         dp = abs(r["pitch_db"] - pitch)
         di = abs(r["irregularity_db"] - irr)
-        if dp > bp or (bi is not None and di > bi):
+        if (bp is not None and dp > bp) or (bi is not None and di > bi):
             bad.append((pitch, irr, q, seed, round(dp, 2), round(di, 2)))
-    assert bad == []
+    assert bad == [], bad
 
 
 def test_the_encoder_is_never_farther_than_the_truth(trips):
@@ -165,7 +178,8 @@ def test_tiny_irregularity_is_reported_as_not_identifiable(pitch):
     lo, hi = r["ranges"]["irregularity_db"]
     assert lo == E.BOUNDS[1][0] and hi > -20.0       # anything from -30 to beyond -20 feels alike
     plo, phi = r["ranges"]["pitch_db"]
-    assert plo <= pitch <= phi and phi - plo < 1.5
+    # the felt method's same-feel range: within one difference threshold either side
+    assert plo <= pitch <= phi and phi - plo < 2 * P.JND_DB + 0.3
 
 
 def test_quantized_pitch_is_known_to_its_cell():
@@ -179,7 +193,9 @@ def test_quantized_pitch_is_known_to_its_cell():
 
 def test_gain_and_aliasing_and_compression_are_reported():
     m = 0.5 + 0.5 * (render(19.0, -5.0, seed=4) - 0.5)     # half-scale, aliasing
-    r = E.encode(m, intervals=False)
+    # W2 with a lens that feels 7 kHz (no fingertip fall): the spectrum's own
+    # texture, half its texels aliased (the felt method stays in the skin's band)
+    r = E.encode(m, intervals=False, method="w2", model=P.Model(fingertip_corner_hz=None))
     assert r["gain"] == pytest.approx(0.5, abs=0.02)
     a = r["aliasing"]
     assert 0.3 < a["expected_fraction"] < 0.7 and a["texels"] == HALF // 50

@@ -260,29 +260,51 @@ def _round_db(x: float) -> float:
     return float(round(x, 2))
 
 
+METHODS = ("felt", "w2")
+# The felt method's tie-break (a recorded choice, docs/encoder.md): where several
+# textures feel the same as the map (a ridge of equal felt pitch and noisiness,
+# e.g. a wide texture in the skin's band and one far above it whose aliased
+# texels feel alike), the one nearest where the lab's free-exploration sliders
+# start - log10 P = 0.5 (5 dB), sigma 0.5 decade (-3.01 dB): the lab's
+# free_exploration_and_quantization_test_app, NU-Haptics-Lab/SinglePitchTexel -
+# as a participant stops moving a slider once the texture feels the same. The
+# weight keeps the pull below 0.01 dB wherever the felt point is identifiable.
+SLIDER_START_DB = (5.0, 10.0 * math.log10(0.5))
+TIE_BREAK = 1e-3
+# ... and within the sliders' reach: irregularity at most 1 decade (0 dB; the
+# lab's app, as above). The generator goes to +5 dB, the felt method stops
+# where a participant's slider does (W2 keeps the generator's limits).
+FELT_IRREG_MAX_DB = 0.0
+
+
 def encode(fmap: Any, *, texel_samples: int = 50, quant_db: float = 0.0, seed: int = 0,
            v: int = FORMAT_NEW, model: P.Model | None = None, intervals: bool = True,
-           source: str | None = None) -> dict[str, Any]:
+           source: str | None = None, method: str = "felt") -> dict[str, Any]:
     """Encode a friction map (1-D, values ~0..1, DX_MM = 5.3 um per sample) as
     texel parameters that feel the same, with the report (docs/encoder.md).
 
+    method: "felt" (default) - the texture whose felt pitch and noisiness
+    (perception.FeltPoint: what people match, seed 000/001) equal the map's,
+    nearest the lab's slider start where several do (SLIDER_START_DB);
+    "w2" - the texture whose whole felt spectrum is nearest the map's
+    (perception.w2_db): recovers the parameters of a map that is itself a
+    texel rendering, even one far above the skin's band.
     texel_samples, quant_db, seed, v: the texture's texel length, pitch
     quantization (dB; 0 = none), seed and format (default 2; 1 = the lab's
     float generator) - fixed, not fitted; the candidates are rendered with
-    them. model: the perceptual model (default
-    perception.DEFAULT_MODEL). intervals: also scan each parameter for the
-    range that feels the same (~40 more candidates). source: a label kept in
-    the result.
+    them. model: the perceptual model (default perception.DEFAULT_MODEL).
+    intervals: also scan each parameter for the range that feels the same
+    (~40 more candidates). source: a label kept in the result.
 
     Returns a JSON-ready dict: "pitch_db", "irregularity_db", "gain" and the
     other texture keys; "texture" (the dict a board plays, e.g.
     Board.push_texel); "distance_db" (minimised); "ranges"; "felt"; "spectrum";
-    "quantization"; "compression"; "aliasing"; "map"; "model"; "notes";
-    "evaluations"; "seconds". EncodeError (a ValueError) when the map cannot
-    be encoded."""
-    from scipy.optimize import minimize
-
+    "quantization"; "compression"; "aliasing"; "skin_band"; "map"; "model";
+    "method"; "notes"; "evaluations"; "seconds". EncodeError (a ValueError)
+    when the map cannot be encoded."""
     t0 = time.perf_counter()
+    if method not in METHODS:
+        raise EncodeError("method: expected one of %s, got %r" % (", ".join(METHODS), method))
     model = P.DEFAULT_MODEL if model is None else model
     # the fixed texture keys first: a bad one is the caller's error, named as texel names it
     try:
@@ -291,23 +313,31 @@ def encode(fmap: Any, *, texel_samples: int = 50, quant_db: float = 0.0, seed: i
                                 "seed": seed, "v": v})
     except ValueError as e:
         raise EncodeError(str(e)) from None
+    x, notes, gain = _prepare(fmap, fixed["texel_samples"])
+    target = P.map_pattern(x, model)
+    if target.sl_db < 0:
+        notes.append("the map is felt below the detection threshold at its strongest "
+                     "(%.1f dB): it would hardly be felt; encoded by its shape" % target.sl_db)
+    cands = _Candidates(target, x.size, fixed["texel_samples"], fixed["quant_db"], gain, model,
+                        method)
+    pitch, irr = (_search_felt if method == "felt" else _search_w2)(cands)
+    return _report(x, notes, gain, fixed, cands, pitch, irr, intervals, source, t0)
+
+
+def _prepare(fmap: Any, L: int) -> tuple[np.ndarray, list[str], float]:
+    """The cleaned map, the notes so far and the gain (closed form: a texel map
+    gain*(sin+1)/2 has variance gain^2/8, matched to the map's, at most 1)."""
     x, notes = _clean(fmap)
     n = x.size
     var = float(np.var(x))
     if not var > 1e-18:
         raise EncodeError("map: constant (every sample is %.6g): there is no texture to feel, "
                           "nothing to encode (play it as a constant level)" % float(x[0]))
-    target = P.map_pattern(x, model)
     gain = math.sqrt(8.0 * var)
     if gain > 1.005:
         notes.append("the map varies more than a full-scale texel can (its rms asks for gain "
                      "%.3g): gain 1" % gain)
     gain = min(1.0, float("%.4g" % gain))         # 4 significant digits, at most 1
-    L = fixed["texel_samples"]
-    q = fixed["quant_db"]
-    if target.sl_db < 0:
-        notes.append("the map is felt below the detection threshold at its strongest "
-                     "(%.1f dB): it would hardly be felt; encoded by its shape" % target.sl_db)
     if n * DX_MM < 2.0:
         notes.append("a short map (%.3g mm): its spectrum has bins every %.3g c/mm (%.2f dB), "
                      "so lower pitches cannot be told apart"
@@ -318,28 +348,78 @@ def encode(fmap: Any, *, texel_samples: int = 50, quant_db: float = 0.0, seed: i
         notes.append("only %s texel%s of %d samples in the map: a rendering differs much from "
                      "seed to seed, and the distance is to the mean over seeds"
                      % ("%.3g" % (n / L), "" if n <= L else "s", L))
+    return x, notes, gain
 
-    cache: dict[tuple[float, float], tuple[float, P.Pattern]] = {}
 
-    def candidate(pitch: float, irr: float) -> tuple[float, P.Pattern]:
-        pitch = min(max(pitch, BOUNDS[0][0]), BOUNDS[0][1])
+class _Candidates:
+    """Candidate textures' expected felt patterns, cached, and their distance
+    to the map by the method's measure (felt plane or W2)."""
+
+    def __init__(self, target: P.Pattern, n: int, L: int, q: float, gain: float,
+                 model: P.Model, method: str) -> None:
+        self.target, self.n, self.L, self.q, self.gain = target, n, L, q, gain
+        self.model, self.method = model, method
+        self.target_point = target.felt_point()
+        self.cache: dict[tuple[float, float, float], tuple[float, P.Pattern]] = {}
+
+    def __call__(self, pitch: float, irr: float, q: float | None = None
+                 ) -> tuple[float, P.Pattern]:
+        pitch = _clip_pitch(pitch)
         irr = min(max(irr, BOUNDS[1][0]), BOUNDS[1][1])
-        key = (round(pitch, 6), round(irr, 6))
-        if key not in cache:
+        q = self.q if q is None else q
+        key = (round(pitch, 6), round(irr, 6), q)
+        if key not in self.cache:
             pat = P.texel_pattern({"pitch_db": pitch, "irregularity_db": irr,
-                                   "texel_samples": L, "quant_db": q, "gain": gain,
-                                   "length_samples": n}, model=model)
-            cache[key] = (P.w2_db(target, pat), pat)
-        return cache[key]
+                                   "texel_samples": self.L, "quant_db": q, "gain": self.gain,
+                                   "length_samples": self.n}, model=self.model)
+            self.cache[key] = (self.distance(pat), pat)
+        return self.cache[key]
+
+    def distance(self, pat: P.Pattern) -> float:
+        if self.method == "felt":
+            return self.target_point.distance(pat.felt_point())
+        return P.w2_db(self.target, pat)
+
+
+def _nelder_mead(objective: Any, starts: list[tuple[float, float, float]],
+                 bounds: tuple[tuple[float, float], tuple[float, float]] = BOUNDS
+                 ) -> tuple[float, float]:
+    """Nelder-Mead (scipy) within BOUNDS from the best start, and from the best
+    start of another basin (a pitch 2 dB or more away) when it is nearly as
+    good; the better end, rounded to 0.01 dB."""
+    from scipy.optimize import minimize
+    starts = sorted(starts)
+    runs = [starts[0]]
+    other = [s for s in starts[1:] if abs(s[1] - starts[0][1]) >= 2.0]
+    if other and other[0][0] <= 1.5 * starts[0][0] + 0.05:
+        runs.append(other[0])
+    res = None
+    for _, pb, ib in runs:
+        simplex = np.array([[pb, ib], [pb + (1.5 if pb + 1.5 <= bounds[0][1] else -1.5), ib],
+                            [pb, ib + (3.0 if ib + 3.0 <= bounds[1][1] else -3.0)]])
+        r = minimize(objective, np.array([pb, ib]), method="Nelder-Mead", bounds=bounds,
+                     options={"initial_simplex": simplex, "xatol": 0.02, "fatol": 1e-4,
+                              "maxfev": 160})
+        if res is None or r.fun < res.fun:
+            res = r
+    pitch = _clip_pitch(_round_db(float(res.x[0])))
+    irr = min(max(_round_db(float(res.x[1])), bounds[1][0]), bounds[1][1])
+    return pitch, irr
+
+
+def _search_w2(cand: _Candidates) -> tuple[float, float]:
+    """The texture whose felt spectrum is nearest the map's (W2): the starts
+    are a coarse column of irregularities at the felt mean pitch, the felt
+    peak and the band-power peak (what is felt of a high pitch can be mostly
+    its texel borders, low in frequency: the power's peak still says where
+    it is), then +-2 dB of pitch at the best."""
+    target = cand.target
 
     def objective(z: np.ndarray) -> float:
-        return candidate(float(z[0]), float(z[1]))[0]
+        return cand(float(z[0]), float(z[1]))[0]
 
-    # the starts: a coarse column of irregularities at the felt mean pitch, the felt
-    # peak and the band-power peak (what is felt of a high pitch can be mostly its
-    # texel borders, low in frequency: the power's peak still says where it is)
     mean_db, _ = target.moments_db()
-    pitches = []
+    pitches: list[float] = []
     for p0 in (mean_db, 10.0 * float(P.GRID[int(np.argmax(target.felt))]),
                10.0 * float(P.GRID[int(np.argmax(target.band_power))])):
         p0 = _clip_pitch(p0)
@@ -349,70 +429,84 @@ def encode(fmap: Any, *, texel_samples: int = 50, quant_db: float = 0.0, seed: i
     _, pb, ib = min(starts)
     for dp in _COARSE_PITCH:
         starts.append((objective(np.array([pb + dp, ib])), _clip_pitch(pb + dp), ib))
-    starts.sort()
-    # Nelder-Mead from the best start, and from the best start of another basin
-    # (a pitch 2 dB or more away) when it is nearly as good
-    runs = [starts[0]]
-    other = [s for s in starts[1:] if abs(s[1] - starts[0][1]) >= 2.0]
-    if other and other[0][0] <= 1.5 * starts[0][0] + 0.05:
-        runs.append(other[0])
-    res = None
-    for _, pb, ib in runs:
-        simplex = np.array([[pb, ib], [pb + (1.5 if pb + 1.5 <= BOUNDS[0][1] else -1.5), ib],
-                            [pb, ib + (3.0 if ib + 3.0 <= BOUNDS[1][1] else -3.0)]])
-        r = minimize(objective, np.array([pb, ib]), method="Nelder-Mead", bounds=BOUNDS,
-                     options={"initial_simplex": simplex, "xatol": 0.02, "fatol": 1e-4,
-                              "maxfev": 160})
-        if res is None or r.fun < res.fun:
-            res = r
-    pitch, irr = _round_db(float(res.x[0])), _round_db(float(res.x[1]))
-    pitch = _clip_pitch(pitch)
-    irr = min(max(irr, IRREG_DB_MIN), IRREG_DB_MAX)
-    best, pat = candidate(pitch, irr)
+    return _nelder_mead(objective, starts)
 
+
+def _search_felt(cand: _Candidates) -> tuple[float, float]:
+    """The texture whose felt point (pitch, noisiness) is the map's, nearest
+    the sliders' start where several are (TIE_BREAK): the starts are a coarse
+    column of irregularities at the map's felt pitch, 3 dB either side of it
+    and at the sliders' start."""
+    p0, i0 = SLIDER_START_DB
+
+    bounds = (BOUNDS[0], (BOUNDS[1][0], FELT_IRREG_MAX_DB))
+
+    def objective(z: np.ndarray) -> float:
+        p, i = _clip_pitch(float(z[0])), min(max(float(z[1]), bounds[1][0]), bounds[1][1])
+        d = cand(p, i)[0]
+        return d * d + TIE_BREAK * ((p - p0) ** 2 + (i - i0) ** 2)
+
+    felt = cand.target_point.pitch_db
+    pitches: list[float] = []
+    for p in (felt, felt - 3.0, felt + 3.0, p0):
+        p = _clip_pitch(p)
+        if all(abs(p - q) > 0.5 for q in pitches):
+            pitches.append(p)
+    starts = [(objective(np.array([p, i])), p, i) for p in pitches for i in _COARSE_IRREG
+              if i <= FELT_IRREG_MAX_DB]
+    return _nelder_mead(objective, starts, bounds)
+
+
+def _report(x: np.ndarray, notes: list[str], gain: float, fixed: Mapping[str, Any],
+            cand: _Candidates, pitch: float, irr: float, intervals: bool,
+            source: str | None, t0: float) -> dict[str, Any]:
+    """The result dict (encode's docstring) for the chosen texture."""
+    n, L, q, model, target = x.size, cand.L, cand.q, cand.model, cand.target
+    best, pat = cand(pitch, irr)
     texture = _texture(pitch, irr, texel_samples=L, quant_db=q, gain=gain,
                        seed=fixed["seed"], v=fixed["v"])
     texel.validate(texture)                      # what the board will be sent
-
-    ranges = _ranges(candidate, pitch, irr, best) if intervals else None
+    ranges = _ranges(cand, pitch, irr, best) if intervals else None
     quant = {}
     if q == 0:
         for qd in QUANT_COSTS_DB:
-            d, _ = _quant_candidate(x.size, pitch, irr, L, qd, gain, target, model)
-            quant["%g" % qd] = round(d, 3)
-
+            quant["%g" % qd] = round(cand(pitch, irr, qd)[0], 3)
     plan = texel.make_plan(dict(texture, length_samples=n))
     literal = repr(texture).encode("ascii")
-    mean_r, sd_r = pat.moments_db()
-    mean_m, sd_m = target.moments_db()
+    lo_hz, hi_hz = P.skin_band_hz(model)
+    v = model.speed_mm_s
     out: dict[str, Any] = {
         "pitch_db": pitch, "irregularity_db": irr, "gain": gain, "texel_samples": L,
         "quant_db": q, "seed": fixed["seed"], "v": fixed["v"],
         "texture": texture,
+        "method": cand.method,
         "distance_db": round(best, 4),
+        "felt_distance_db": round(cand.target_point.distance(pat.felt_point()), 4),
+        "w2_distance_db": round(P.w2_db(target, pat), 4),
         "ranges": ranges,
-        "felt": {"map": {"pitch_db": round(mean_m, 3), "spread_db": round(sd_m, 3),
-                         "level_db": _finite(target.level_db), "peak_sl_db":
-                             _finite(target.sl_db)},
-                 "rendering": {"pitch_db": round(mean_r, 3), "spread_db": round(sd_r, 3),
-                               "level_db": _finite(pat.level_db),
-                               "peak_sl_db": _finite(pat.sl_db)}},
+        "felt": {"map": _felt(target), "rendering": _felt(pat)},
+        "skin_band": {"hz": [round(lo_hz, 1), round(hi_hz, 1)],
+                      "cpmm": [round(lo_hz / v, 4), round(hi_hz / v, 3)],
+                      "pitch_db_max": round(10.0 * math.log10(hi_hz / v), 2),
+                      "speed_mm_s": v},
         "spectrum": _spectrum(target, pat, n),
-        "quantization": {"cost_db": quant, "equivalent_db": EQUIVALENT_DB} if quant else None,
+        "quantization": {"cost_db": quant, "equivalent_db": _equivalent(cand.method)}
+        if quant else None,
         "compression": {"map_bytes": 2 * n, "map_format": "uint16 (2 bytes per sample, as a "
                         "board holds an uploaded map)", "texture_bytes": len(literal),
                         "texture_format": "the texture as the Python literal a board is sent",
                         "ratio": round(2 * n / len(literal), 1)},
         "aliasing": {"expected_fraction": round(P.expected_aliased_fraction(texture), 6),
+                     "map_top_band_fraction": round(_top_band_fraction(x), 6),
                      "drawn_fraction": round(plan.fraction_above_nyquist(), 6),
                      "drawn_texels": plan.above_nyquist, "texels": plan.count,
                      "nyquist_cpmm": round(NYQUIST_CPMM, 4)},
         "map": {"samples": n, "length_mm": round(n * DX_MM, 4), "mean": round(float(x.mean()), 6),
-                "rms": round(math.sqrt(var), 6), "min": round(float(x.min()), 6),
+                "rms": round(float(x.std()), 6), "min": round(float(x.min()), 6),
                 "max": round(float(x.max()), 6)},
         "model": model.as_dict(),
         "notes": notes,
-        "evaluations": len(cache),
+        "evaluations": len(cand.cache),
         "seconds": None,
     }
     if source is not None:
@@ -421,19 +515,38 @@ def encode(fmap: Any, *, texel_samples: int = 50, quant_db: float = 0.0, seed: i
     return out
 
 
+def _top_band_fraction(x: np.ndarray) -> float:
+    """The share of the map's power in the top 0.1 decade below Nyquist (74.9 ..
+    94.3 c/mm): a map with none there has nothing a texture must alias to
+    match (docs/encoder.md, "aliasing")."""
+    f, p = P.periodogram(x)
+    total = float(p[1:].sum())
+    top = float(p[f >= NYQUIST_CPMM / 10 ** 0.1].sum())
+    return top / total if total > 0.0 else 0.0
+
+
+def _felt(pat: P.Pattern) -> dict[str, Any]:
+    """A pattern's felt point, its unfused spread, level and strongest band."""
+    mean, sd = pat.moments_db()
+    fp = pat.felt_point()
+    return {"pitch_db": round(fp.pitch_db, 3), "noisiness_db": round(fp.noisiness_db, 3),
+            "tonal": round(fp.tonal, 4), "spread_db": round(sd, 3),
+            "level_db": _finite(pat.level_db), "peak_sl_db": _finite(pat.sl_db)}
+
+
+def _equivalent(method: str) -> float:
+    """What 'feels the same' is for a method: within the felt plane's
+    difference threshold (perception.JND_DB), or within EQUIVALENT_DB of the
+    W2 minimum."""
+    return P.JND_DB if method == "felt" else EQUIVALENT_DB
+
+
 def _clip_pitch(p: float) -> float:
     return min(max(p, BOUNDS[0][0]), BOUNDS[0][1])
 
 
 def _finite(x: float) -> float | None:
     return round(float(x), 3) if math.isfinite(x) else None
-
-
-def _quant_candidate(n: int, pitch: float, irr: float, L: int, q: float, gain: float,
-                     target: P.Pattern, model: P.Model) -> tuple[float, P.Pattern]:
-    pat = P.texel_pattern({"pitch_db": pitch, "irregularity_db": irr, "texel_samples": L,
-                           "quant_db": q, "gain": gain, "length_samples": n}, model=model)
-    return P.w2_db(target, pat), pat
 
 
 def _interval(f: Any, lo: float, hi: float, x0: float, limit: float, grid: np.ndarray
@@ -455,16 +568,20 @@ def _interval(f: Any, lo: float, hi: float, x0: float, limit: float, grid: np.nd
     return [round(float(left), 2), round(float(right), 2)]
 
 
-def _ranges(candidate: Any, pitch: float, irr: float, best: float) -> dict[str, Any]:
-    """Each parameter's range (the other held) whose distance to the map is
-    within EQUIVALENT_DB of the minimum: where it is wide, the parameter is
-    not identifiable from what a finger feels."""
-    limit = best + EQUIVALENT_DB
+def _ranges(candidate: _Candidates, pitch: float, irr: float, best: float) -> dict[str, Any]:
+    """Each parameter's range (the other held) that feels the same as the map:
+    felt method, a felt distance within perception.JND_DB (or within
+    EQUIVALENT_DB of the chosen texture's, when that is farther); W2, within
+    EQUIVALENT_DB of the minimum. Where it is wide, the parameter is not
+    identifiable from what a finger feels."""
+    eq = _equivalent(candidate.method)
+    limit = max(eq, best + EQUIVALENT_DB) if candidate.method == "felt" else best + eq
     pg = pitch + np.array([-6, -4, -3, -2, -1.5, -1, -0.6, -0.3, 0.3, 0.6, 1, 1.5, 2, 3, 4, 6])
     ig = np.arange(IRREG_DB_MIN, IRREG_DB_MAX + 0.5, 1.0)
     pr = _interval(lambda p: candidate(p, irr)[0], *BOUNDS[0], pitch, limit, pg)
     ir = _interval(lambda i: candidate(pitch, i)[0], *BOUNDS[1], irr, limit, ig)
-    return {"pitch_db": pr, "irregularity_db": ir, "equivalent_db": EQUIVALENT_DB}
+    return {"pitch_db": pr, "irregularity_db": ir, "equivalent_db": eq,
+            "limit_db": round(limit, 4)}
 
 
 def _spectrum(target: P.Pattern, pat: P.Pattern, n: int) -> dict[str, Any]:

@@ -103,6 +103,30 @@ RESOLUTION_DECADES = 0.1
 # 10 dB. It decides how much the weak harmonics of the square and sawtooth
 # waves count (docs/encoder.md: the references without masking).
 MASKING_DB = 10.0
+# The fingertip's mechanics. The display modulates friction, i.e. the lateral
+# FORCE on the finger; what the receptors feel is the skin's displacement. The
+# fingertip's tangential impedance is elastic below ~100 Hz (displacement per
+# unit force flat) and viscous above (force ~ velocity: displacement per unit
+# force falls as 1/f, -6 dB/octave): Wiertlewski & Hayward (2012), "Mechanical
+# behavior of the fingertip in the range of frequencies and displacements
+# relevant to touch", J Biomech 45:1869-1874. The force threshold is the
+# displacement threshold (threshold_db) plus 20*log10(f / 100 Hz) above 100 Hz.
+FINGERTIP_CORNER_HZ = 100.0
+# Fusion of discrete lines (seed 000, quantization discussion, citing Friesen
+# et al.: several discrete frequency components are felt as ONE dominant
+# frequency at their weighted mean; noisiness is felt from wide-band content).
+# A periodogram bin is a line when it stands LINE_DB above the geometric mean
+# of the bins within +-RESOLUTION_DECADES of it: a bin of a noise periodogram
+# (exponential, geometric mean 0.56 of its mean) does so with probability
+# exp(-31.6 * 0.56) = 2e-8, a spectral line of a sine or a harmonic by tens of
+# dB. OUR CHOICE of 15 dB (docs/encoder.md: the calibration's table).
+LINE_DB = 15.0
+LINE_MIN_BINS = 8               # the floor's window: at least +-8 bins (low frequencies)
+# A "difference threshold" on the felt plane (felt pitch, noisiness), in dB:
+# the frequency resolution's 0.1 decade (Weber fraction ~0.25, LaMotte &
+# Mountcastle 1975, above). Two textures whose felt points are nearer than
+# this feel the same (texelpad.study.participant answers "unsure" below it).
+JND_DB = 10.0 * RESOLUTION_DECADES
 
 FULL_SCALE_POWER = 0.125        # variance of a full-scale sine map (y+1)/2, y = sin: 1/8
 SEGMENT_MAX = 32768             # longest FFT; longer maps: averaged 50 %-overlapped segments
@@ -126,37 +150,75 @@ class Model:
     full_scale_sl_db: float = FULL_SCALE_SL_DB
     masking_db: float | None = MASKING_DB
     resolution_decades: float = RESOLUTION_DECADES
+    slope_above_db_per_octave: float = SLOPE_ABOVE_DB_PER_OCTAVE
+    fingertip_corner_hz: float | None = FINGERTIP_CORNER_HZ
+    line_db: float | None = LINE_DB
 
     def __post_init__(self) -> None:
         for name, lo, hi in (("speed_mm_s", 1.0, 10000.0), ("full_scale_sl_db", -20.0, 200.0),
-                             ("resolution_decades", 0.02, 1.0)):
+                             ("resolution_decades", 0.02, 1.0),
+                             ("slope_above_db_per_octave", 0.0, 60.0)):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and lo <= v <= hi):
                 raise ValueError("%s: expected a number in [%g, %g], got %r" % (name, lo, hi, v))
-        m = self.masking_db
-        if m is not None and not (isinstance(m, (int, float)) and math.isfinite(m)
-                                  and 0.0 <= m <= 200.0):
-            raise ValueError("masking_db: expected None or a number in [0, 200], got %r" % (m,))
+        for name, lo, hi in (("masking_db", 0.0, 200.0), ("fingertip_corner_hz", 1.0, 10000.0),
+                             ("line_db", 3.0, 100.0)):
+            m = getattr(self, name)
+            if m is not None and not (isinstance(m, (int, float)) and math.isfinite(m)
+                                      and lo <= m <= hi):
+                raise ValueError("%s: expected None or a number in [%g, %g], got %r"
+                                 % (name, lo, hi, m))
 
     def as_dict(self) -> dict[str, Any]:
         return {"speed_mm_s": self.speed_mm_s, "full_scale_sl_db": self.full_scale_sl_db,
                 "masking_db": self.masking_db, "resolution_decades": self.resolution_decades,
                 "knee_hz": KNEE_HZ, "best_hz": BEST_HZ,
                 "slope_below_db_per_octave": SLOPE_BELOW_DB_PER_OCTAVE,
-                "slope_above_db_per_octave": SLOPE_ABOVE_DB_PER_OCTAVE}
+                "slope_above_db_per_octave": self.slope_above_db_per_octave,
+                "fingertip_corner_hz": self.fingertip_corner_hz, "line_db": self.line_db,
+                "jnd_db": JND_DB}
 
 
 DEFAULT_MODEL = Model()
 
 
-def threshold_db(hz: Any) -> np.ndarray:
-    """Detection threshold at vibration frequency hz (Hz), in dB re its
-    minimum at BEST_HZ: flat below KNEE_HZ (31.7 dB), -12 dB/octave from
-    KNEE_HZ to BEST_HZ, +12 dB/octave above (the constants' sources above)."""
+def threshold_db(hz: Any, slope_above: float = SLOPE_ABOVE_DB_PER_OCTAVE) -> np.ndarray:
+    """Displacement detection threshold at vibration frequency hz (Hz), in dB
+    re its minimum at BEST_HZ: flat below KNEE_HZ (31.7 dB), -12 dB/octave
+    from KNEE_HZ to BEST_HZ, +slope_above dB/octave above (the constants'
+    sources above)."""
     nu = np.maximum(np.asarray(hz, dtype=float), 1e-12)
     below = SLOPE_BELOW_DB_PER_OCTAVE * np.log2(BEST_HZ / np.clip(nu, KNEE_HZ, BEST_HZ))
-    above = SLOPE_ABOVE_DB_PER_OCTAVE * np.log2(np.maximum(nu, BEST_HZ) / BEST_HZ)
+    above = slope_above * np.log2(np.maximum(nu, BEST_HZ) / BEST_HZ)
     return below + above
+
+
+def force_threshold_db(hz: Any, model: "Model | None" = None) -> np.ndarray:
+    """Detection threshold for the display's lateral-force modulation at hz,
+    in dB re its value at BEST_HZ (its minimum): threshold_db plus the
+    fingertip's viscous fall of displacement per unit force above
+    FINGERTIP_CORNER_HZ (none when model.fingertip_corner_hz is None)."""
+    model = DEFAULT_MODEL if model is None else model
+    nu = np.maximum(np.asarray(hz, dtype=float), 1e-12)
+    t = threshold_db(nu, model.slope_above_db_per_octave)
+    fc = model.fingertip_corner_hz
+    if fc is not None:
+        t = t + 20.0 * (np.log10(np.maximum(nu, fc) / fc) - math.log10(max(BEST_HZ, fc) / fc))
+    return t
+
+
+def skin_band_hz(model: "Model | None" = None) -> tuple[float, float]:
+    """The skin's band for this display: the vibration frequencies (Hz) at
+    which a full-scale modulation is above the force threshold, i.e.
+    force_threshold_db < model.full_scale_sl_db (0.1 Hz .. 100 kHz searched
+    on a 1 % grid; the lower end is 0.1 Hz when the threshold is flat
+    below KNEE_HZ within reach)."""
+    model = DEFAULT_MODEL if model is None else model
+    hz = np.logspace(-1, 5, 1201)
+    ok = np.nonzero(force_threshold_db(hz, model) < model.full_scale_sl_db)[0]
+    if ok.size == 0:
+        return (math.nan, math.nan)
+    return float(hz[ok[0]]), float(hz[ok[-1]])
 
 
 # --- spectra -----------------------------------------------------------------------
@@ -393,11 +455,34 @@ def _kernel(resolution: float) -> np.ndarray:
     return np.exp(-0.5 * x * x)
 
 
-@functools.lru_cache(maxsize=8)
-def _thresholds(speed: float, sl_db: float) -> tuple[np.ndarray, np.ndarray]:
+@functools.lru_cache(maxsize=32)
+def _thresholds(model: "Model") -> tuple[np.ndarray, np.ndarray]:
     """(band power at threshold on GRID, Pacinian-channel mask on GRID)."""
-    hz = speed * 10.0 ** GRID
-    return FULL_SCALE_POWER * 10.0 ** ((threshold_db(hz) - sl_db) / 10.0), hz >= KNEE_HZ
+    hz = model.speed_mm_s * 10.0 ** GRID
+    thr = force_threshold_db(hz, model)
+    return (FULL_SCALE_POWER * 10.0 ** ((thr - model.full_scale_sl_db) / 10.0),
+            hz >= KNEE_HZ)
+
+
+def line_bins(P: np.ndarray, m: int, line_db: float | None = LINE_DB) -> np.ndarray:
+    """Which bins of a periodogram P (power per bin, m-sample segments) are
+    spectral lines: at least line_db above the geometric mean of the bins
+    within +-RESOLUTION_DECADES of them (at least LINE_MIN_BINS each side).
+    A boolean array like P; none when line_db is None. O(n): cumulative sums."""
+    P = np.asarray(P, dtype=np.float64)
+    if line_db is None or P.size < 3:
+        return np.zeros(P.shape, dtype=bool)
+    k = np.arange(P.size)
+    top = float(P.max())
+    logp = np.log(np.maximum(P, top * 1e-30 if top > 0 else 1e-300))
+    c = np.concatenate(([0.0], np.cumsum(logp)))
+    r = 10.0 ** RESOLUTION_DECADES
+    lo = np.clip(np.minimum(np.floor(k / r), k - LINE_MIN_BINS), 1, P.size - 1).astype(np.int64)
+    hi = np.clip(np.maximum(np.ceil(k * r), k + LINE_MIN_BINS), 1, P.size - 1).astype(np.int64)
+    floor = (c[hi + 1] - c[lo]) / (hi + 1 - lo)
+    line = logp > floor + line_db * math.log(10.0) / 10.0
+    line[0] = False                                 # DC: the mean, removed
+    return line & (P > 0)
 
 
 @dataclass(frozen=True)
@@ -411,6 +496,8 @@ class Pattern:
     level_db: float
     sl_db: float
     model: Model = field(default=DEFAULT_MODEL)
+    # the part of `felt` that comes from spectral lines (line_bins), on GRID
+    line_felt: np.ndarray | None = None
 
     @property
     def log10_f(self) -> np.ndarray:
@@ -434,6 +521,65 @@ class Pattern:
         sd = math.sqrt(max(float(np.sum(d * (GRID - mu) ** 2)), 0.0))
         return 10.0 * mu, 10.0 * sd
 
+    def felt_point(self) -> "FeltPoint":
+        """Where this texture sits on the felt plane (FeltPoint): the felt
+        pitch (weighted mean of log f over the felt power) and the felt
+        noisiness (the felt power's SD over log f, its lines fused into one
+        pitch at their weighted mean, felt with the resolution's width).
+        ValueError when nothing is felt."""
+        d = self.distribution()
+        mu = float(np.sum(d * GRID))
+        res = self.model.resolution_decades
+        tonal = 0.0
+        if self.line_felt is not None:
+            tonal = min(1.0, max(0.0, float(self.line_felt.sum()) / float(self.felt.sum())))
+        cont = d * (1.0 - tonal) if self.line_felt is None else \
+            (self.felt - self.line_felt) / float(self.felt.sum())
+        cont = np.maximum(cont, 0.0)
+        var = 0.0
+        wc = float(cont.sum())
+        if wc > 0.0:
+            mc = float(np.sum(cont * GRID)) / wc
+            var += wc * (float(np.sum(cont * (GRID - mc) ** 2)) / wc + (mc - mu) ** 2)
+        if tonal > 0.0:
+            assert self.line_felt is not None
+            dl = self.line_felt / float(self.felt.sum())
+            ml = float(np.sum(dl * GRID)) / max(float(dl.sum()), 1e-300)
+            var += tonal * (res * res + (ml - mu) ** 2)
+        sd = math.sqrt(max(var, 1e-12))
+        return FeltPoint(10.0 * mu, 10.0 * math.log10(sd), self.level_db, tonal)
+
+
+@dataclass(frozen=True)
+class FeltPoint:
+    """A texture on the felt plane: pitch_db (10*log10 of the felt weighted
+    mean frequency, c/mm), noisiness_db (10*log10 of the fused felt spread,
+    decades: -10 dB is a single pitch felt at the resolution's 0.1 decade),
+    level_db (felt power re a full-scale sine) and tonal (the fraction of the
+    felt power in spectral lines, 0..1)."""
+    pitch_db: float
+    noisiness_db: float
+    level_db: float
+    tonal: float
+
+    def distance(self, other: "FeltPoint") -> float:
+        """How far apart two textures feel, in dB: the Euclidean distance of
+        (pitch, noisiness), both in the papers' dB convention (pitch
+        10*log10 c/mm, noisiness 10*log10 decades like the irregularity
+        slider). How it relates to w2_db: for Gaussian felt distributions
+        W2 = sqrt(dpitch^2 + (10*dsd)^2), sd in decades - the same pitch
+        term, the spread counted linearly instead of as a ratio; for two
+        textures of one spread both are |dpitch|. The level is not in it
+        (the encoder matches it with the gain)."""
+        return math.hypot(self.pitch_db - other.pitch_db,
+                          self.noisiness_db - other.noisiness_db)
+
+    def as_dict(self) -> dict[str, float]:
+        return {"pitch_db": round(self.pitch_db, 3),
+                "noisiness_db": round(self.noisiness_db, 3),
+                "level_db": round(self.level_db, 3) if math.isfinite(self.level_db) else None,
+                "tonal": round(self.tonal, 4)}
+
 
 def pattern_of_spectrum(P: np.ndarray, m: int, model: Model = DEFAULT_MODEL) -> Pattern:
     """The felt pattern of a periodogram P (power per bin, len m//2+1) of
@@ -442,8 +588,16 @@ def pattern_of_spectrum(P: np.ndarray, m: int, model: Model = DEFAULT_MODEL) -> 
     p = P[k]
     raw = np.bincount(i0, weights=p * (1.0 - frac), minlength=GRID.size) \
         + np.bincount(i0 + 1, weights=p * frac, minlength=GRID.size)
-    E = np.convolve(raw[:GRID.size], _kernel(model.resolution_decades), mode="same")
-    e_thr, pac = _thresholds(model.speed_mm_s, model.full_scale_sl_db)
+    kern = _kernel(model.resolution_decades)
+    E = np.convolve(raw[:GRID.size], kern, mode="same")
+    lines = line_bins(P, m, model.line_db)
+    E_line = None
+    if lines.any():
+        pl = np.where(lines[k], p, 0.0)
+        raw_l = np.bincount(i0, weights=pl * (1.0 - frac), minlength=GRID.size) \
+            + np.bincount(i0 + 1, weights=pl * frac, minlength=GRID.size)
+        E_line = np.convolve(raw_l[:GRID.size], kern, mode="same")
+    e_thr, pac = _thresholds(model)
     ratio = E / e_thr
     felt = E * -np.expm1(-ratio)
     if model.masking_db is not None:
@@ -459,7 +613,12 @@ def pattern_of_spectrum(P: np.ndarray, m: int, model: Model = DEFAULT_MODEL) -> 
     total = float(felt.sum()) * GRID_STEP / (math.sqrt(2.0 * math.pi) * model.resolution_decades)
     level = 10.0 * math.log10(total / FULL_SCALE_POWER) if total > 0.0 else -math.inf
     sl = 10.0 * math.log10(float(ratio.max())) if float(ratio.max()) > 0.0 else -math.inf
-    return Pattern(E, felt, level, sl, model)
+    line_felt = None
+    if E_line is not None:
+        with np.errstate(invalid="ignore", divide="ignore"):
+            share = np.where(E > 0.0, np.clip(E_line / np.maximum(E, 1e-300), 0.0, 1.0), 0.0)
+        line_felt = felt * share
+    return Pattern(E, felt, level, sl, model, line_felt)
 
 
 def map_pattern(fmap: MapLike, model: Model = DEFAULT_MODEL) -> Pattern:
@@ -524,3 +683,25 @@ def distance(a: Any, b: Any, model: Model = DEFAULT_MODEL, n: int | None = None)
                 n = int(np.asarray(x).size)
                 break
     return w2_db(as_pattern(a, n, model), as_pattern(b, n, model))
+
+
+def felt_point(x: Any, n: int | None = None, model: Model = DEFAULT_MODEL) -> FeltPoint:
+    """The FeltPoint of a friction map, a texel texture dict (its expected
+    pattern, n samples long: default its length_samples) or a Pattern."""
+    return as_pattern(x, n, model).felt_point()
+
+
+def felt_distance(a: Any, b: Any, model: Model = DEFAULT_MODEL, n: int | None = None) -> float:
+    """How different two textures feel, in dB on the felt plane
+    (FeltPoint.distance): maps, texture dicts, Patterns or FeltPoints (n as
+    in distance()). Below JND_DB they feel the same. The distance the lab's
+    simulated participant, `texelpad brush compare` and the quantization
+    test's expected similarity use."""
+    if n is None:
+        for x in (a, b):
+            if not isinstance(x, (Pattern, Mapping, FeltPoint)):
+                n = int(np.asarray(x).size)
+                break
+    pa = a if isinstance(a, FeltPoint) else felt_point(a, n, model)
+    pb = b if isinstance(b, FeltPoint) else felt_point(b, n, model)
+    return pa.distance(pb)

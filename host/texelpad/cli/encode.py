@@ -20,11 +20,12 @@ _FLAG_OF = {"reference": "--reference", "length": "--length", "scene": "--scene"
 def add_encode(p: argparse.ArgumentParser) -> None:
     p.description = (
         "Encode a friction map as Single-Pitch Texel parameters that feel the same: pitch and "
-        "irregularity (and gain) chosen to minimise the distance between the felt spectra "
-        "of the map and of the texture (a model of what a sliding fingertip feels: "
-        "docs/encoder.md). Prints the texture a board plays and the report: both spectra on a "
-        "log-frequency axis, the distance, the range of each parameter that feels the same, "
-        "what quantization costs, the compression and the fraction of aliased texels. The map: "
+        "irregularity (and gain) chosen so that the texture's felt pitch and noisiness equal "
+        "the map's (a model of what a sliding fingertip feels, calibrated on the trained "
+        "rater's matches: docs/encoder.md). Prints the texture as JSON that pastes into a "
+        "scene region, and the report: the felt points, both spectra on a log-frequency axis, "
+        "the range of each parameter that feels the same, what quantization costs, the "
+        "compression and the fraction of aliased texels. The map: "
         "a FILE (.csv: one number per line or a 'friction' column, as `texelpad render --out` "
         "writes it; .npy: float, or uint16 as a board stores it), a study reference "
         "(--reference) or a scene region (--scene, --region); one sample is 5.3 um.")
@@ -50,6 +51,10 @@ def add_encode(p: argparse.ArgumentParser) -> None:
                      help=FORMAT_HELP)
     p.add_argument("--speed", type=positive_float, metavar="MM_S",
                    help="the finger's sliding speed in the perceptual model (default 86 mm/s)")
+    p.add_argument("--method", choices=("felt", "w2"), default="felt",
+                   help="felt (default): match the felt pitch and noisiness, as people "
+                        "match; w2: match the whole felt spectrum (recovers a texel "
+                        "rendering's own parameters, even above the skin's band)")
     p.add_argument("--no-ranges", action="store_true",
                    help="skip the scan for the range of each parameter that feels the same "
                         "(about half the time)")
@@ -112,7 +117,7 @@ def cmd_encode(args: argparse.Namespace) -> int:
     try:
         res = E.encode(fmap, texel_samples=args.texel_samples, quant_db=args.quant_db,
                        seed=args.seed, v=args.v, model=model, intervals=not args.no_ranges,
-                       source=source)
+                       source=source, method=args.method)
     except ValueError as e:                 # EncodeError, and validate's own
         raise _error(e) from None
     res["notes"] = notes + res["notes"]
@@ -131,24 +136,29 @@ def summary(res: dict) -> str:
     lines = ["%s: %s samples (%.4g mm), mean %.3g, rms %.3g"
              % (res.get("source", "map"), format(m["samples"], ","), m["length_mm"], m["mean"],
                 m["rms"]),
-             "texture    %r" % tex,
+             "texture    %s" % scene_texture_json(tex),
              "           pitch %.2f dB (%.4g c/mm), irregularity %.2f dB (%.3g decade), gain %.4g"
              % (tex["pitch_db"], 10 ** (tex["pitch_db"] / 10), tex["irregularity_db"],
-                10 ** (tex["irregularity_db"] / 10), tex["gain"]),
-             "distance   %.3f dB (felt spectra, 2-Wasserstein on log frequency; 0 = the same, "
-             "two pitches d dB apart: d)" % res["distance_db"]]
+                10 ** (tex["irregularity_db"] / 10), tex["gain"])]
+    fm, fr = res["felt"]["map"], res["felt"]["rendering"]
+    lines.append("felt       pitch %.2f dB, noisiness %.2f dB (map); %.2f dB, %.2f dB (texture); "
+                 "level %s dB re full scale"
+                 % (fm["pitch_db"], fm["noisiness_db"], fr["pitch_db"], fr["noisiness_db"],
+                    "%.1f" % fm["level_db"] if fm["level_db"] is not None else "-inf"))
+    lines.append("distance   %.3f dB on the felt plane (pitch, noisiness; under %.2g dB feels the "
+                 "same), %.3f dB between the felt spectra (2-Wasserstein)%s"
+                 % (res["felt_distance_db"], res["model"]["jnd_db"], res["w2_distance_db"],
+                    "" if res["method"] == "felt" else "; minimised: the second"))
     rg = res.get("ranges")
     if rg:
         lines.append("same feel  pitch %.2f .. %.2f dB, irregularity %.2f .. %.2f dB (within "
-                     "%.2g dB of the minimum, the other held)%s"
+                     "%.3g dB, the other held)%s"
                      % (rg["pitch_db"][0], rg["pitch_db"][1], rg["irregularity_db"][0],
-                        rg["irregularity_db"][1], rg["equivalent_db"],
-                        _unidentified(rg)))
-    fm, fr = res["felt"]["map"], res["felt"]["rendering"]
-    lines.append("felt       pitch %.2f dB, spread %.2f dB (map); %.2f dB, %.2f dB (texture); "
-                 "level %s dB re full scale"
-                 % (fm["pitch_db"], fm["spread_db"], fr["pitch_db"], fr["spread_db"],
-                    "%.1f" % fm["level_db"] if fm["level_db"] is not None else "-inf"))
+                        rg["irregularity_db"][1], rg["limit_db"], _unidentified(rg)))
+    sb = res["skin_band"]
+    lines.append("skin band  up to %.0f Hz at %g mm/s: %.3g c/mm (%.2f dB); a full-scale "
+                 "modulation above it is not felt" % (sb["hz"][1], sb["speed_mm_s"],
+                                                      sb["cpmm"][1], sb["pitch_db_max"]))
     qz = res.get("quantization")
     if qz:
         lines.append("quantized  distance with the pitch quantized to " + ", ".join(
@@ -158,8 +168,9 @@ def summary(res: dict) -> str:
                  "%gx" % (format(c["map_bytes"], ","), c["texture_bytes"], c["ratio"]))
     a = res["aliasing"]
     lines.append("aliasing   %.2f %% of texels expected above Nyquist (%.2f c/mm); %d of %d "
-                 "drawn with seed %d" % (100 * a["expected_fraction"], a["nyquist_cpmm"],
-                                         a["drawn_texels"], a["texels"], tex["seed"]))
+                 "drawn with seed %d; the map has %.2f %% of its power in the top 0.1 decade"
+                 % (100 * a["expected_fraction"], a["nyquist_cpmm"], a["drawn_texels"],
+                    a["texels"], tex["seed"], 100 * a["map_top_band_fraction"]))
     sp = res["spectrum"]
     lines.append("spectrum   band power (dB re full-scale sine) and share of the felt power (%)")
     lines.append("             c/mm     map  texture   felt map  felt texture")
@@ -177,6 +188,12 @@ def summary(res: dict) -> str:
     lines.append("encoded in %.3f s (%d candidate textures)" % (res["seconds"],
                                                               res["evaluations"]))
     return "\n".join(lines)
+
+
+def scene_texture_json(tex: dict) -> str:
+    """The texture as the JSON a scene region's "texture" takes (kind texel
+    first), one line: it pastes into a scene file as it stands."""
+    return json.dumps(dict({"kind": "texel"}, **tex))
 
 
 def _unidentified(rg: dict) -> str:
