@@ -69,6 +69,9 @@ def test_fit_design_paint_show_compare(capsys, tmp_path):
     assert "wavenumbers 1..%d:" % B.NYQ in o
     code, o, e = run_cli(capsys, "brush", "compare", str(out), str(d2))
     assert code == 0 and "braycurtis distance" in o and "ranges differ" in e
+    assert "felt distance" in o and "dB" in o
+    code, o, e = run_cli(capsys, "brush", "compare", str(out), str(out))
+    assert code == 0 and "felt distance %s .. %s: 0.00 dB (the same" % (out, out) in o
 
 
 @pytest.mark.parametrize("argv, fragment", [

@@ -12,15 +12,19 @@ The model (docs/lab-benchmark.md):
   geometric mean frequency and SD of log10 f; that module's docstring);
 - the participant: texelpad.study.participant.SimulatedParticipant aiming
   at that point, noise SD given in dB of pitch (its own unit is the
-  normalised space's: 1 dB = 1/40 = 0.025, texelpad.study.space), never
-  "unsure" (unsure_below = 0);
+  normalised space's: 1 dB = 1/40 = 0.025, texelpad.study.space). --feel
+  felt (the default): it feels the distance on the felt plane
+  (texelpad.analysis.perception: felt pitch and noisiness) and answers
+  "unsure" within one difference threshold (1 dB); --feel plane: the
+  Euclidean oracle of the unit square, never "unsure";
 - an answer: the pursuit - one pairwise comparison (20 in all, 5 trials of
   4; the centre moves after every fourth); the search - one pick of 3
   candidates (one CMA-ES iteration), up to --max-answers. Both start at the
   centre (0.5, 0.5);
 - the estimate: the pursuit's centre, the search's mean; its distance to
-  the target is Euclidean in (pitch dB, irregularity dB) - 40 dB per unit of
-  u, 30 dB per unit of v - and "within 1 dB" is distance <= 1 dB. Counted:
+  the target is the participant's own: on the felt plane (felt), or
+  Euclidean in (pitch dB, irregularity dB) - 40 dB per unit of u, 30 dB per
+  unit of v - (plane); "within 1 dB" is distance <= 1 dB. Counted:
   the answers until the estimate is first within 1 dB (0 = at the start),
   whether it is within 1 dB after the last answer, the final distance.
 
@@ -46,7 +50,8 @@ from typing import Callable, Sequence
 
 from ..search.preference import PreferenceSearch
 from ..study import references as R
-from ..study.participant import SimulatedParticipant
+from ..analysis.perception import JND_DB
+from ..study.participant import FEELS, SimulatedParticipant
 from ..study.pursuit import Pursuit
 from ..study.space import PITCH_DB_PER_U, Point, irregularity_db, pitch_db
 
@@ -66,33 +71,43 @@ def distance_db(u: float, v: float, target: Point) -> float:
                       irregularity_db(v) - irregularity_db(target.v))
 
 
-def _participant(target: Point, noise_db: float, seed: int) -> SimulatedParticipant:
+def _participant(target: Point, noise_db: float, seed: int, feel: str) -> SimulatedParticipant:
     # SimulatedParticipant's noise is in normalised units (participant.py: 0.025 = 1 dB of pitch)
-    return SimulatedParticipant(target, noise=noise_db / PITCH_DB_PER_U, seed=seed)
+    return SimulatedParticipant(target, noise=noise_db / PITCH_DB_PER_U, seed=seed, feel=feel,
+                                unsure_below=0.0 if feel == "plane" else None)
 
 
-def run_pursuit(target: Point, noise_db: float, seed: int) -> list[float]:
+def _distance(who: SimulatedParticipant, u: float, v: float) -> float:
+    """The estimate's distance to the target in dB, by the participant's own
+    measure (module docstring)."""
+    if who.feel == "plane":
+        return distance_db(u, v, who.target)
+    return who.distance(Point(u, v)) * PITCH_DB_PER_U
+
+
+def run_pursuit(target: Point, noise_db: float, seed: int, feel: str = "felt") -> list[float]:
     """The distance (dB) of the pursuit's centre after 0, 1, ..., 20 answers."""
-    who = _participant(target, noise_db, seed)
+    who = _participant(target, noise_db, seed, feel)
     pv = Pursuit(seed=seed + PROTOCOL_SEED_OFFSET)
-    curve = [distance_db(pv.centre.u, pv.centre.v, target)]
+    curve = [_distance(who, pv.centre.u, pv.centre.v)]
     while not pv.done:
         q = pv.next_comparison()
         pv.answer(who.compare(q.a, q.b))
-        curve.append(distance_db(pv.centre.u, pv.centre.v, target))
+        curve.append(_distance(who, pv.centre.u, pv.centre.v))
     return curve
 
 
-def run_search(target: Point, noise_db: float, seed: int, max_answers: int) -> list[float]:
+def run_search(target: Point, noise_db: float, seed: int, max_answers: int,
+               feel: str = "felt") -> list[float]:
     """The distance (dB) of the search's mean after 0, 1, ..., max_answers picks."""
-    who = _participant(target, noise_db, seed)
+    who = _participant(target, noise_db, seed, feel)
     s = PreferenceSearch(seed=seed + PROTOCOL_SEED_OFFSET, x0=(0.5, 0.5))
     u, v = s.mean
-    curve = [distance_db(u, v, target)]
+    curve = [_distance(who, u, v)]
     for _ in range(max_answers):
         s.choose(who.pick(s.ask()))
         u, v = s.mean[:2]
-        curve.append(distance_db(u, v, target))
+        curve.append(_distance(who, u, v))
     return curve
 
 
@@ -127,8 +142,10 @@ def summarise(runs: list[dict], at: int) -> dict:
 
 def run(references: Sequence[str] = R.REFERENCES, seeds: int = DEFAULT_SEEDS,
         noise_db: Sequence[float] = DEFAULT_NOISE_DB, max_answers: int = DEFAULT_MAX_ANSWERS,
-        progress: Progress | None = None) -> dict:
+        progress: Progress | None = None, feel: str = "felt") -> dict:
     """Every (reference, noise, seed, method) run and the summaries."""
+    if feel not in FEELS:
+        raise ValueError("feel: expected one of %s, got %r" % (", ".join(FEELS), feel))
     if seeds < 1 or max_answers < 1:
         raise ValueError("seeds and max_answers: expected >= 1, got %r, %r" % (seeds, max_answers))
     if any(not (n >= 0.0 and math.isfinite(n)) for n in noise_db):
@@ -145,8 +162,8 @@ def run(references: Sequence[str] = R.REFERENCES, seeds: int = DEFAULT_SEEDS,
         for noise in noise_db:
             for seed in range(seeds):
                 for method in METHODS:
-                    curve = (run_pursuit(t, noise, seed) if method == "pursuit"
-                             else run_search(t, noise, seed, max_answers))
+                    curve = (run_pursuit(t, noise, seed, feel) if method == "pursuit"
+                             else run_search(t, noise, seed, max_answers, feel))
                     results.append({"reference": name, "noise_db": noise, "seed": seed,
                                     "method": method, "answers": len(curve) - 1,
                                     "answers_to_1db": first_within(curve),
@@ -168,7 +185,8 @@ def run(references: Sequence[str] = R.REFERENCES, seeds: int = DEFAULT_SEEDS,
                        "noise_db": list(noise_db), "max_answers": max_answers,
                        "pursuit_answers": pursuit_answers, "within_db": WITHIN_DB,
                        "protocol_seed_offset": PROTOCOL_SEED_OFFSET,
-                       "weighting": R.WEIGHTING, "x0": [0.5, 0.5]},
+                       "weighting": R.WEIGHTING, "x0": [0.5, 0.5], "feel": feel,
+                       "unsure_db": 0.0 if feel == "plane" else JND_DB},
             "targets": targets, "results": results, "summary": summary,
             "seconds": time.perf_counter() - t0}
 
@@ -309,6 +327,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="participant noise SD in dB of pitch (default 0 1)")
     p.add_argument("--max-answers", type=int, default=DEFAULT_MAX_ANSWERS,
                    help="the search's answers (picks) per run (default %(default)s)")
+    p.add_argument("--feel", choices=FEELS, default="felt",
+                   help="the participant's distance: felt (the felt plane, the default) or "
+                        "plane (the unit square's Euclidean oracle)")
     p.add_argument("--json", metavar="PATH")
     p.add_argument("--figure", metavar="PATH")
     a = p.parse_args(argv)
@@ -328,7 +349,8 @@ def main(argv: list[str] | None = None) -> int:
     def progress(msg: str) -> None:
         print(msg, file=sys.stderr, flush=True)
 
-    res = run(seeds=a.seeds, noise_db=a.noise, max_answers=a.max_answers, progress=progress)
+    res = run(seeds=a.seeds, noise_db=a.noise, max_answers=a.max_answers, progress=progress,
+              feel=a.feel)
     print(format_table(res))
     print("\n%d runs in %.1f s" % (len(res["results"]), res["seconds"]))
     if a.json:

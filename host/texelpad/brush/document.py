@@ -223,3 +223,27 @@ def distance(a: dict[str, Any], b: dict[str, Any], metric: str = "braycurtis") -
     metrics over the Weibull vectors; seuclidean needs a set of brushes)."""
     from .compare import brush_distance
     return brush_distance(check(a), check(b), metric)
+
+
+FELT_SEEDS = (0, 1, 2)          # paintings averaged for a brush's felt point
+
+
+def felt_point(doc: dict[str, Any], seeds: Sequence[int] = FELT_SEEDS, n: int = 19200):
+    """Where a brush sits on the felt plane (texelpad.analysis.perception:
+    felt pitch and noisiness): the mean periodogram of its paintings with
+    `seeds`, n samples each (a full screen), as the display plays them
+    (0..65535 -> 0..1 modulation)."""
+    from ..analysis import perception as P
+    d = check(doc)
+    if not seeds:
+        raise ValueError("seeds: expected at least one")
+    spec = sum(P.periodogram(paint(d, s, n) / 65535.0)[1] for s in seeds) / len(seeds)
+    return P.pattern_of_spectrum(spec, P.segment_length(n)).felt_point()
+
+
+def felt_distance(a: dict[str, Any], b: dict[str, Any], seeds: Sequence[int] = FELT_SEEDS,
+                  n: int = 19200) -> tuple[float, Any, Any]:
+    """(distance in dB on the felt plane, a's felt point, b's): under
+    perception.JND_DB the two brushes feel the same."""
+    fa, fb = felt_point(a, seeds, n), felt_point(b, seeds, n)
+    return fa.distance(fb), fa, fb

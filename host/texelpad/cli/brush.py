@@ -84,10 +84,13 @@ def add_brush(p: argparse.ArgumentParser) -> None:
     s.add_argument("--seed", type=int, default=0)
     s.add_argument("--original", metavar="REC.csv", help="the recording it was fitted to")
     s.set_defaults(func=cmd_brush_show)
-    s = sub.add_parser("compare", help="distance between two brushes (seed 002's metrics)")
+    s = sub.add_parser("compare", help="distance between two brushes: seed 002's metric and "
+                                       "how far apart they feel")
     s.add_argument("a", metavar="A")
     s.add_argument("b", metavar="B")
     s.add_argument("--metric", choices=METRICS, default="braycurtis")
+    s.add_argument("--no-felt", action="store_true",
+                   help="skip the felt distance (it paints each brush three times)")
     s.set_defaults(func=cmd_brush_compare)
     p.set_defaults(func=_no_action)
 
@@ -279,6 +282,15 @@ def cmd_brush_compare(args: argparse.Namespace) -> int:
     b = _load("B", args.b)
     d = distance(a, b, args.metric)
     print("%s distance %s .. %s: %.4f" % (args.metric, args.a, args.b, d))
+    if not args.no_felt:
+        from ..analysis.perception import JND_DB
+        from ..brush.document import FELT_SEEDS, felt_distance
+        fd, fa, fb = felt_distance(a, b)
+        print("felt distance %s .. %s: %.2f dB (%s: under %g dB they feel the same)"
+              % (args.a, args.b, fd, "the same" if fd < JND_DB else "different", JND_DB))
+        for label, path, fp in (("A", args.a, fa), ("B", args.b, fb)):
+            print("  %s felt pitch %.2f dB, noisiness %.2f dB (full screen, seeds %s)"
+                  % (label, fp.pitch_db, fp.noisiness_db, ", ".join(map(str, FELT_SEEDS))))
     if a["range"] != b["range"]:
         _stderr("note: their ranges differ (%s, %s): the scales are in their own units"
                 % (a["range"], b["range"]))

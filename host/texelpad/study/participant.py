@@ -4,49 +4,109 @@ answers from a distance between textures plus noise.
 The model (documented so a figure made with it can be read): a texture is a
 point of texelpad.study.space's unit square (u: pitch, v: irregularity; a
 search candidate's further dimensions are ignored). The participant holds a
-target point; the perceived distance of a texture is its Euclidean distance
-to the target plus Gaussian noise of SD `noise` (normalised units: 0.025 is
-1 dB of pitch). Comparisons pick the smaller perceived distance, or "unsure"
-when the two differ by less than `unsure_below`. The oddity task is a
-psychometric function of texel length: P(correct) = 1/3 + 2/3 / (1 +
+target point. How far a texture feels from the target (`feel`):
+
+- "felt" (the default): the distance on the felt plane of
+  texelpad.analysis.perception (felt pitch and noisiness, dB; the model
+  calibrated on the trained rater's matches, docs/encoder.md) between the
+  two textures as the lab renders them (TEXEL_SAMPLES-sample texels, the
+  study's half screen), divided by PITCH_DB_PER_U so the units are the
+  square's (0.025 = 1 dB). Textures the finger cannot tell apart (two tiny
+  irregularities, two pitches far above the skin's band) are near;
+- "plane": the Euclidean distance in the unit square - an idealised oracle
+  for testing the protocols' geometry, not a model of touch.
+
+Gaussian noise of SD `noise` (the square's units) is added. Comparisons pick
+the smaller perceived distance, or "unsure" when the two differ by less than
+`unsure_below` (default: one difference threshold, perception.JND_DB, with
+"felt"; never with "plane"), as the paper's subjects could. The oddity task
+is a psychometric function of texel length: P(correct) = 1/3 + 2/3 / (1 +
 exp(-(length - threshold) / slope)) - chance (1/3) far below the threshold,
 certain far above. In the free exploration it sets the sliders on its target
-(plus the noise) with confidence 4; in the quantization test (and the
-similarity matrix) it rates similarity 5 - d/4 - q/2, d the distance in dB
-between the reference's spectral position (texelpad.study.references) and
-the match rendered, q the quantization in dB, plus noise of SD noise*40,
-rounded to 1..5 - a model for driving the protocols, not a finding.
+(plus the noise) with confidence 4. In the quantization test (and the
+similarity matrix) it rates the similarity of the reference and the
+rendering the trial plays (the match, quantized) from their felt distance d
+(dB): the top of the scale minus d / perception.JND_DB (one step per
+difference threshold), plus noise of SD noise*40, rounded and clipped to the
+scale - the model's expected similarity, not a finding ("plane": the
+reference's spectral position, texelpad.study.references, against the match:
+5 - d/4 - q/2).
 """
 from __future__ import annotations
 
+import functools
 import math
 import random
 from dataclasses import dataclass, field
 
-from .space import Point
+from .space import PITCH_DB_PER_U, Point, texel_params
+
+FEELS = ("felt", "plane")
+TEXEL_SAMPLES = 50              # the lab's 0.265 mm texels (the quantization test's own: its config)
+LENGTH_SAMPLES = 9600           # one half of the split display, as the studies show a texture
+
+
+@functools.lru_cache(maxsize=8192)
+def _texture_point(pitch_db: float, irregularity_db: float, quant_db: float,
+                   texel_samples: int):
+    """The expected felt point of a texture (perception.felt_point), cached:
+    the protocols ask for the same textures again and again."""
+    from ..analysis import perception
+    return perception.felt_point({"pitch_db": pitch_db, "irregularity_db": irregularity_db,
+                                  "quant_db": quant_db, "texel_samples": texel_samples,
+                                  "gain": 1.0}, LENGTH_SAMPLES)
+
+
+@functools.lru_cache(maxsize=64)
+def _reference_point(name: str):
+    from ..analysis import encoder, perception
+    return perception.felt_point(encoder.reference_map(name, LENGTH_SAMPLES))
+
+
+def felt_point(p: Point, quant_db: float = 0.0, texel_samples: int = TEXEL_SAMPLES):
+    """The felt point of the texture a point of the square stands for."""
+    t = texel_params(p)
+    return _texture_point(t["pitch_db"], t["irregularity_db"], float(quant_db),
+                          int(texel_samples))
 
 
 @dataclass
 class SimulatedParticipant:
     target: Point
     noise: float = 0.0
-    unsure_below: float = 0.0
+    unsure_below: float | None = None
     seed: int = 0
     threshold_mm: float = 6.0
     slope_mm: float = 1.0
+    feel: str = "felt"
     _rng: random.Random = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
+        if self.feel not in FEELS:
+            raise ValueError("feel: expected one of %s, got %r" % (", ".join(FEELS), self.feel))
         self._rng = random.Random(self.seed)
+        if self.feel == "felt":
+            from ..analysis.perception import JND_DB
+            self._jnd = JND_DB / PITCH_DB_PER_U
+            self._target_point = felt_point(self.target)
+
+    def distance(self, p: Point) -> float:
+        """How far p feels from the target, without noise (the square's units)."""
+        if self.feel == "plane":
+            return p.distance(self.target)
+        return felt_point(p).distance(self._target_point) / PITCH_DB_PER_U
 
     def perceived(self, p: Point) -> float:
-        d = p.distance(self.target)
+        d = self.distance(p)
         return d + (self._rng.gauss(0.0, self.noise) if self.noise else 0.0)
 
     def compare(self, a: Point, b: Point) -> str:
         """'A', 'B' or 'unsure': which of the two is closer to the target."""
         da, db = self.perceived(a), self.perceived(b)
-        if abs(da - db) < self.unsure_below:
+        unsure = self.unsure_below
+        if unsure is None:
+            unsure = self._jnd if self.feel == "felt" else 0.0
+        if abs(da - db) < unsure:
             return "unsure"
         return "A" if da < db else "B"
 
@@ -80,12 +140,26 @@ class SimulatedParticipant:
                                                irregularity_db(self.target.v + n())))
             return {"pitch_db": round(p, 3), "irregularity_db": round(s, 3), "confidence": 4}
         if protocol == "quant":
+            return self.rate(state)
+        raise ValueError("protocol: unknown %r" % (protocol,))
+
+    def rate(self, state) -> int:
+        """The similarity rating of the quantization test's current trial
+        (module docstring: the expected similarity, plus noise)."""
+        lo, hi = state.config.scale
+        ref, q = state.current
+        if self.feel == "felt":
+            from ..analysis.perception import JND_DB
+            t = state.texture()
+            d = _texture_point(float(t["pitch_db"]), float(t["irregularity_db"]),
+                               float(t["quant_db"]), int(t["texel_samples"])
+                               ).distance(_reference_point(ref))
+            r = hi - d / JND_DB
+        else:
             from .references import position
-            ref, q = state.current
             m = state.config.matches[state.current_match]
             p, s = position(ref)
-            d = math.hypot(m["pitch_db"] - p, m["irregularity_db"] - s)
-            r = 5.0 - d / 4.0 - q / 2.0 + (self._rng.gauss(0.0, self.noise * 40)
-                                           if self.noise else 0.0)
-            return int(min(5, max(1, round(r))))
-        raise ValueError("protocol: unknown %r" % (protocol,))
+            r = 5.0 - math.hypot(m["pitch_db"] - p, m["irregularity_db"] - s) / 4.0 - q / 2.0
+        if self.noise:
+            r += self._rng.gauss(0.0, self.noise * 40)
+        return int(min(hi, max(lo, round(r))))
