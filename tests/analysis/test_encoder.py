@@ -124,7 +124,7 @@ def _bound(pitch: float, irr: float, q: float) -> tuple[float | None, float | No
         # feel (test_the_encoder_is_never_farther_than_the_truth still holds)
         return None, None
     if irr == 0.0:                  # a decade of spread: one half screen is a loose sample
-        return 12.0, 5.5
+        return 15.0, 5.5
     if q > 0.0 and irr <= -15.0:    # texels collapse onto one or two grid values
         return q / 2.0 + 0.3, None
     if pitch <= -10.0 and irr <= -10.0:

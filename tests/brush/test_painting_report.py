@@ -59,7 +59,7 @@ def test_the_report_has_every_part_and_finite_numbers(res):
         q = res["perception"][name]
         for key in ("source_painting", "source_painting2", "painting_painting2",
                     "to_nearest_other", "to_others_median", "level_source_db",
-                    "level_painting_db"):
+                    "level_painting_db", "w2_source_painting"):
             assert _finite(q[key]), key
         assert q["source_painting"] >= 0 and q["nearest_other"] in NAMES and \
             q["nearest_other"] != name

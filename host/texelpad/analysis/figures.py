@@ -501,10 +501,12 @@ def encode_figure(path: str | Path, fmap: Any, result: dict, decoded: Any = None
     tex = result["texture"]
     src = result.get("source") or "map"
     fig.suptitle("%s%s \u2192 pitch %.2f dB (%.3g c/mm), irregularity %.2f dB (%.3g decade), "
-                 "gain %.3g\nfelt-spectrum distance %.3f dB" % (
+                 "gain %.3g\nfelt distance %.3f dB (method %s), felt spectra %.3f dB apart "
+                 "(W2)" % (
                      (title + ": ") if title else "", src, tex["pitch_db"],
                      10 ** (tex["pitch_db"] / 10), tex["irregularity_db"],
-                     10 ** (tex["irregularity_db"] / 10), tex["gain"], result["distance_db"]))
+                     10 ** (tex["irregularity_db"] / 10), tex["gain"],
+                     result["felt_distance_db"], result["method"], result["w2_distance_db"]))
 
     # 1-2. the map and its decoding over the same stretch: 6 mm (seed 000's Fig. 4
     # shows 6-mm samples), or the whole map when shorter
@@ -540,9 +542,12 @@ def encode_figure(path: str | Path, fmap: Any, result: dict, decoded: Any = None
                                                       / P.FULL_SCALE_POWER),
                      color="C1", lw=0.7, ls=":", label="this rendering (seed %d)" % tex["seed"])
     speed = result["model"]["speed_mm_s"]
-    thr = P.threshold_db(speed * f) - result["model"]["full_scale_sl_db"]
+    mod = _model_of(result["model"])
+    thr = P.force_threshold_db(speed * f, mod) - mod.full_scale_sl_db
     ax_spec.semilogx(f, thr, color="0.4", lw=1, ls="--",
                      label="detection threshold at %g mm/s (model)" % speed)
+    ax_spec.axvline(result["skin_band"]["cpmm"][1], color="0.4", ls=":", lw=1,
+                    label="the skin's band ends (%.0f Hz)" % result["skin_band"]["hz"][1])
     ax_spec.axvline(texel.NYQUIST_CPMM, color="C3", ls="--", lw=1,
                     label="Nyquist %.1f c/mm" % texel.NYQUIST_CPMM)
     ax_spec.axvline(10 ** (tex["pitch_db"] / 10), color="C2", ls=":", lw=1.2,
@@ -564,7 +569,11 @@ def encode_figure(path: str | Path, fmap: Any, result: dict, decoded: Any = None
     ax_felt.axvline(tex["pitch_db"], color="C2", ls=":", lw=1.2)
     ax_felt.set_xlabel("pitch (dB re 1 c/mm)")
     ax_felt.set_ylabel("share of the felt power")
-    ax_felt.set_title("felt spectra compared (distance %.3f dB)" % result["distance_db"],
+    ax_felt.set_title("felt spectra: pitch %.2f / %.2f dB, noisiness %.2f / %.2f dB "
+                      "(map / texture)" % (result["felt"]["map"]["pitch_db"],
+                                           result["felt"]["rendering"]["pitch_db"],
+                                           result["felt"]["map"]["noisiness_db"],
+                                           result["felt"]["rendering"]["noisiness_db"]),
                       fontsize="medium")
     ax_felt.legend(loc="upper left", fontsize="small")
 
@@ -573,13 +582,13 @@ def encode_figure(path: str | Path, fmap: Any, result: dict, decoded: Any = None
     lines = ["texture: %s" % _short_texture(tex)]
     rg = result.get("ranges")
     if rg:
-        lines.append("feels the same (within %.2g dB): pitch %.2f .. %.2f dB, irregularity "
-                     "%.2f .. %.2f dB" % (rg["equivalent_db"], rg["pitch_db"][0],
+        lines.append("feels the same (within %.3g dB): pitch %.2f .. %.2f dB, irregularity "
+                     "%.2f .. %.2f dB" % (rg["limit_db"], rg["pitch_db"][0],
                                           rg["pitch_db"][1], rg["irregularity_db"][0],
                                           rg["irregularity_db"][1]))
-    fm, fr = result["felt"]["map"], result["felt"]["rendering"]
-    lines.append("felt pitch %.2f / %.2f dB, spread %.2f / %.2f dB (map / texture)"
-                 % (fm["pitch_db"], fr["pitch_db"], fm["spread_db"], fr["spread_db"]))
+    lines.append("felt distance %.3f dB (under %g: the same); W2 between the felt spectra "
+                 "%.3f dB; method %s" % (result["felt_distance_db"], result["model"]["jnd_db"],
+                                         result["w2_distance_db"], result["method"]))
     c = result["compression"]
     lines.append("compression: %s bytes of map (uint16) \u2192 %d bytes of texture: %gx"
                  % (format(c["map_bytes"], ","), c["texture_bytes"], c["ratio"]))
@@ -592,9 +601,13 @@ def encode_figure(path: str | Path, fmap: Any, result: dict, decoded: Any = None
             "%s dB: %.2f" % (k, v) for k, v in qz["cost_db"].items()))
     m = result["model"]
     lines.append("model: %g mm/s, full scale %g dB above threshold, masking %s, resolution "
-                 "%g decade" % (m["speed_mm_s"], m["full_scale_sl_db"],
-                                "off" if m["masking_db"] is None else "%g dB" % m["masking_db"],
-                                m["resolution_decades"]))
+                 "%g decade, fingertip corner %s, lines %s"
+                 % (m["speed_mm_s"], m["full_scale_sl_db"],
+                    "off" if m["masking_db"] is None else "%g dB" % m["masking_db"],
+                    m["resolution_decades"],
+                    "off" if m["fingertip_corner_hz"] is None else "%g Hz"
+                    % m["fingertip_corner_hz"],
+                    "off" if m["line_db"] is None else "%g dB" % m["line_db"]))
     for note in result.get("notes", [])[:3]:
         lines.append("note: " + note)
     import textwrap
@@ -603,6 +616,14 @@ def encode_figure(path: str | Path, fmap: Any, result: dict, decoded: Any = None
                  transform=ax_text.transAxes, va="top", ha="left", fontsize="small",
                  family="monospace")
     fig.savefig(str(path), dpi=100)
+
+
+def _model_of(d: dict) -> Any:
+    """The perception.Model a result's "model" dict describes."""
+    from . import perception as P
+    return P.Model(**{k: d[k] for k in ("speed_mm_s", "full_scale_sl_db", "masking_db",
+                                        "resolution_decades", "slope_above_db_per_octave",
+                                        "fingertip_corner_hz", "line_db")})
 
 
 def _short_texture(tex: dict) -> str:

@@ -38,11 +38,13 @@ and the two texel renderings, a full screen each, values in amplitude units):
    silhouette_samples on the sources' swipes). The silhouette of the
    sources' swipes alone (compare.silhouette: seed 002 Table II's Weibull
    column on our data) and with the painted swipes labelled as their source;
-5. the perceptual distance (texelpad.analysis.perception.distance: the
-   encoder's model, in dB) between the source and painting seed 0, and for
+5. how it feels: the distance on the felt plane (texelpad.analysis.perception
+   .felt_distance: felt pitch and noisiness, dB; under perception.JND_DB =
+   1 dB they feel the same) between the source and painting seed 0, and for
    scale the source and painting seed 1, the two paintings, and the source
-   and the other sources (the nearest, the median); the felt levels beside
-   (the distance leaves the level out);
+   and the other sources (the nearest, the median); the W2 distance between
+   the felt spectra (perception.w2_db) of source and painting 0 beside; the
+   felt levels beside (the distances leave the level out);
 6. the autocorrelation r(m) of the source and of each painting (mean
    removed, normalised per lag by its overlap: a sinusoid gives cos 2 pi f m)
    at lags of whole windows j * WINDOW (j = 1 .. as many as fit in 12 mm;
@@ -289,16 +291,20 @@ def compare_swipes(per: dict, names: Sequence[str]) -> dict:
 
 
 def perception(per: dict, names: Sequence[str]) -> dict:
-    """The encoder's perceptual distance (dB) and felt levels (module docstring, step 5)."""
+    """Felt distances (dB), W2 beside, and felt levels (module docstring, step 5)."""
     pat_src = {n: P.map_pattern(per[n]["_map"]) for n in names}
+    pt_src = {n: pat_src[n].felt_point() for n in names}
     out = {}
     for n in names:
         pats = [P.map_pattern(p) for p in per[n]["_paintings"][:2]]
-        others = {o: P.w2_db(pat_src[n], pat_src[o]) for o in names if o != n}
+        pts = [p.felt_point() for p in pats]
+        others = {o: pt_src[n].distance(pt_src[o]) for o in names if o != n}
         nearest = min(others, key=others.get)
-        out[n] = {"source_painting": P.w2_db(pat_src[n], pats[0]),
-                  "source_painting2": P.w2_db(pat_src[n], pats[1]),
-                  "painting_painting2": P.w2_db(pats[0], pats[1]),
+        out[n] = {"source_painting": pt_src[n].distance(pts[0]),
+                  "source_painting2": pt_src[n].distance(pts[1]),
+                  "painting_painting2": pts[0].distance(pts[1]),
+                  "w2_source_painting": P.w2_db(pat_src[n], pats[0]),
+                  "felt_source": pt_src[n].as_dict(), "felt_painting": pts[0].as_dict(),
                   "nearest_other": nearest, "to_nearest_other": others[nearest],
                   "to_others_median": _median(list(others.values())),
                   "level_source_db": pat_src[n].level_db, "level_painting_db": pats[0].level_db}
@@ -423,17 +429,18 @@ def format_tables(res: dict) -> str:
                                                 c["silhouette_with_paintings"]))
     lines.append("")
     lines.append(_para(
-        "Perceptual distance (texelpad.analysis.perception, dB: the felt spectrum's "
-        "2-Wasserstein distance; levels beside, re a full-scale sine):"))
-    lines.append("  %-14s %9s %9s %9s  %-22s %8s %10s %11s" % (
+        "How it feels (texelpad.analysis.perception, dB on the felt plane: felt pitch and "
+        "noisiness; under 1 dB the same; W2: the felt spectra's 2-Wasserstein distance; levels "
+        "beside, re a full-scale sine):"))
+    lines.append("  %-14s %9s %9s %9s  %-22s %8s %8s %10s %11s" % (
         "source", "src-pnt0", "src-pnt1", "pnt0-pnt1", "nearest other source", "others",
-        "level src", "level pnt0"))
+        "W2 s-p0", "level src", "level pnt0"))
     for n in names:
         r = res["perception"][n]
-        lines.append("  %-14s %9.2f %9.2f %9.2f  %-13s %8.2f %8.2f %10.1f %11.1f" % (
+        lines.append("  %-14s %9.2f %9.2f %9.2f  %-13s %8.2f %8.2f %8.2f %10.1f %11.1f" % (
             n, r["source_painting"], r["source_painting2"], r["painting_painting2"],
             r["nearest_other"], r["to_nearest_other"], r["to_others_median"],
-            r["level_source_db"], r["level_painting_db"]))
+            r["w2_source_painting"], r["level_source_db"], r["level_painting_db"]))
     lines.append("  (others: the median over the other sources)")
     lines.append("")
     lags = cfg["lags"]

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import statistics
 import sys
 import time
@@ -47,6 +48,8 @@ FULL_SCREEN = 19200
 DEFAULT_SEEDS = 4
 DEFAULT_RUNS = 5
 VARIANTS = (("default", P.Model()),
+            ("no fingertip fall", P.Model(fingertip_corner_hz=None)),
+            ("no line fusion", P.Model(line_db=None)),
             ("no masking", P.Model(masking_db=None)),
             ("full scale 30 dB SL", P.Model(full_scale_sl_db=30.0)),
             ("full scale 50 dB SL", P.Model(full_scale_sl_db=50.0)),
@@ -78,14 +81,20 @@ def people() -> dict[str, Any]:
     for name in R.REFERENCES:
         m = E.reference_map(name)
         r = E.encode(m, source="reference %s" % name)
+        w = E.encode(m, method="w2", intervals=False)
         sp, si = R.position(name)
         row = {"reference": name, "family": R.FAMILIES[name],
                "paper_pitch_db": R.PAPER_PITCH_DB.get(name),
                "pitch_db": r["pitch_db"], "irregularity_db": r["irregularity_db"],
                "gain": r["gain"], "distance_db": r["distance_db"], "ranges": r["ranges"],
                "felt_pitch_db": r["felt"]["map"]["pitch_db"],
+               "felt_noisiness_db": r["felt"]["map"]["noisiness_db"],
+               "texture_felt_pitch_db": r["felt"]["rendering"]["pitch_db"],
+               "skin_top_db": r["skin_band"]["pitch_db_max"],
+               "w2": [w["pitch_db"], w["irregularity_db"]],
                "spectral_model": [round(sp, 2), round(si, 2)],
                "aliased_fraction": r["aliasing"]["expected_fraction"],
+               "map_top_band_fraction": r["aliasing"]["map_top_band_fraction"],
                "quantization_cost_db": r["quantization"]["cost_db"], "variants": {}}
         for label, model in VARIANTS[1:]:
             v = E.encode(m, model=model, intervals=False)
@@ -107,17 +116,21 @@ def people() -> dict[str, Any]:
     return {"rows": rows, "pitch_error_vs_paper": summary}
 
 
-def round_trip(seeds: int, progress: Any = None) -> list[dict[str, Any]]:
-    """Every (quant, irregularity, pitch, seed) case: truth, encoding, ranges."""
+def round_trip(seeds: int, progress: Any = None, method: str = "w2",
+               quants: tuple[float, ...] = QUANTS) -> list[dict[str, Any]]:
+    """Every (quant, irregularity, pitch, seed) case: truth, encoding, ranges
+    (method "w2": the spectral match, whose bounds docs/encoder.md states;
+    "felt": the default encoder, measured by how far its texture feels from
+    the map)."""
     out = []
-    for q in QUANTS:
+    for q in quants:
         for irr in IRREGS:
             for pitch in PITCHES:
                 for s in range(1, seeds + 1):
                     p = {"pitch_db": pitch, "irregularity_db": irr, "quant_db": q, "seed": s,
                          "length_samples": LENGTH}
                     plan = texel.make_plan(p)
-                    r = E.encode(texel.render(p), quant_db=q)
+                    r = E.encode(texel.render(p), quant_db=q, method=method)
                     rg = r["ranges"]
                     out.append({"quant_db": q, "irregularity_db": irr, "pitch_db": pitch,
                                 "seed": s, "got": [r["pitch_db"], r["irregularity_db"]],
@@ -128,10 +141,14 @@ def round_trip(seeds: int, progress: Any = None) -> list[dict[str, Any]]:
                                            rg["irregularity_db"][0] - 0.005 <= irr
                                            <= rg["irregularity_db"][1] + 0.005],
                                 "distance_db": r["distance_db"],
+                                "felt_distance_db": r["felt_distance_db"],
+                                "truth_felt_distance_db": P.felt_distance(
+                                    r["texture"], dict(p, gain=r["gain"]), n=LENGTH),
                                 "aliased_drawn": plan.fraction_above_nyquist(),
                                 "seconds": r["seconds"]})
             if progress:
-                progress("round trip: quant %g dB, irregularity %g dB done" % (q, irr))
+                progress("round trip (%s): quant %g dB, irregularity %g dB done"
+                         % (method, q, irr))
     return out
 
 
@@ -233,21 +250,31 @@ def format_people(res: dict[str, Any]) -> str:
              "seed 000",
              "  paper: the subjects' mean Central Pitch in the free exploration as seed 000 "
              "quotes it (dB)",
-             "  felt: the map's felt mean pitch; same-feel: the ranges within %.2g dB of the "
-             "minimum; spectral: texelpad.study.references" % E.EQUIVALENT_DB,
-             "reference  paper | pitch  irreg  gain  dist |  felt | same-feel pitch  "
-             "same-feel irreg | spectral pitch/irreg | aliased",
-             "-" * 118]
+             "  felt: the map's felt pitch / noisiness; dist: felt distance of the texture from "
+             "the map; same-feel: the ranges within 1 dB (one difference threshold);",
+             "  w2: the spectral match (method w2); spectral: texelpad.study.references; "
+             "aliased: the texture's texels above Nyquist / the map's power in the top 0.1 "
+             "decade",
+             "reference  paper | pitch  irreg  gain  dist |  felt p/n     | same-feel pitch  "
+             "same-feel irreg |    w2 p/i      | spectral p/i   | aliased",
+             "-" * 132]
     for r in res["rows"]:
         rg = r["ranges"]
-        lines.append("%-9s %6s | %5.2f %6.2f %5.3f %5.3f | %5.2f | %6.2f .. %5.2f %7.2f .. %5.2f "
-                     "| %8.2f / %6.2f    | %5.1f %%"
+        lines.append("%-9s %6s | %5.2f %6.2f %5.3f %5.3f | %5.2f / %6.2f | %6.2f .. %5.2f "
+                     "%7.2f .. %5.2f | %6.2f / %6.2f | %6.2f / %6.2f | %4.1f %% / %4.1f %%"
                      % (r["reference"], "-" if r["paper_pitch_db"] is None else
                         "%.1f" % r["paper_pitch_db"], r["pitch_db"], r["irregularity_db"],
-                        r["gain"], r["distance_db"], r["felt_pitch_db"], rg["pitch_db"][0],
+                        r["gain"], r["distance_db"], r["felt_pitch_db"],
+                        r["felt_noisiness_db"], rg["pitch_db"][0],
                         rg["pitch_db"][1], rg["irregularity_db"][0], rg["irregularity_db"][1],
+                        r["w2"][0], r["w2"][1],
                         r["spectral_model"][0], r["spectral_model"][1],
-                        100 * r["aliased_fraction"]))
+                        100 * r["aliased_fraction"], 100 * r["map_top_band_fraction"]))
+    lines.append("the skin's band at the model's 86 mm/s ends at %.2f dB: the felt pitch of "
+                 "every encoding is at most %.2f dB, its pitch at most %.2f dB"
+                 % (res["rows"][0]["skin_top_db"],
+                    max(r["texture_felt_pitch_db"] for r in res["rows"]),
+                    max(r["pitch_db"] for r in res["rows"])))
     lines.append("")
     lines.append("the model's assumed constants changed: pitch / irregularity (dB)")
     labels = [lab for lab, _ in VARIANTS]
@@ -289,6 +316,36 @@ def format_round_trip(rows: list[dict[str, Any]], seeds: int) -> str:
     lines.append("")
     lines.append("truth within the reported same-feel ranges (both parameters): %d of %d cases"
                  % (inside, len(rows)))
+    return "\n".join(lines)
+
+
+def format_felt_round_trip(rows: list[dict[str, Any]], seeds: int) -> str:
+    """The felt encoder on rendered maps: how far its texture feels from the
+    map, beside how far the truth does (max over the seeds), and the pitch
+    error; a pitch above the skin's band comes back as the texture in it
+    that feels the same."""
+    top = 10.0 * math.log10(P.skin_band_hz()[1] / P.SPEED_MM_S)
+    lines = ["the felt encoder (the default) on the same maps, no quantization (seeds 1..%d): "
+             "felt distance of its texture / of the truth from the map, max over the seeds "
+             "(dB), and max |pitch error|" % seeds,
+             "  the skin's band ends at %.2f dB: above it the truth is not what is felt" % top,
+             "irr \\ pitch " + "".join("%19g" % p for p in PITCHES)]
+    for irr in IRREGS:
+        cells = []
+        for p in PITCHES:
+            cs = [r for r in rows if r["irregularity_db"] == irr and r["pitch_db"] == p]
+            cells.append("%4.2f/%4.2f %6.2f" % (max(r["felt_distance_db"] for r in cs),
+                                                 max(r["truth_felt_distance_db"] for r in cs),
+                                                 max(abs(r["error"][0]) for r in cs)))
+        lines.append("%8g    " % irr + "  ".join("%17s" % c for c in cells))
+    within = sum(r["felt_distance_db"] < P.JND_DB for r in rows)
+    better = sum(r["felt_distance_db"] <= r["truth_felt_distance_db"] + 0.02 for r in rows)
+    inband = [r for r in rows if r["pitch_db"] <= top and -15.0 <= r["irregularity_db"] <= -5.0]
+    lines.append("felt distance under one difference threshold (%g dB): %d of %d; no farther "
+                 "than the truth (+0.02 dB): %d of %d; in the band, irregularity -15 .. -5 dB: "
+                 "|pitch error| max %.2f dB over %d cases"
+                 % (P.JND_DB, within, len(rows), better, len(rows),
+                    max(abs(r["error"][0]) for r in inband), len(inband)))
     return "\n".join(lines)
 
 
@@ -383,11 +440,15 @@ def main(argv: list[str] | None = None) -> int:
     print()
     bs = bounds(rows)
     print(format_bounds(bs))
+    print()
+    felt_rows = round_trip(a.seeds, progress, method="felt", quants=(0.0,))
+    print(format_felt_round_trip(felt_rows, a.seeds))
     print("\nbench done in %.1f s" % (time.perf_counter() - t0))
     if a.json:
         with open(a.json, "w") as f:
             json.dump({"speed": sp, "people": ppl, "model_check": mc, "robustness": rob,
-                       "round_trip": rows, "bounds": bs, "model": P.Model().as_dict(),
+                       "round_trip": rows, "bounds": bs, "felt_round_trip": felt_rows,
+                       "model": P.Model().as_dict(),
                        "seeds": a.seeds, "length": LENGTH}, f, indent=1)
     return 0
 

@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 from .space import PITCH_DB_PER_U, Point, texel_params
 
 FEELS = ("felt", "plane")
-TEXEL_SAMPLES = 50              # the lab's 0.265 mm texels (the quantization test's own: its config)
+TEXEL_SAMPLES = 50              # the lab's 0.265 mm texels (the quantization test: its config's)
 LENGTH_SAMPLES = 9600           # one half of the split display, as the studies show a texture
 
 

@@ -74,6 +74,7 @@ from texel.gen.params import (DX_MM, IRREG_DB_MAX, IRREG_DB_MIN, NYQUIST_CPMM, P
                               PITCH_DB_MIN)
 from texel.gen.reference import HALF_SCREEN, STUDY_NAMES
 
+from ..analysis.calibration import QUOTED_PITCH_DB
 from .space import Point, to_point
 
 REFERENCES = tuple(STUDY_NAMES)     # the CSV's row order: 2sin, 3sin, 4sin, white, ..., sawtooth
@@ -83,9 +84,8 @@ FAMILIES = {"2sin": "sums of sinusoids", "3sin": "sums of sinusoids", "4sin": "s
             "sawtooth": "shaped waveforms"}
 # seed 000, Discussion: the subjects' mean Central Pitch in the free exploration (dB re 1 c/mm);
 # the shaped waveforms' "1 cycle/mm (0 dB) for all textures". Nothing for the noises or for
-# irregularity.
-PAPER_PITCH_DB = {"2sin": 4.8, "3sin": 6.0, "4sin": 7.8,
-                  "square": 0.0, "triangle": 0.0, "sawtooth": 0.0}
+# irregularity. (The felt model's calibration holds them: texelpad.analysis.calibration.)
+PAPER_PITCH_DB = QUOTED_PITCH_DB
 WEIGHTINGS = ("power", "magnitude")
 WEIGHTING = "power"                 # the model's choice (module docstring: the table)
 BAND_CPMM = (10.0 ** (PITCH_DB_MIN / 10.0), NYQUIST_CPMM)    # 0.01 .. 94.34 c/mm
