@@ -217,6 +217,21 @@ def test_replayed_draws_random_and_refused():
         PN.make_plan(texel.validate(dict(p, v=2)), (0.5, [0.0] * 4))
 
 
+@pytest.mark.parametrize("v", [1, 2])
+def test_make_plan_takes_the_loop_for_few_texels(v):
+    """plan_numpy.make_plan: the loops below LOOP_BELOW texels (quicker
+    there), the arrays from it on - the same plan either way."""
+    for count in (1, 2, PN.LOOP_BELOW - 1, PN.LOOP_BELOW, PN.LOOP_BELOW + 1, 400):
+        p = texel.validate({"pitch_db": 12.0, "irregularity_db": -3.0, "seed": count,
+                            "texel_samples": 50, "length_samples": 50 * count - 7, "v": v})
+        got = PN.make_plan(p)
+        loop = Plan if v == 1 else PlanInt
+        fast = PN.PlanNumpy if v == 1 else PN.PlanIntNumpy
+        assert type(got) is (loop if count < PN.LOOP_BELOW else fast), count
+        assert_same_plan(loop(p), got, count)
+        assert_same_plan(loop(p), fast(p), count)
+
+
 def test_generator_outputs_are_the_rng_stream():
     for seed in (0, 1, 7, 12345, 0x7FFFFFFF, 0x80000000, 0xFFFFFFFF):
         for count in (0, 1, 2, 5, 400):
