@@ -114,7 +114,7 @@ def test_the_autocorrelation():
 
 def test_tables_json_and_figure(res, tmp_path):
     text = BP.format_tables(res)
-    for word in ("Bray-Curtis", "standardized Euclidean", "Perceptual distance",
+    for word in ("Bray-Curtis", "standardized Euclidean", "How it feels",
                  "Autocorrelation", "|r|<=0.1", "pink", "texel-p15-i-5"):
         assert word in text
     doc = json.loads(json.dumps(jsonable(res), allow_nan=False))
