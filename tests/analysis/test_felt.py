@@ -275,3 +275,19 @@ def test_brushes_that_feel_different_and_the_same():
     d, fa, fb = D.felt_distance(pink, saw)
     assert d > P.JND_DB and fa.pitch_db > fb.pitch_db
     assert D.felt_distance(pink, pink)[0] == 0.0
+
+
+def test_the_calibration_bench_writes_its_report(tmp_path, capsys):
+    from texelpad.bench import felt_calibration as FC
+    js, fig = tmp_path / "cal.json", tmp_path / "cal.png"
+    assert FC.main(["--json", str(js), "--figure", str(fig)]) == 0
+    out = capsys.readouterr().out
+    for words in ("1. the fit over 80 combinations", "3. leave one texture out",
+                  "4. three encoders", "square <- 2sin"):
+        assert words in out
+    res = json.loads(js.read_text())
+    assert res["fit"]["constants"] == C.constants_of(P.DEFAULT_MODEL)
+    assert res["summary"]["felt"]["pitch_in_skin_band"] == 9
+    assert len(res["leave_one_out"]) == 9 and fig.stat().st_size > 20000
+    with pytest.raises(SystemExit):                      # argparse: a figure type it cannot write
+        FC.main(["--figure", str(tmp_path / "x.gif")])

@@ -52,11 +52,30 @@ def _texture_point(pitch: float, irr: float, n: int, model: P.Model) -> P.FeltPo
 
 
 def run(shared: str | None = None, progress: Any = None) -> dict[str, Any]:
+    """The whole report (module docstring, 1-4) as a JSON-ready dict."""
     t0 = time.perf_counter()
     data = C.load(shared)
     cal = C.Calibration(data)
+    fit = cal.fit(data.names)
+    out = _fit_report(data, cal, fit)
+    if progress:
+        progress("felt_calibration: fit done (%.1f s); leave-one-out ..."
+                 % (time.perf_counter() - t0))
+    out["leave_one_out"] = C.leave_one_out(cal)
+    if progress:
+        progress("felt_calibration: leave-one-out done (%.1f s); encoders ..."
+                 % (time.perf_counter() - t0))
+    pts = data.points(fit.model)
+    out["encoders"] = [_encoders(data, n, pts[n], fit.model) for n in data.names]
+    out["summary"] = _summary(out["encoders"], fit.model)
+    out["seconds"] = time.perf_counter() - t0
+    return out
+
+
+def _fit_report(data: C.Data, cal: C.Calibration, fit: C.Fit) -> dict[str, Any]:
+    """1 and 2: the grid's best, the loss without each structural piece, and
+    per texture the reference and the rater's rendering under the fit."""
     names = data.names
-    fit = cal.fit(names)
     ranked = sorted(((C.loss(pts, names), C.constants_of(m)) for m, pts in cal.grid),
                     key=lambda r: r[0])
     variants = {"fitted": fit.model,
@@ -65,45 +84,52 @@ def run(shared: str | None = None, progress: Any = None) -> dict[str, Any]:
                 "neither (the model before)": PREVIOUS}
     var_rows = {}
     for label, m in variants.items():
-        pts = data.points(m)
-        var_rows[label] = {"loss": C.loss(pts, names),
-                           "distances": {n: pts[n][0].distance(pts[n][1]) for n in names}}
+        vp = data.points(m)
+        var_rows[label] = {"loss": C.loss(vp, names),
+                           "distances": {n: vp[n][0].distance(vp[n][1]) for n in names}}
     pts = data.points(fit.model)
     per = [{"texture": n, "reference": pts[n][0].as_dict(), "rater_rendering": pts[n][1].as_dict(),
             "felt_distance_db": pts[n][0].distance(pts[n][1]),
             "quoted_pitch_db": C.QUOTED_PITCH_DB.get(n)} for n in names]
-    if progress:
-        progress("felt_calibration: fit done (%.1f s); leave-one-out ..."
-                 % (time.perf_counter() - t0))
-    loo = C.leave_one_out(cal)
-    if progress:
-        progress("felt_calibration: leave-one-out done (%.1f s); encoders ..."
-                 % (time.perf_counter() - t0))
-    enc = []
-    for n in names:
-        m = data.reference[n]
-        rater_pt = pts[n][1]
-        row: dict[str, Any] = {"texture": n, "quoted_pitch_db": C.QUOTED_PITCH_DB.get(n),
-                               "rater": {"pitch_db": data.matches[n][0],
-                                         "irregularity_db": data.matches[n][1]}}
-        felt = E.encode(m, intervals=False)
-        prev = E.encode(m, intervals=False, method="w2", model=PREVIOUS)
-        base = R.position(n)
-        for key, (p, i, alias) in (
-                ("felt", (felt["pitch_db"], felt["irregularity_db"],
-                          felt["aliasing"]["expected_fraction"])),
-                ("previous", (prev["pitch_db"], prev["irregularity_db"],
-                              prev["aliasing"]["expected_fraction"])),
-                ("baseline", (base[0], base[1], P.expected_aliased_fraction(
-                    {"pitch_db": min(base[0], 19.747), "irregularity_db": base[1]})))):
-            tp = _texture_point(p, i, m.size, fit.model)
-            row[key] = {"pitch_db": round(p, 3), "irregularity_db": round(i, 3),
-                        "aliased_fraction": round(alias, 4),
-                        "felt": tp.as_dict(),
-                        "felt_from_rater_rendering_db": round(tp.distance(rater_pt), 3),
-                        "felt_from_reference_db": round(tp.distance(pts[n][0]), 3)}
-        row["map_top_band_fraction"] = felt["aliasing"]["map_top_band_fraction"]
-        enc.append(row)
+    return {"rows_assigned": data.rows,
+            "fit": {"constants": C.constants_of(fit.model), "loss": fit.loss,
+                    "model": fit.model.as_dict()},
+            "ranked": [{"loss": lo, "constants": c} for lo, c in ranked[:8]],
+            "grid_size": len(cal.grid), "variants": var_rows, "per_texture": per,
+            "skin_band_hz": list(P.skin_band_hz(fit.model)),
+            "skin_top_db": _skin_top_db(fit.model)}
+
+
+def _encoders(data: C.Data, n: str, points: tuple[P.FeltPoint, P.FeltPoint],
+              model: P.Model) -> dict[str, Any]:
+    """4, one texture: the felt encoder, the previous one and the baseline,
+    each with its texture's felt point and distances."""
+    m = data.reference[n]
+    ref_pt, rater_pt = points
+    row: dict[str, Any] = {"texture": n, "quoted_pitch_db": C.QUOTED_PITCH_DB.get(n),
+                           "rater": {"pitch_db": data.matches[n][0],
+                                     "irregularity_db": data.matches[n][1]}}
+    felt = E.encode(m, intervals=False)
+    prev = E.encode(m, intervals=False, method="w2", model=PREVIOUS)
+    base = R.position(n)
+    for key, (p, i, alias) in (
+            ("felt", (felt["pitch_db"], felt["irregularity_db"],
+                      felt["aliasing"]["expected_fraction"])),
+            ("previous", (prev["pitch_db"], prev["irregularity_db"],
+                          prev["aliasing"]["expected_fraction"])),
+            ("baseline", (base[0], base[1], P.expected_aliased_fraction(
+                {"pitch_db": min(base[0], 19.747), "irregularity_db": base[1]})))):
+        tp = _texture_point(p, i, m.size, model)
+        row[key] = {"pitch_db": round(p, 3), "irregularity_db": round(i, 3),
+                    "aliased_fraction": round(alias, 4), "felt": tp.as_dict(),
+                    "felt_from_rater_rendering_db": round(tp.distance(rater_pt), 3),
+                    "felt_from_reference_db": round(tp.distance(ref_pt), 3)}
+    row["map_top_band_fraction"] = felt["aliasing"]["map_top_band_fraction"]
+    return row
+
+
+def _summary(enc: list[dict[str, Any]], model: P.Model) -> dict[str, Any]:
+    """4, over the nine: each encoder against the quotes, the rater, the band."""
     summary = {}
     for key in ("felt", "previous", "baseline"):
         q = [abs(r[key]["pitch_db"] - r["quoted_pitch_db"]) for r in enc
@@ -118,15 +144,8 @@ def run(shared: str | None = None, progress: Any = None) -> dict[str, Any]:
                 r[key]["felt_from_rater_rendering_db"] for r in enc),
             "felt_from_reference_median_db": statistics.median(
                 r[key]["felt_from_reference_db"] for r in enc),
-            "pitch_in_skin_band": sum(r[key]["pitch_db"] <= _skin_top_db(fit.model) for r in enc)}
-    return {"rows_assigned": data.rows, "fit": {"constants": C.constants_of(fit.model),
-                                                "loss": fit.loss, "model": fit.model.as_dict()},
-            "ranked": [{"loss": lo, "constants": c} for lo, c in ranked[:8]],
-            "grid_size": len(cal.grid), "variants": var_rows, "per_texture": per,
-            "leave_one_out": loo, "encoders": enc, "summary": summary,
-            "skin_band_hz": list(P.skin_band_hz(fit.model)),
-            "skin_top_db": _skin_top_db(fit.model),
-            "seconds": time.perf_counter() - t0}
+            "pitch_in_skin_band": sum(r[key]["pitch_db"] <= _skin_top_db(model) for r in enc)}
+    return summary
 
 
 def _skin_top_db(model: P.Model) -> float:
@@ -140,6 +159,11 @@ def _c(c: dict) -> str:
 
 
 def format_report(res: dict) -> str:
+    return "\n".join(_format_fit(res) + [""] + _format_per_texture(res) + [""]
+                     + _format_loo(res) + [""] + _format_encoders(res))
+
+
+def _format_fit(res: dict) -> list[str]:
     L = ["the rater's pitch file: its rows assigned to the matches by their statistics "
          "(texture <- the file's label)",
          "  " + ", ".join("%s <- %s" % (k, v) for k, v in res["rows_assigned"].items()), "",
@@ -150,25 +174,33 @@ def format_report(res: dict) -> str:
     L.append("   with the best constants:")
     for label, v in res["variants"].items():
         L.append("   %-28s loss %7.2f" % (label, v["loss"]))
-    L += ["", "2. per texture, fitted model: felt pitch / noisiness (dB) of the reference and of "
-          "the rendering the rater felt",
-          "%-9s %6s | %15s | %15s | %6s | %s" % ("texture", "quoted", "reference", "rater's rend.",
-                                                "dist", "dist without fall / fusion / either"),
-          "-" * 100]
+    return L
+
+
+def _format_per_texture(res: dict) -> list[str]:
+    L = ["2. per texture, fitted model: felt pitch / noisiness (dB) of the reference and of "
+         "the rendering the rater felt",
+         "%-9s %6s | %15s | %15s | %6s | %s" % ("texture", "quoted", "reference", "rater's rend.",
+                                               "dist", "dist without fall / fusion / either"),
+         "-" * 100]
+    v = res["variants"]
     for r in res["per_texture"]:
         n = r["texture"]
         a, b = r["reference"], r["rater_rendering"]
-        v = res["variants"]
         L.append("%-9s %6s | %6.2f / %6.2f | %6.2f / %6.2f | %6.2f | %5.2f / %5.2f / %5.2f"
                  % (n, "-" if r["quoted_pitch_db"] is None else "%.1f" % r["quoted_pitch_db"],
                     a["pitch_db"], a["noisiness_db"], b["pitch_db"], b["noisiness_db"],
                     r["felt_distance_db"], v["no fingertip fall"]["distances"][n],
                     v["no line fusion"]["distances"][n],
                     v["neither (the model before)"]["distances"][n]))
-    L += ["", "3. leave one texture out: constants fitted on the other eight; on the held-out one:",
-          "%-9s | %-44s | %6s %6s | %-22s %6s" % ("held out", "fold's constants", "dist",
-                                                  "p-quot", "encoded (rater)", "felt"),
-          "-" * 108]
+    return L
+
+
+def _format_loo(res: dict) -> list[str]:
+    L = ["3. leave one texture out: constants fitted on the other eight; on the held-out one:",
+         "%-9s | %-44s | %6s %6s | %-22s %6s" % ("held out", "fold's constants", "dist",
+                                                 "p-quot", "encoded (rater)", "felt"),
+         "-" * 108]
     for r in res["leave_one_out"]:
         e, rv = r["encoded"], r["rater"]
         L.append("%-9s | %-44s | %6.2f %6s | %6.2f/%6.2f (%5.1f/%5.1f) %6.2f"
@@ -182,20 +214,22 @@ def format_report(res: dict) -> str:
     L.append("held-out felt distance reference - rater's rendering: median %.2f dB, worst %.2f dB;"
              " |felt pitch - quoted| mean %.2f dB, worst %.2f dB" % (statistics.median(d), max(d),
                                                                     statistics.fmean(pe), max(pe)))
-    L += ["", "4. three encoders on the nine (half screen): pitch / irregularity (dB), aliased "
-          "texels (%), felt distance (dB) of their texture from the rater's rendering",
-          "   felt: the default; previous: W2, no fingertip fall, no fusion; baseline: power-"
-          "weighted mean and SD of log f. Skin band ends at %.2f dB (%.0f Hz at 86 mm/s)"
-          % (res["skin_top_db"], res["skin_band_hz"][1]),
-          "%-9s %6s %13s | %-22s | %-22s | %-22s" % ("texture", "quoted", "rater", "felt",
-                                                      "previous", "baseline"), "-" * 110]
+    return L
+
+
+def _format_encoders(res: dict) -> list[str]:
+    L = ["4. three encoders on the nine (half screen): pitch / irregularity (dB), aliased "
+         "texels (%), felt distance (dB) of their texture from the rater's rendering",
+         "   felt: the default; previous: W2, no fingertip fall, no fusion; baseline: power-"
+         "weighted mean and SD of log f. Skin band ends at %.2f dB (%.0f Hz at 86 mm/s)"
+         % (res["skin_top_db"], res["skin_band_hz"][1]),
+         "%-9s %6s %13s | %-22s | %-22s | %-22s" % ("texture", "quoted", "rater", "felt",
+                                                     "previous", "baseline"), "-" * 110]
     for r in res["encoders"]:
-        cells = []
-        for key in ("felt", "previous", "baseline"):
-            x = r[key]
-            cells.append("%6.2f/%6.2f %4.1f%% %4.2f" % (x["pitch_db"], x["irregularity_db"],
-                                                       100 * x["aliased_fraction"],
-                                                       x["felt_from_rater_rendering_db"]))
+        cells = ["%6.2f/%6.2f %4.1f%% %4.2f" % (r[k]["pitch_db"], r[k]["irregularity_db"],
+                                                100 * r[k]["aliased_fraction"],
+                                                r[k]["felt_from_rater_rendering_db"])
+                 for k in ("felt", "previous", "baseline")]
         L.append("%-9s %6s %6.2f/%6.2f | %s" % (
             r["texture"], "-" if r["quoted_pitch_db"] is None else "%.1f" % r["quoted_pitch_db"],
             r["rater"]["pitch_db"], r["rater"]["irregularity_db"], " | ".join(cells)))
@@ -209,7 +243,7 @@ def format_report(res: dict) -> str:
                     s["rater_pitch_median_abs_db"], s["rater_irregularity_median_abs_db"],
                     s["felt_from_rater_median_db"], s["pitch_in_skin_band"]))
     L.append("  (|p - quoted|: mean / max over the six seed 000 quotes; med: median over the nine)")
-    return "\n".join(L)
+    return L
 
 
 def figure(res: dict, path: str) -> None:
