@@ -3,6 +3,7 @@ canvas; pyplot and its global backend state are never touched)."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -217,16 +218,73 @@ def demo_figure(path: str | Path, scene: Any, telemetry: Any, *, display: dict |
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
+    d = _demo_data(scene, display, telemetry)
+    out: dict = {"path": str(path), "samples": int(len(d.tel)), "down": int(d.down.sum()),
+                 "amp_err_max": int(d.err[d.down].max()) if d.down.any() else None,
+                 "amp_mismatches": int((d.err != 0).sum())}
+    if truth is not None:
+        out.update(_demo_truth(d, truth))
+
+    fig = Figure(figsize=(12, 14.5), layout="constrained")
+    FigureCanvasAgg(fig)
+    gs = fig.add_gridspec(4, 2, height_ratios=[1.15, 1, 1, 1])
+    ax_map = fig.add_subplot(gs[0, :])
+    ax_zoom = fig.add_subplot(gs[1, :])
+    ax_spec = fig.add_subplot(gs[2, 0])
+    ax_hist = fig.add_subplot(gs[2, 1])
+    ax_time = fig.add_subplot(gs[3, :])
+    _demo_title(fig, title, out, d.sc.dx_um)
+    _demo_map(ax_map, d)
+    _demo_zoom(ax_zoom, d)
+    _demo_spectra(ax_spec, d)
+    _demo_histograms(ax_hist, d)
+    _demo_time(ax_time, d)
+    fig.savefig(str(path), dpi=100)
+    return out
+
+
+@dataclass
+class _Demo:
+    """What the demo figure's panels share: the scene as built (sc), its map
+    (u16 and 0..1), positions in mm, regions, and the telemetry (and truth)."""
+    sc: Any
+    u16: np.ndarray
+    fmap: np.ndarray
+    dx: float                                   # mm per position
+    x: np.ndarray                               # mm
+    spans: list
+    texs: list
+    edges: list
+    textured: list
+    colors: list
+    short: bool
+    tel: np.ndarray
+    pos: np.ndarray
+    amp: np.ndarray
+    down: np.ndarray
+    err: np.ndarray                             # |played - map[position]|, uint16 counts
+    t0: float | None
+    ts: np.ndarray                              # s from the first telemetry sample
+    tr: np.ndarray | None = None
+    tr_s: np.ndarray | None = None
+
+    @property
+    def npos(self) -> int:
+        return self.sc.positions
+
+
+_PLAYED_KW = dict(s=14, color="C3", zorder=3, edgecolors="none")
+
+
+def _demo_data(scene: Any, display: dict | None, telemetry: Any) -> _Demo:
+    """The scene built and the telemetry checked (ValueError naming the bad row)."""
     canonical, sc = _built(scene, display)
     u16 = _u16_map(sc)
     fmap = u16 / _U16                             # friction reduction 0..1 per position
     npos = sc.positions
     dx = sc.dx_um / 1000.0                        # mm per position
-    x = np.arange(npos) * dx                      # mm
     regions = canonical["regions"]
     spans = [(s, e) for (s, e, _, _) in sc.spans()]
-    texs = [r["texture"] for r in regions]
-
     tel = _rows("telemetry", telemetry, 3, "(t_us, position, amplitude)")
     t_us, pos, amp = tel[:, 0], tel[:, 1], tel[:, 2]
     if ((pos < -1) | (pos >= npos)).any():
@@ -237,65 +295,65 @@ def demo_figure(path: str | Path, scene: Any, telemetry: Any, *, display: dict |
         i = int(np.argmax((amp < 0) | (amp > 65535)))
         raise ValueError("telemetry[%d]: amplitude %d outside 0 .. 65535" % (i, amp[i]))
     down = pos >= 0
-    err = np.zeros(len(tel), dtype=np.int64)      # |played - map[position]|, uint16 counts
+    err = np.zeros(len(tel), dtype=np.int64)
     err[down] = np.abs(amp[down] - u16[pos[down]].astype(np.int64))
-    out: dict = {"path": str(path), "samples": int(len(tel)), "down": int(down.sum()),
-                 "amp_err_max": int(err[down].max()) if down.any() else None,
-                 "amp_mismatches": int((err != 0).sum())}
     t0 = float(t_us[0]) if len(tel) else None
-    ts = (_unwrap_us(t_us) - (t0 or 0.0)) / 1e6   # s from the first telemetry sample
+    # one colour per region: tab10, then the light tab20 shades (16 regions at most)
+    from matplotlib import colormaps
+    t20 = colormaps["tab20"].colors
+    return _Demo(sc=sc, u16=u16, fmap=fmap, dx=dx, x=np.arange(npos) * dx, spans=spans,
+                 texs=[r["texture"] for r in regions],
+                 edges=sorted({s for s, _ in spans} | {e for _, e in spans}),
+                 textured=[bool(np.ptp(fmap[s:e]) > 0) for s, e in spans],
+                 colors=[t20[2 * k] if k < 10 else t20[2 * (k - 10) + 1]
+                         for k in range(len(regions))],
+                 short=len(regions) > 3, tel=tel, pos=pos, amp=amp, down=down, err=err, t0=t0,
+                 ts=(_unwrap_us(t_us) - (t0 or 0.0)) / 1e6)
 
-    tr = None
-    if truth is not None:
-        tr = _rows("truth", truth, 2, "(t_us, true position)")
-        tr_t = _unwrap_us(tr[:, 0])               # rows in time order, stamps may wrap like t_us
-        if t0 is None and len(tr):
-            t0 = float(tr[0, 0])
-        tr_s = (tr_t - (t0 or 0.0)) / 1e6         # s, same origin as ts
-        out["pos_err_max"] = None
-        out["lift_mismatches"] = 0
-        if len(tel) and len(tr):
-            # the truth row nearest in time to each telemetry sample
-            near = np.zeros(len(ts), dtype=np.int64)
-            if len(tr) > 1:
-                j = np.clip(np.searchsorted(tr_s, ts), 1, len(tr) - 1)
-                near = np.where(ts - tr_s[j - 1] <= tr_s[j] - ts, j - 1, j)
-            tpos = tr[near, 1]
-            both = down & (tpos >= 0)
-            if both.any():
-                out["pos_err_max"] = int(np.abs(pos[both] - tpos[both]).max())
-            out["lift_mismatches"] = int((down != (tpos >= 0)).sum())
 
-    fig = Figure(figsize=(12, 14.5), layout="constrained")
-    FigureCanvasAgg(fig)
-    gs = fig.add_gridspec(4, 2, height_ratios=[1.15, 1, 1, 1])
-    ax_map = fig.add_subplot(gs[0, :])
-    ax_zoom = fig.add_subplot(gs[1, :])
-    ax_spec = fig.add_subplot(gs[2, 0])
-    ax_hist = fig.add_subplot(gs[2, 1])
-    ax_time = fig.add_subplot(gs[3, :])
+def _demo_truth(d: _Demo, truth: Any) -> dict:
+    """The simulated finger against the sensed one: pos_err_max, lift_mismatches
+    (and d.tr, d.tr_s for panel 5)."""
+    tr = _rows("truth", truth, 2, "(t_us, true position)")
+    tr_t = _unwrap_us(tr[:, 0])                   # rows in time order, stamps may wrap like t_us
+    t0 = d.t0
+    if t0 is None and len(tr):
+        t0 = float(tr[0, 0])
+    d.tr, d.tr_s = tr, (tr_t - (t0 or 0.0)) / 1e6     # s, same origin as ts
+    out: dict = {"pos_err_max": None, "lift_mismatches": 0}
+    if len(d.tel) and len(tr):
+        # the truth row nearest in time to each telemetry sample
+        ts, tr_s = d.ts, d.tr_s
+        near = np.zeros(len(ts), dtype=np.int64)
+        if len(tr) > 1:
+            j = np.clip(np.searchsorted(tr_s, ts), 1, len(tr) - 1)
+            near = np.where(ts - tr_s[j - 1] <= tr_s[j] - ts, j - 1, j)
+        tpos = tr[near, 1]
+        both = d.down & (tpos >= 0)
+        if both.any():
+            out["pos_err_max"] = int(np.abs(d.pos[both] - tpos[both]).max())
+        out["lift_mismatches"] = int((d.down != (tpos >= 0)).sum())
+    return out
 
+
+def _demo_title(fig: Any, title: str, out: dict, dx_um: float) -> None:
     summary = ["%d telemetry samples, %d with the finger down" % (out["samples"], out["down"])]
     played = played_words(out["amp_err_max"], out["amp_mismatches"], out["down"])
     if played is not None:
         summary.append(played)
-    finger = finger_words(out.get("pos_err_max"), sc.dx_um)
+    finger = finger_words(out.get("pos_err_max"), dx_um)
     if finger is not None:
         summary.append(finger)
     import textwrap
     fig.suptitle(textwrap.fill(title or "texelpad demo", 130) + "\n" + "; ".join(summary[:2])
                  + ("\n" + summary[2] if len(summary) > 2 else ""))
-    # one colour per region: tab10, then the light tab20 shades (16 regions at most)
-    from matplotlib import colormaps
-    t20 = colormaps["tab20"].colors
-    colors = [t20[2 * k] if k < 10 else t20[2 * (k - 10) + 1] for k in range(len(regions))]
-    short = len(regions) > 3
-    played_kw = dict(s=14, color="C3", zorder=3, edgecolors="none")
 
-    # 1. the whole display: the map, regions, played samples at their positions
-    ax_map.plot(x, fmap, lw=0.4, color="C0", label="map (what should play)")
-    edges = sorted({s for s, _ in spans} | {e for _, e in spans})
-    for b in edges:
+
+def _demo_map(ax_map: Any, d: _Demo) -> None:
+    """1. the whole display: the map, regions, played samples at their positions."""
+    dx, npos, spans, pos, amp, down = d.dx, d.npos, d.spans, d.pos, d.amp, d.down
+    ax_map.plot(d.x, d.fmap, lw=0.4, color="C0", label="map (what should play)")
+    for b in d.edges:
         ax_map.axvline(b * dx, color="0.5", lw=0.8, ls="--", zorder=1)
     gaps = [(0, spans[0][0])] + [(spans[k][1], spans[k + 1][0]) for k in range(len(spans) - 1)] \
         + [(spans[-1][1], npos)]
@@ -304,13 +362,13 @@ def demo_figure(path: str | Path, scene: Any, telemetry: Any, *, display: dict |
             ax_map.axvspan(a * dx, b * dx, color="0.85", zorder=0)
     if down.any():
         ax_map.scatter(pos[down] * dx, amp[down] / _U16, label="played (telemetry, finger down)",
-                       **played_kw)
-        bad = down & (err != 0)
+                       **_PLAYED_KW)
+        bad = down & (d.err != 0)
         if bad.any():
             ax_map.scatter(pos[bad] * dx, amp[bad] / _U16, marker="x", s=40, color="k", zorder=4,
                            label="played \u2260 map (%d)" % bad.sum())
     else:
-        ax_map.text(0.99, 0.97, "no telemetry" if not len(tel) else "finger never down",
+        ax_map.text(0.99, 0.97, "no telemetry" if not len(d.tel) else "finger never down",
                     transform=ax_map.transAxes, ha="right", va="top", color="C3")
     ax_map.set_xlim(0, npos * dx)
     ax_map.set_ylim(-0.03, 1.3)
@@ -318,18 +376,20 @@ def demo_figure(path: str | Path, scene: Any, telemetry: Any, *, display: dict |
     ax_map.set_xlabel("position (mm)")
     ax_map.set_ylabel("friction reduction")
     ax_map.set_title("friction map over the display (%d positions \u00d7 %.3g \u00b5m = %.2f mm)%s"
-                     % (npos, sc.dx_um, npos * dx,
+                     % (npos, d.sc.dx_um, npos * dx,
                         ", grey = no region (idle)" if any(b > a for a, b in gaps) else ""),
                      fontsize="medium")
     ax_map.legend(loc="upper left", ncol=3, fontsize="small", framealpha=0.9)
     top = ax_map.secondary_xaxis("top")
     top.set_xticks([(s + e) / 2 * dx for s, e in spans],
-                   labels=[_label(k, t, short) for k, t in enumerate(texs)])
-    top.tick_params(axis="x", length=0, labelsize="small" if not short else 7,
-                    rotation=0 if not short else 90)
+                   labels=[_label(k, t, d.short) for k, t in enumerate(d.texs)])
+    top.tick_params(axis="x", length=0, labelsize="small" if not d.short else 7,
+                    rotation=0 if not d.short else 90)
 
-    # 2. zoom: a few mm around the first border touching a textured region
-    textured = [bool(np.ptp(fmap[s:e]) > 0) for s, e in spans]
+
+def _demo_zoom(ax_zoom: Any, d: _Demo) -> None:
+    """2. zoom: a few mm around the first border touching a textured region."""
+    dx, npos, spans, textured, x = d.dx, d.npos, d.spans, d.textured, d.x
     half = int(round(1.5 / dx))                   # positions in 1.5 mm
     centre, what = None, ""
     for k in range(len(spans) - 1):
@@ -343,13 +403,13 @@ def demo_figure(path: str | Path, scene: Any, telemetry: Any, *, display: dict |
         what = "start of R%d" % (k + 1)
     a = max(0, min(centre - half, npos - 2 * half))
     b = min(npos, a + 2 * half)
-    ax_zoom.plot(x[a:b], fmap[a:b], lw=0.9, color="C0", label="map")
-    for e in edges:
+    ax_zoom.plot(x[a:b], d.fmap[a:b], lw=0.9, color="C0", label="map")
+    for e in d.edges:
         if a <= e <= b:
             ax_zoom.axvline(e * dx, color="0.5", lw=0.8, ls="--")
-    inz = down & (pos >= a) & (pos < b)
+    inz = d.down & (d.pos >= a) & (d.pos < b)
     if inz.any():
-        ax_zoom.scatter(pos[inz] * dx, amp[inz] / _U16, label="played", **played_kw)
+        ax_zoom.scatter(d.pos[inz] * dx, d.amp[inz] / _U16, label="played", **_PLAYED_KW)
     ax_zoom.set_xlim(x[a], x[b - 1] if b - a > 1 else x[a] + dx)
     ax_zoom.set_ylim(-0.03, 1.03)
     ax_zoom.set_xlabel("position (mm)")
@@ -358,14 +418,17 @@ def demo_figure(path: str | Path, scene: Any, telemetry: Any, *, display: dict |
                       % (x[a], x[b - 1], what, inz.sum()), fontsize="medium")
     ax_zoom.legend(loc="upper right", fontsize="small", framealpha=0.9)
 
-    # 3. spectrum of every non-constant region (c/mm on this display's spacing)
-    nyq = 1.0 / (2.0 * dx)                        # c/mm
-    scale = texel.DX_MM / dx                      # spectrum() assumes 5.3 um samples
+
+def _demo_spectra(ax_spec: Any, d: _Demo) -> None:
+    """3. spectrum of every non-constant region (c/mm on this display's spacing)."""
+    texs, colors = d.texs, d.colors
+    nyq = 1.0 / (2.0 * d.dx)                      # c/mm
+    scale = texel.DX_MM / d.dx                    # spectrum() assumes 5.3 um samples
     peak, shown = 0.0, 0
-    for k, (s, e) in enumerate(spans):
-        if not textured[k] or e - s < 2:
+    for k, (s, e) in enumerate(d.spans):
+        if not d.textured[k] or e - s < 2:
             continue
-        f, am = spectrum(fmap[s:e])
+        f, am = spectrum(d.fmap[s:e])
         f = f * scale
         keep = f > 0
         peak = max(peak, float(am[keep].max()))
@@ -389,53 +452,61 @@ def demo_figure(path: str | Path, scene: Any, telemetry: Any, *, display: dict |
     ax_spec.set_ylabel("amplitude")
     ax_spec.set_title("spectrum per region (Hann, mean removed)", fontsize="medium")
 
-    # 4. texel pitch histograms against the drawing distribution (first 4 texel regions)
+
+def _demo_histograms(ax_hist: Any, d: _Demo) -> None:
+    """4. texel pitch histograms against the drawing distribution (first 4 texel regions)."""
+    texs, colors = d.texs, d.colors
     tk = [k for k, t in enumerate(texs) if t["kind"] == "texel"]
-    if tk:
-        plans = []
-        for k in tk[:4]:
-            p = {key: v for key, v in texs[k].items() if key != "kind"}
-            p["length_samples"] = spans[k][1] - spans[k][0]   # the region sets the length
-            plans.append((k, texel.make_plan(p)))
-        lo = min(min(10 * np.log10(np.asarray(pl.f, dtype=np.float64)).min(),
-                     pl.params["pitch_db"] - 4 * 10 * 10 ** (pl.params["irregularity_db"] / 10))
-                 for _, pl in plans)
-        hi = max(max(10 * np.log10(np.asarray(pl.f, dtype=np.float64)).max(),
-                     pl.params["pitch_db"] + 4 * 10 * 10 ** (pl.params["irregularity_db"] / 10))
-                 for _, pl in plans)
-        if hi - lo < 1e-6:
-            lo, hi = lo - 0.5, hi + 0.5
-        grid = np.linspace(lo, hi, 400)                       # dB re 1 c/mm
-        fracs = []
-        for k, pl in plans:
-            db = 10 * np.log10(np.asarray(pl.f, dtype=np.float64))
-            bins = int(min(60, max(10, math.sqrt(db.size) * 2)))
-            ax_hist.hist(db, bins=np.linspace(lo, hi, bins + 1), density=True, color=colors[k],
-                         **(dict(alpha=0.45) if len(plans) == 1 else dict(histtype="step", lw=1.5)),
-                         label="R%d: %d texels" % (k + 1, db.size))
-            ax_hist.plot(grid, pitch_normal_pdf(grid, pl.params["pitch_db"],
-                                                pl.params["irregularity_db"]),
-                         color=colors[k], lw=1.5)
-            fracs.append("R%d %.0f%%" % (k + 1, 100 * pl.fraction_above_nyquist()))
-        nyq_db = 10 * math.log10(texel.NYQUIST_CPMM)          # the plan's own sample spacing
-        if lo <= nyq_db <= hi:
-            ax_hist.axvline(nyq_db, color="C3", ls="--", lw=1,
-                            label="Nyquist (above: %s)" % ", ".join(fracs))
-        else:
-            ax_hist.plot([], [], " ", label="above Nyquist: %s" % ", ".join(fracs))
-        ax_hist.plot([], [], color="0.3", lw=1.5, label="drawing distribution (lines)")
-        ax_hist.set_xlim(lo, hi)
-        ax_hist.set_ylim(0, ax_hist.get_ylim()[1] * 1.3)         # headroom for the legend
-        ax_hist.legend(loc="upper right", fontsize="x-small", framealpha=0.9)
-        ax_hist.set_title("texel pitch histogram%s" % (
-            " (first 4 of %d texel regions)" % len(tk) if len(tk) > 4 else ""), fontsize="medium")
-    else:
+    if not tk:
         _note(ax_hist, "no texel region in this scene")
         ax_hist.set_title("texel pitch histogram", fontsize="medium")
+        ax_hist.set_xlabel("texel pitch (dB re 1 cycle/mm)")
+        ax_hist.set_ylabel("density (1/dB)")
+        return
+    plans = []
+    for k in tk[:4]:
+        p = {key: v for key, v in texs[k].items() if key != "kind"}
+        p["length_samples"] = d.spans[k][1] - d.spans[k][0]   # the region sets the length
+        plans.append((k, texel.make_plan(p)))
+    lo = min(min(10 * np.log10(np.asarray(pl.f, dtype=np.float64)).min(),
+                 pl.params["pitch_db"] - 4 * 10 * 10 ** (pl.params["irregularity_db"] / 10))
+             for _, pl in plans)
+    hi = max(max(10 * np.log10(np.asarray(pl.f, dtype=np.float64)).max(),
+                 pl.params["pitch_db"] + 4 * 10 * 10 ** (pl.params["irregularity_db"] / 10))
+             for _, pl in plans)
+    if hi - lo < 1e-6:
+        lo, hi = lo - 0.5, hi + 0.5
+    grid = np.linspace(lo, hi, 400)                           # dB re 1 c/mm
+    fracs = []
+    for k, pl in plans:
+        db = 10 * np.log10(np.asarray(pl.f, dtype=np.float64))
+        bins = int(min(60, max(10, math.sqrt(db.size) * 2)))
+        ax_hist.hist(db, bins=np.linspace(lo, hi, bins + 1), density=True, color=colors[k],
+                     **(dict(alpha=0.45) if len(plans) == 1 else dict(histtype="step", lw=1.5)),
+                     label="R%d: %d texels" % (k + 1, db.size))
+        ax_hist.plot(grid, pitch_normal_pdf(grid, pl.params["pitch_db"],
+                                            pl.params["irregularity_db"]),
+                     color=colors[k], lw=1.5)
+        fracs.append("R%d %.0f%%" % (k + 1, 100 * pl.fraction_above_nyquist()))
+    nyq_db = 10 * math.log10(texel.NYQUIST_CPMM)              # the plan's own sample spacing
+    if lo <= nyq_db <= hi:
+        ax_hist.axvline(nyq_db, color="C3", ls="--", lw=1,
+                        label="Nyquist (above: %s)" % ", ".join(fracs))
+    else:
+        ax_hist.plot([], [], " ", label="above Nyquist: %s" % ", ".join(fracs))
+    ax_hist.plot([], [], color="0.3", lw=1.5, label="drawing distribution (lines)")
+    ax_hist.set_xlim(lo, hi)
+    ax_hist.set_ylim(0, ax_hist.get_ylim()[1] * 1.3)             # headroom for the legend
+    ax_hist.legend(loc="upper right", fontsize="x-small", framealpha=0.9)
+    ax_hist.set_title("texel pitch histogram%s" % (
+        " (first 4 of %d texel regions)" % len(tk) if len(tk) > 4 else ""), fontsize="medium")
     ax_hist.set_xlabel("texel pitch (dB re 1 cycle/mm)")
     ax_hist.set_ylabel("density (1/dB)")
 
-    # 5. played amplitude and finger position over time (lifted = gaps)
+
+def _demo_time(ax_time: Any, d: _Demo) -> None:
+    """5. played amplitude and finger position over time (lifted = gaps)."""
+    ts, down, amp, pos, dx, npos, tr = d.ts, d.down, d.amp, d.pos, d.dx, d.npos, d.tr
     ax_pos = ax_time.twinx()
     handles = []
     if down.any():
@@ -449,9 +520,9 @@ def demo_figure(path: str | Path, scene: Any, telemetry: Any, *, display: dict |
         handles.append(ax_pos.plot(ts, np.where(down, pos * dx, np.nan), lw=1.2, color="C1",
                                    label="sensed finger (mm)")[0])
     if tr is not None and len(tr):
-        handles.append(ax_pos.plot(tr_s, np.where(tr[:, 1] >= 0, tr[:, 1] * dx, np.nan), lw=1,
+        handles.append(ax_pos.plot(d.tr_s, np.where(tr[:, 1] >= 0, tr[:, 1] * dx, np.nan), lw=1,
                                    ls="--", color="k", label="true finger (mm)")[0])
-    if not len(tel):
+    if not len(d.tel):
         _note(ax_time, "no telemetry")
     elif not down.any():
         ax_time.text(0.5, 0.6, "finger lifted throughout", transform=ax_time.transAxes,
@@ -466,8 +537,6 @@ def demo_figure(path: str | Path, scene: Any, telemetry: Any, *, display: dict |
     if handles:
         ax_pos.legend(handles=handles, loc="upper left", ncol=len(handles), fontsize="small",
                        framealpha=0.9)
-    fig.savefig(str(path), dpi=100)
-    return out
 
 
 # --- the `texelpad encode` figure ---------------------------------------------------
@@ -482,13 +551,10 @@ def encode_figure(path: str | Path, fmap: Any, result: dict, decoded: Any = None
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from . import perception as P
     from .encoder import decode
 
     x = np.asarray(fmap, dtype=np.float64)
     y = decode(result) if decoded is None else np.asarray(decoded, dtype=np.float64)
-    n = x.size
-    dx = texel.DX_MM
     fig = Figure(figsize=(11, 12), layout="constrained")
     FigureCanvasAgg(fig)
     gs = fig.add_gridspec(4, 2, height_ratios=[1, 1, 1.25, 1.1])
@@ -508,8 +574,18 @@ def encode_figure(path: str | Path, fmap: Any, result: dict, decoded: Any = None
                      10 ** (tex["irregularity_db"] / 10), tex["gain"],
                      result["felt_distance_db"], result["method"], result["w2_distance_db"]))
 
-    # 1-2. the map and its decoding over the same stretch: 6 mm (seed 000's Fig. 4
-    # shows 6-mm samples), or the whole map when shorter
+    _encode_maps(ax_map, ax_dec, x, y, tex)
+    _encode_spectra(ax_spec, y, tex, result)
+    _encode_felt(ax_felt, tex, result)
+    _encode_words(ax_text, tex, result)
+    fig.savefig(str(path), dpi=100)
+
+
+def _encode_maps(ax_map: Any, ax_dec: Any, x: np.ndarray, y: np.ndarray, tex: dict) -> None:
+    """1-2. the map and its decoding over the same stretch: 6 mm (seed 000's Fig. 4
+    shows 6-mm samples), or the whole map when shorter."""
+    n = x.size
+    dx = texel.DX_MM
     nz = int(min(n, round(6.0 / dx)))
     xs = np.arange(nz) * dx
     ax_map.plot(xs, x[:nz], lw=0.8, color="C0")
@@ -528,8 +604,11 @@ def encode_figure(path: str | Path, fmap: Any, result: dict, decoded: Any = None
     ax_dec.set_xlabel("position (mm)")
     ax_map.set_xlim(0, max(xs[-1], dx))
 
-    # 3. spectra: band power on the log-frequency axis (the encoder's), and the
-    # decoded rendering's own spectrum, and where a finger at the model's speed feels them
+
+def _encode_spectra(ax_spec: Any, y: np.ndarray, tex: dict, result: dict) -> None:
+    """3. spectra: band power on the log-frequency axis (the encoder's), the decoded
+    rendering's own spectrum, and where a finger at the model's speed feels them."""
+    from . import perception as P
     sp = result["spectrum"]
     f = np.asarray(sp["f_cpmm"])
     ax_spec.semilogx(f, sp["map_db"], color="C0", lw=1.6, label="the map")
@@ -562,7 +641,10 @@ def encode_figure(path: str | Path, fmap: Any, result: dict, decoded: Any = None
     ax_spec.legend(loc="lower left", fontsize="small", ncol=2, framealpha=0.9)
     ax_spec.grid(True, which="both", alpha=0.25)
 
-    # 4. what the encoder compared: the felt distributions over pitch (dB)
+
+def _encode_felt(ax_felt: Any, tex: dict, result: dict) -> None:
+    """4. what the encoder compared: the felt distributions over pitch (dB)."""
+    sp = result["spectrum"]
     lf = np.asarray(sp["log10_f"]) * 10.0
     ax_felt.fill_between(lf, sp["map_felt"], step="mid", alpha=0.35, color="C0", label="the map")
     ax_felt.step(lf, sp["rendering_felt"], where="mid", color="C1", lw=1.4, label="the texture")
@@ -577,7 +659,9 @@ def encode_figure(path: str | Path, fmap: Any, result: dict, decoded: Any = None
                       fontsize="medium")
     ax_felt.legend(loc="upper left", fontsize="small")
 
-    # 5. the report's figures in words
+
+def _encode_words(ax_text: Any, tex: dict, result: dict) -> None:
+    """5. the report's figures in words."""
     ax_text.axis("off")
     lines = ["texture: %s" % _short_texture(tex)]
     rg = result.get("ranges")
@@ -615,7 +699,6 @@ def encode_figure(path: str | Path, fmap: Any, result: dict, decoded: Any = None
                                      for s in lines),
                  transform=ax_text.transAxes, va="top", ha="left", fontsize="small",
                  family="monospace")
-    fig.savefig(str(path), dpi=100)
 
 
 def _model_of(d: dict) -> Any:
