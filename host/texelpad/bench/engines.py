@@ -586,6 +586,42 @@ def _fmt(x: float | None, spec: str) -> str:
 
 def table(res: BenchResult) -> str:
     """The aligned text table and its footnotes."""
+    out = _table_head(res) + [""] + _table_grid(res) + [""]
+    notes = _table_notes(res) + _model_notes(res) + _outcome_notes(res)
+    wrapped = list(out)
+    for para in notes:
+        indent = "    " if para.startswith("  ") else "  "
+        wrapped.append(textwrap.fill(para, width=110, subsequent_indent=indent,
+                                     break_on_hyphens=False))
+    return "\n".join(wrapped)
+
+
+def _table_head(res: BenchResult) -> list[str]:
+    """What was measured and on what: the case, the host, every interpreter."""
+    timing = HARD_CASES[TIMING_CASE][0]
+    load = res.machine.get("load_average")
+    out = ["texelpad bench: %d samples (%s case: pitch %g dB, irregularity %g dB, %d texels), "
+           "median of %d; errors over %d hard cases in PWM steps (1/%d of full scale)"
+           % (res.rows[0].samples if res.rows else timing["length_samples"], TIMING_CASE,
+              timing["pitch_db"], timing["irregularity_db"],
+              res.rows[0].texels if res.rows else 0, res.repeat, len(res.case_names),
+              pr.PWM_STEPS),
+           "host: %s, %s CPUs, load average %s; Python %s, numpy %s" % (
+               res.machine.get("cpu"), res.machine.get("cpu_count"),
+               "/".join("%.2f" % x for x in load) if load else "?", res.machine.get("python"),
+               res.machine.get("numpy"))]
+    for rt in MP_RUNTIMES + (CHIP,):
+        m = res.machine.get(rt)
+        if m:
+            out.append("%s: %s %s, %s, %s, %s" % (
+                m["name"], {"circuitpython": "CircuitPython"}.get(m["impl"], "MicroPython"),
+                m["version"], m["float"], "viper" if m["viper"] else "no viper",
+                ("ulab " + m["ulab"]) if m["ulab"] else "no ulab"))
+    return out
+
+
+def _table_grid(res: BenchResult) -> list[str]:
+    """The table itself: one row per runtime and engine, columns aligned."""
     heads = ["runtime", "engine", "full map ms", "fastest", "plan ms", "synth ms", "max err",
              "RMS err", "worst case", "<=bound", "map B", "transient B", "est RP2040 ms*"]
     right = {2, 3, 4, 5, 6, 7, 10, 11, 12}
@@ -607,37 +643,18 @@ def table(res: BenchResult) -> str:
         return "  ".join(c.rjust(w) if i in right else c.ljust(w)
                          for i, (c, w) in enumerate(zip(cells, widths))).rstrip()
 
-    timing = HARD_CASES[TIMING_CASE][0]
-    load = res.machine.get("load_average")
-    out = ["texelpad bench: %d samples (%s case: pitch %g dB, irregularity %g dB, %d texels), "
-           "median of %d; errors over %d hard cases in PWM steps (1/%d of full scale)"
-           % (res.rows[0].samples if res.rows else timing["length_samples"], TIMING_CASE,
-              timing["pitch_db"], timing["irregularity_db"],
-              res.rows[0].texels if res.rows else 0, res.repeat, len(res.case_names),
-              pr.PWM_STEPS),
-           "host: %s, %s CPUs, load average %s; Python %s, numpy %s" % (
-               res.machine.get("cpu"), res.machine.get("cpu_count"),
-               "/".join("%.2f" % x for x in load) if load else "?", res.machine.get("python"),
-               res.machine.get("numpy"))]
-    for rt in MP_RUNTIMES + (CHIP,):
-        m = res.machine.get(rt)
-        if m:
-            out.append("%s: %s %s, %s, %s, %s" % (
-                m["name"], {"circuitpython": "CircuitPython"}.get(m["impl"], "MicroPython"),
-                m["version"], m["float"], "viper" if m["viper"] else "no viper",
-                ("ulab " + m["ulab"]) if m["ulab"] else "no ulab"))
-    out.append("")
-    out.append(fmt_line(heads))
-    out.append(fmt_line(["-" * w for w in widths]))
-    out += [fmt_line(l) for l in lines_]
-    out.append("")
-    notes_from = len(out)
-    out.append("full map = plan + synthesis (medians); fastest = fastest plan + fastest "
-               "synthesis (less disturbed by other load); plan = texel.make_plan(params); synthesis = "
-               "engine.render_u16(plan, out) into a reused uint16 buffer.")
-    out.append("max/RMS err: uint16 map against the float64 reference, max over every sample of "
-               "every case, RMS with every case weighted alike; worst case: where the max is; "
-               "<=bound: every sample within precision.error_bound (else: samples over).")
+    return ([fmt_line(heads), fmt_line(["-" * w for w in widths])]
+            + [fmt_line(l) for l in lines_])
+
+
+def _table_notes(res: BenchResult) -> list[str]:
+    """What the columns mean, and the plans by format."""
+    out = ["full map = plan + synthesis (medians); fastest = fastest plan + fastest "
+           "synthesis (less disturbed by other load); plan = texel.make_plan(params); synthesis = "
+           "engine.render_u16(plan, out) into a reused uint16 buffer.",
+           "max/RMS err: uint16 map against the float64 reference, max over every sample of "
+           "every case, RMS with every case weighted alike; worst case: where the max is; "
+           "<=bound: every sample within precision.error_bound (else: samples over)."]
     narrow = sorted({(r.float_bits, r.runtime_name) for r in res.rows if r.float_bits < 53})
     if narrow:
         out.append("narrow floats (%s): the plan (pitches, phases) is made in the "
@@ -659,6 +676,13 @@ def table(res: BenchResult) -> str:
         out.append("plan of the %s map by texture format, format 1 (float plan) / format 2 "
                    "(integer plan, gen/plan_int.py), median ms: %s." % (TIMING_CASE,
                                                                        "; ".join(plans)))
+    return out
+
+
+def _model_notes(res: BenchResult) -> list[str]:
+    """The op-count model of the RP2040: against the emulated chip, its costs,
+    its check on the unix port, and the estimates per engine."""
+    out = []
     chip = [r for r in res.rows if r.runtime == CHIP and r.est_rp2040]
     if chip:
         out.append("op-count model against the emulated chip (estimate / measured ms, plan + "
@@ -701,6 +725,12 @@ def table(res: BenchResult) -> str:
                                                       r.est_rp2040["synth_ms"]))
         if est:
             out.append("  estimated plan+synthesis ms: " + ", ".join(est.values()))
+    return out
+
+
+def _outcome_notes(res: BenchResult) -> list[str]:
+    """Each row's notes, then what was skipped and what failed."""
+    out = []
     for r in res.rows:
         for n in r.notes:
             out.append("note (%s %s): %s" % (r.runtime_name, r.label, n))
@@ -710,12 +740,7 @@ def table(res: BenchResult) -> str:
     for f in res.failed:
         out.append("FAILED: %s: %s" % (RUNTIME_NAMES.get(f["runtime"], f["runtime"]),
                                        f["reason"]))
-    wrapped = out[:notes_from]
-    for para in out[notes_from:]:
-        indent = "    " if para.startswith("  ") else "  "
-        wrapped.append(textwrap.fill(para, width=110, subsequent_indent=indent,
-                                     break_on_hyphens=False))
-    return "\n".join(wrapped)
+    return out
 
 
 def to_json(res: BenchResult) -> dict[str, Any]:
