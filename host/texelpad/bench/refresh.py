@@ -578,7 +578,6 @@ def _wrap(para: str) -> str:
 
 def table(res: RefreshBenchResult) -> str:
     """The aligned tables and their footnotes."""
-    info = res.info
     load = res.machine.get("load_average")
     mp = res.machine.get("micropython", {})
     out = ["texelpad bench-refresh: one refresh of the %s Hz loop (budget %d us per refresh, "
@@ -591,97 +590,11 @@ def table(res: RefreshBenchResult) -> str:
            % (res.machine.get("cpu"), res.machine.get("cpu_count"),
               "/".join("%.2f" % x for x in load) if load else "?", res.seconds), ""]
     notes: list[str] = []
-    if res.refresh:
-        rows = []
-        for r in res.refresh:
-            rows.append([VARIANT_LABELS[r.variant], r.mode, _fmt(r.stat.median_us, ".2f"),
-                         _fmt(r.stat.worst_us, ".2f"), _fmt(r.stat.best_us, ".2f"),
-                         _fmt(r.minus_adc_median_us, ".2f"), "%.1f %%" % r.budget_pct,
-                         "yes" if r.meets_goal else "no", "{:,}".format(r.refreshes),
-                         str(r.per_call_worst_us)])
-        out += _grid(["refresh (split screen, swipe)", "mode", "median us", "worst us",
-                      "best us", "- ADC us", "of budget", "<=10 us", "refreshes",
-                      "1-call worst us"], rows, {2, 3, 4, 5, 6, 8, 9})
-        out.append("")
-        sw = info.get("swipe_ms_mm")
-        notes.append("refresh: the callback app.start gives the board (hw.cb), called as the "
-                     "timer would, %d refreshes per batch timed with time.ticks_us, minus the "
-                     "same loop without the call; median/worst/best = the batches' per-refresh "
-                     "averages. The finger (app.finger keyframes, ms: mm) %s repeats: a swipe "
-                     "5 -> 95 mm -> 5 mm at 100 mm/s over both halves, lifted %.1f %% of the "
-                     "time. '- ADC' = median minus the virtual ADC's median (finger script and "
-                     "calibration, which a board replaces by its ADC read). 1-call worst = the "
-                     "refresh's own worst_us (one call, real clock: includes host preemption)."
-                     % (res.refresh[0].stat.batch,
-                        ", ".join("%s: %s" % (t, "lift" if p is None else p) for t, p in sw)
-                        if sw else "?", 100.0 * info.get("lifted_fraction", 0.0)))
-    if res.components:
-        rows = [[COMPONENT_LABELS.get(c.name, c.name), VARIANT_LABELS[c.variant],
-                 _fmt(c.stat.median_us, ".3f"), _fmt(c.stat.worst_us, ".3f"),
-                 _fmt(c.stat.best_us, ".3f"), str(c.stat.batches)] for c in res.components]
-        out += _grid(["component (per call)", "measured in", "median us", "worst us",
-                      "best us", "batches"], rows, {2, 3, 4, 5})
-        out.append("")
-        notes.append("components: each called through a stored bound method over the swipe's "
-                     "inputs (times, positions, amplitudes, duties of one swipe cycle), timed "
-                     "like the refresh.")
-    if res.scenes:
-        variants = [v for v in ("python", "viper") if any(v in s.push for s in res.scenes)]
-        heads = ["scene", "regions", "Scene.nbytes", "mem_alloc delta", "build churn B",
-                 "validate us", "build us"]
-        heads += ["swap us (%s)" % v for v in variants] + ["push us"]
-        rows = []
-        for s in res.scenes:
-            first = s.push.get("python") or next(iter(s.push.values()), None)
-            row = [SCENE_LABELS.get(s.key, s.key), str(s.regions), "{:,}".format(s.nbytes),
-                   "{:,}".format(s.mem_alloc_delta),
-                   "{:,}".format(s.build_churn_bytes) if s.build_churn_bytes is not None else "-",
-                   _fmt(first.validate_us if first else None, ".0f"),
-                   _fmt(first.build_us if first else None, ",.0f")]
-            row += [_fmt(s.push[v].swap_us if v in s.push else None, ".0f") for v in variants]
-            row.append(_fmt(first.push_us if first else None, ",.0f"))
-            rows.append(row)
-        out += _grid(heads, rows, set(range(1, len(heads))))
-        out.append("")
-        notes.append("scenes: %s. Scene.nbytes = sample buffers + region table; mem_alloc "
-                     "delta = gc.mem_alloc() growth once built (after gc.collect(): also the "
-                     "canonical dict and the objects; 64-bit unix sizes); build churn = bytes "
-                     "allocated by one build with gc off (%s heap), garbage the collector "
-                     "reclaims during a push. While a push builds, the old scene is still "
-                     "playing: peak = old + new scene."
-                     % ("; ".join("%s = %s" % (SCENE_LABELS.get(s.key, s.key), s.what)
-                                  for s in res.scenes), CHURN_HEAP))
-        notes.append("push: app.push(scene) on the running virtual board, median of %d; "
-                     "validate = scene.validate() timed alone; build and swap = "
-                     "status()['last_push'] (app's clock pointed at the real one meanwhile: "
-                     "the virtual board's stepped clock reports 0); push = the whole call, "
-                     "the rest being app's gc.collect() and status() (a collection of a %s "
-                     "heap). swap (viper) rebuilds the fused refresh's address table."
-                     % (len(next(iter(res.scenes[0].push.values())).runs)
-                        if res.scenes and res.scenes[0].push else 0, MP_HEAP))
-    if res.estimates:
-        c = res.rp2040_costs
-        rows = [[e.path, e.label, _fmt(e.counts["I"], ".0f"), _fmt(e.counts["N"], ".0f"),
-                 _fmt(e.counts["C"], ".0f"), _fmt(e.counts["Vop"], ".0f"),
-                 _fmt(e.counts["us"], ".0f"), _fmt(e.est_us, ",.1f"),
-                 "%.0f %%" % e.budget_pct, "yes" if e.meets_goal else "no"]
-                for e in res.estimates]
-        out.append("ESTIMATE, not a measurement: one refresh on an emulated RP2040 @ 125 MHz")
-        out += _grid(["path", "what runs", "I", "N", "C", "Vop", "ADC us", "est us*",
-                      "of budget", "<=10 us"], rows, {2, 3, 4, 5, 6, 7, 8})
-        out.append("")
-        notes.append("* " + FORMULA + ". Here I = %.2f us, N = %.2f us, C = %.2f us, "
-                     "Vop = %.4f us (%s). Not counted: MicroPython's own IRQ entry and exit."
-                     % (c["I"], c["N"], c["C"], c["Vop"], res.rp2040_costs_note))
-    if res.checks:
-        parts = ["%s %.3f/%.3f" % (k.name, k.predicted_us, k.measured_us) for k in res.checks]
-        notes.append("  check of the op counts on the unix port (same counts, unix per-op "
-                     "costs measured in this run), predicted/measured us: " + "; ".join(parts))
-        off = [k.name for k in res.checks if not 0.5 <= k.ratio <= 2.0]
-        if off:
-            notes.append("  WARNING: the op-count model misses the unix timing of %s by more "
-                         "than 2x: the counts in texelpad/bench/refresh.py may be stale"
-                         % ", ".join(off))
+    for section in (_refresh_section, _components_section, _scenes_section,
+                    _estimates_section, _checks_section):
+        lines, more = section(res)
+        out += lines
+        notes += more
     if res.chip:
         from .chip import table_lines
         out += table_lines(res.chip, res.chip_check, GOAL_US, BUDGET_US) + [""]
@@ -690,6 +603,138 @@ def table(res: RefreshBenchResult) -> str:
     for f in res.failed:
         notes.append("FAILED: %s: %s" % (f["runtime"], f["reason"]))
     return "\n".join(out + [_wrap(n) for n in notes])
+
+
+def _refresh_section(res: RefreshBenchResult) -> tuple[list[str], list[str]]:
+    """The refresh loop's table and its note (none without a run)."""
+    out: list[str] = []
+    notes: list[str] = []
+    if not res.refresh:
+        return out, notes
+    info = res.info
+    rows = []
+    for r in res.refresh:
+        rows.append([VARIANT_LABELS[r.variant], r.mode, _fmt(r.stat.median_us, ".2f"),
+                     _fmt(r.stat.worst_us, ".2f"), _fmt(r.stat.best_us, ".2f"),
+                     _fmt(r.minus_adc_median_us, ".2f"), "%.1f %%" % r.budget_pct,
+                     "yes" if r.meets_goal else "no", "{:,}".format(r.refreshes),
+                     str(r.per_call_worst_us)])
+    out += _grid(["refresh (split screen, swipe)", "mode", "median us", "worst us",
+                  "best us", "- ADC us", "of budget", "<=10 us", "refreshes",
+                  "1-call worst us"], rows, {2, 3, 4, 5, 6, 8, 9})
+    out.append("")
+    sw = info.get("swipe_ms_mm")
+    notes.append("refresh: the callback app.start gives the board (hw.cb), called as the "
+                 "timer would, %d refreshes per batch timed with time.ticks_us, minus the "
+                 "same loop without the call; median/worst/best = the batches' per-refresh "
+                 "averages. The finger (app.finger keyframes, ms: mm) %s repeats: a swipe "
+                 "5 -> 95 mm -> 5 mm at 100 mm/s over both halves, lifted %.1f %% of the "
+                 "time. '- ADC' = median minus the virtual ADC's median (finger script and "
+                 "calibration, which a board replaces by its ADC read). 1-call worst = the "
+                 "refresh's own worst_us (one call, real clock: includes host preemption)."
+                 % (res.refresh[0].stat.batch,
+                    ", ".join("%s: %s" % (t, "lift" if p is None else p) for t, p in sw)
+                    if sw else "?", 100.0 * info.get("lifted_fraction", 0.0)))
+    return out, notes
+
+
+def _components_section(res: RefreshBenchResult) -> tuple[list[str], list[str]]:
+    """Each component's cost per call, and the note."""
+    out: list[str] = []
+    notes: list[str] = []
+    if not res.components:
+        return out, notes
+    rows = [[COMPONENT_LABELS.get(c.name, c.name), VARIANT_LABELS[c.variant],
+             _fmt(c.stat.median_us, ".3f"), _fmt(c.stat.worst_us, ".3f"),
+             _fmt(c.stat.best_us, ".3f"), str(c.stat.batches)] for c in res.components]
+    out += _grid(["component (per call)", "measured in", "median us", "worst us",
+                  "best us", "batches"], rows, {2, 3, 4, 5})
+    out.append("")
+    notes.append("components: each called through a stored bound method over the swipe's "
+                 "inputs (times, positions, amplitudes, duties of one swipe cycle), timed "
+                 "like the refresh.")
+    return out, notes
+
+
+def _scenes_section(res: RefreshBenchResult) -> tuple[list[str], list[str]]:
+    """Each scene's size and push, and the notes."""
+    out: list[str] = []
+    notes: list[str] = []
+    if not res.scenes:
+        return out, notes
+    variants = [v for v in ("python", "viper") if any(v in s.push for s in res.scenes)]
+    heads = ["scene", "regions", "Scene.nbytes", "mem_alloc delta", "build churn B",
+             "validate us", "build us"]
+    heads += ["swap us (%s)" % v for v in variants] + ["push us"]
+    rows = []
+    for s in res.scenes:
+        first = s.push.get("python") or next(iter(s.push.values()), None)
+        row = [SCENE_LABELS.get(s.key, s.key), str(s.regions), "{:,}".format(s.nbytes),
+               "{:,}".format(s.mem_alloc_delta),
+               "{:,}".format(s.build_churn_bytes) if s.build_churn_bytes is not None else "-",
+               _fmt(first.validate_us if first else None, ".0f"),
+               _fmt(first.build_us if first else None, ",.0f")]
+        row += [_fmt(s.push[v].swap_us if v in s.push else None, ".0f") for v in variants]
+        row.append(_fmt(first.push_us if first else None, ",.0f"))
+        rows.append(row)
+    out += _grid(heads, rows, set(range(1, len(heads))))
+    out.append("")
+    notes.append("scenes: %s. Scene.nbytes = sample buffers + region table; mem_alloc "
+                 "delta = gc.mem_alloc() growth once built (after gc.collect(): also the "
+                 "canonical dict and the objects; 64-bit unix sizes); build churn = bytes "
+                 "allocated by one build with gc off (%s heap), garbage the collector "
+                 "reclaims during a push. While a push builds, the old scene is still "
+                 "playing: peak = old + new scene."
+                 % ("; ".join("%s = %s" % (SCENE_LABELS.get(s.key, s.key), s.what)
+                              for s in res.scenes), CHURN_HEAP))
+    notes.append("push: app.push(scene) on the running virtual board, median of %d; "
+                 "validate = scene.validate() timed alone; build and swap = "
+                 "status()['last_push'] (app's clock pointed at the real one meanwhile: "
+                 "the virtual board's stepped clock reports 0); push = the whole call, "
+                 "the rest being app's gc.collect() and status() (a collection of a %s "
+                 "heap). swap (viper) rebuilds the fused refresh's address table."
+                 % (len(next(iter(res.scenes[0].push.values())).runs)
+                    if res.scenes and res.scenes[0].push else 0, MP_HEAP))
+    return out, notes
+
+
+def _estimates_section(res: RefreshBenchResult) -> tuple[list[str], list[str]]:
+    """The op-count estimate of one refresh on the RP2040."""
+    out: list[str] = []
+    notes: list[str] = []
+    if not res.estimates:
+        return out, notes
+    c = res.rp2040_costs
+    rows = [[e.path, e.label, _fmt(e.counts["I"], ".0f"), _fmt(e.counts["N"], ".0f"),
+             _fmt(e.counts["C"], ".0f"), _fmt(e.counts["Vop"], ".0f"),
+             _fmt(e.counts["us"], ".0f"), _fmt(e.est_us, ",.1f"),
+             "%.0f %%" % e.budget_pct, "yes" if e.meets_goal else "no"]
+            for e in res.estimates]
+    out.append("ESTIMATE, not a measurement: one refresh on an emulated RP2040 @ 125 MHz")
+    out += _grid(["path", "what runs", "I", "N", "C", "Vop", "ADC us", "est us*",
+                  "of budget", "<=10 us"], rows, {2, 3, 4, 5, 6, 7, 8})
+    out.append("")
+    notes.append("* " + FORMULA + ". Here I = %.2f us, N = %.2f us, C = %.2f us, "
+                 "Vop = %.4f us (%s). Not counted: MicroPython's own IRQ entry and exit."
+                 % (c["I"], c["N"], c["C"], c["Vop"], res.rp2040_costs_note))
+    return out, notes
+
+
+def _checks_section(res: RefreshBenchResult) -> tuple[list[str], list[str]]:
+    """The op counts checked on the unix port."""
+    out: list[str] = []
+    notes: list[str] = []
+    if not res.checks:
+        return out, notes
+    parts = ["%s %.3f/%.3f" % (k.name, k.predicted_us, k.measured_us) for k in res.checks]
+    notes.append("  check of the op counts on the unix port (same counts, unix per-op "
+                 "costs measured in this run), predicted/measured us: " + "; ".join(parts))
+    off = [k.name for k in res.checks if not 0.5 <= k.ratio <= 2.0]
+    if off:
+        notes.append("  WARNING: the op-count model misses the unix timing of %s by more "
+                     "than 2x: the counts in texelpad/bench/refresh.py may be stale"
+                     % ", ".join(off))
+    return out, notes
 
 
 def to_json(res: RefreshBenchResult) -> dict[str, Any]:
