@@ -59,6 +59,13 @@ def make_plan(params, draws=None):
     (gen/plan_int.py, integer, the same bits on every runtime). draws replays
     the lab's logged float draws: format 1 only."""
     p = validate(params)
+    if compat.numpy_mod is not None and compat.IMPL == "cpython":
+        # CPython: the same plan bit for bit, built with numpy (gen/plan_numpy.py,
+        # docs/generator.md; the loops below 48 texels). Boards never come here:
+        # they have no numpy (ulab's is ulab.numpy, never compat.numpy_mod), and
+        # plan_numpy is a host-only module.
+        from .gen.plan_numpy import make_plan as _make_plan
+        return _make_plan(p, draws)
     if p["v"] == 2:
         if draws is not None:
             raise ValueError("draws: replaying logged draws is format 1's (v=1); "

@@ -175,7 +175,9 @@ def test_hard_cases(case, v):
     assert_same_plan(want, got, case)
     fresh = Plan(p) if v == 1 else PlanInt(p)   # the engine's own float views (format 2)
     assert_same_maps(want, fresh, got, label=case)
-    assert_same_plan(texel.make_plan(p), PN.make_plan(p), case)
+    # texel.make_plan (numpy on CPython) against the loops' plan, the same keys
+    assert_same_plan(fresh, texel.make_plan(p), case)
+    assert_same_plan(fresh, texel.make_plan(dict(HARD_CASES[case][0], v=v)), case)
 
 
 @pytest.fixture(scope="module")
@@ -191,6 +193,7 @@ def test_golden_runs_replayed_draws(gruns):
         want = Plan(p, r["draws"])
         got = PN.make_plan(p, r["draws"])
         assert_same_plan(want, got, r["id"])
+        assert_same_plan(want, texel.make_plan(r["params"], r["draws"]), r["id"])
         assert_same_maps(want, got, label=r["id"])
         # and still the original's map (tests/gen/test_golden.py's bound)
         assert np.abs(engine_numpy.render_y(got) - r["map"]).max() < 1e-9
@@ -230,6 +233,43 @@ def test_make_plan_takes_the_loop_for_few_texels(v):
         assert type(got) is (loop if count < PN.LOOP_BELOW else fast), count
         assert_same_plan(loop(p), got, count)
         assert_same_plan(loop(p), fast(p), count)
+        assert type(texel.make_plan(p)) is type(got), count   # texel's API: the same choice
+
+
+def test_texel_make_plan_uses_plan_numpy_on_cpython_only(monkeypatch):
+    """texel.make_plan on CPython with numpy is plan_numpy's (issue 23 item
+    9); where compat has no numpy, or on any other implementation (a board),
+    it runs the loops - the same plans, the same refusals word for word."""
+    p = dict(HARD_CASES["study"][0])                      # 384 texels
+    assert type(texel.make_plan(p)) is PN.PlanNumpy
+    assert type(texel.make_plan(dict(p, v=2))) is PN.PlanIntNumpy
+    draws = (0.25, [0.5] * 384)
+    assert type(texel.make_plan(p, draws)) is PN.PlanNumpy
+
+    def refusals():
+        out = []
+        for args in [(dict(p, v=2), draws), (dict(p, v=2), (0.5, [])), (p, (0.5, [0.0])),
+                     (p, (2.0, [0.0] * 384)), (p, 3), (p, (0.5, [float("nan")] * 384)),
+                     (dict(p, v=3), None), (dict(p, pitch_db=99.0), None),
+                     (dict(p, bogus=1), None)]:
+            with pytest.raises(ValueError) as e:
+                texel.make_plan(*args)
+            out.append(str(e.value))
+        return out
+
+    on_numpy = refusals()
+    assert on_numpy[0] == on_numpy[1] == ("draws: replaying logged draws is format 1's (v=1); "
+                                          "format 2 draws from its seed")
+    plans = [texel.make_plan(p), texel.make_plan(dict(p, v=2)), texel.make_plan(p, draws)]
+    for attr, value in (("numpy_mod", None), ("IMPL", "micropython")):
+        with monkeypatch.context() as m:
+            m.setattr(texel.compat, attr, value)
+            loops = [texel.make_plan(p), texel.make_plan(dict(p, v=2)),
+                     texel.make_plan(p, draws)]
+            assert [type(x) for x in loops] == [Plan, PlanInt, Plan], attr
+            assert refusals() == on_numpy, attr
+        for want, got in zip(loops, plans):
+            assert_same_plan(want, got, attr)
 
 
 def test_generator_outputs_are_the_rng_stream():
