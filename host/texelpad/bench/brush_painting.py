@@ -367,20 +367,28 @@ def _para(text: str) -> str:
 
 
 def format_tables(res: dict) -> str:
+    # each table ends with its blank line
+    return "\n".join(_intro(res) + [""] + _fits_table(res) + _distance_tables(res)
+                     + _silhouettes(res) + _feel_table(res) + _acf_table(res))
+
+
+def _intro(res: dict) -> list[str]:
     cfg = res["config"]
     names = cfg["sources"]
-    per = res["sources"]
-    lines = []
     w_mm = cfg["window"] * cfg["dx_mm"]
-    lines.append(_para(
+    return [_para(
         "What painting makes: %d sources, each fitted to a brush (%s; window %d samples = "
         "%.4f mm, hop %d, %d wavenumbers), painted with seeds %s (%d samples each); %d swipes "
         "of each source and %d of its paintings (SwipeModel, %d samples), Weibull per "
         "wavenumber per swipe."
         % (len(names), cfg["brush_format"], cfg["window"], w_mm, cfg["hop"], cfg["wavenumbers"],
            ", ".join(map(str, cfg["paint_seeds"])), cfg["samples"], cfg["swipes"],
-           cfg["swipes"], cfg["model"]["length_samples"])))
-    lines.append("")
+           cfg["swipes"], cfg["model"]["length_samples"]))]
+
+
+def _fits_table(res: dict) -> list[str]:
+    names, per = res["config"]["sources"], res["sources"]
+    lines = []
     lines.append("Fits (mean K-S of the Weibull fits; brush: the source map's, over all its "
                  "windows):")
     lines.append("  %-14s %8s %10s %12s %13s %9s" % ("source", "windows", "brush K-S",
@@ -392,6 +400,12 @@ def format_tables(res: dict) -> str:
             statistics.mean(s["weibull_ks_mean"] for s in p["source_swipes"]),
             statistics.mean(s["weibull_ks_mean"] for s in p["painted_swipes"]), p["paint_s"]))
     lines.append("")
+    return lines
+
+
+def _distance_tables(res: dict) -> list[str]:
+    names = res["config"]["sources"]
+    lines = []
     lines.append(_para(
         "Distances between swipes' Weibull vectors (seed 002's metrics), median over pairs: "
         "within the source's swipes, source-to-painting, within the painting's, to the nearest "
@@ -419,6 +433,11 @@ def format_tables(res: dict) -> str:
             c["silhouette_painted_swipes_mean"], 100 * c["accuracy_source"],
             100 * c["accuracy_painted"]))
     lines.append("")
+    return lines
+
+
+def _silhouettes(res: dict) -> list[str]:
+    lines = []
     lines.append(_para(
         "Silhouette of the swipes clustered by source (Weibull; seed 002 Table II's column on "
         "our data), the sources' swipes alone / with the painted swipes labelled as their "
@@ -428,6 +447,12 @@ def format_tables(res: dict) -> str:
         lines.append("  %-24s %7.3f / %7.3f" % (C.METRIC_LABELS[me], c["silhouette_sources"],
                                                 c["silhouette_with_paintings"]))
     lines.append("")
+    return lines
+
+
+def _feel_table(res: dict) -> list[str]:
+    names = res["config"]["sources"]
+    lines = []
     lines.append(_para(
         "How it feels (texelpad.analysis.perception, dB on the felt plane: felt pitch and "
         "noisiness; under 1 dB the same; W2: the felt spectra's 2-Wasserstein distance; levels "
@@ -443,6 +468,14 @@ def format_tables(res: dict) -> str:
             r["w2_source_painting"], r["level_source_db"], r["level_painting_db"]))
     lines.append("  (others: the median over the other sources)")
     lines.append("")
+    return lines
+
+
+def _acf_table(res: dict) -> list[str]:
+    cfg = res["config"]
+    names, per = cfg["sources"], res["sources"]
+    w_mm = cfg["window"] * cfg["dx_mm"]
+    lines = []
     lags = cfg["lags"]
     cols = _lag_columns(lags)
     nw = sum(1 for k in lags if k.endswith("W"))
@@ -467,7 +500,7 @@ def format_tables(res: dict) -> str:
         met += a["criterion_met"]
     lines.append("  paintings meeting |r| <= %g at every lag: %d of %d"
                  % (cfg["acf_limit"], met, len(names)))
-    return "\n".join(lines)
+    return lines
 
 
 # --- the figure -----------------------------------------------------------------------
