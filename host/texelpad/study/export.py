@@ -139,7 +139,7 @@ def write_csv(data: str | os.PathLike, out: str | os.PathLike,
 
 
 def figure(s: Session, out: str | os.PathLike) -> Path:
-    """The session's summary figure (PNG)."""
+    """The session's summary figure (PNG): one plot per protocol (_PLOTS)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -148,97 +148,124 @@ def figure(s: Session, out: str | os.PathLike) -> Path:
     fig, ax = plt.subplots(figsize=(6, 4.2))
     title = "%s, %s (%s): %d answers" % (h["protocol"], h["participant"], s.path.stem,
                                           sum(1 for _ in s.answers()))
-    plane = h["protocol"] in ("pursuit", "search", "free")
-    if plane:
+    if h["protocol"] in ("pursuit", "search", "free"):
         _references_on(ax, h)
-    if h["protocol"] == "free":
-        ms = state.matches
-        for m in ms:
-            ax.plot(m["pitch_db"], m["irregularity_db"], "o", ms=4 + 2 * m["confidence"],
-                    color="C%d" % (list(state.config.references).index(m["reference"]) % 10))
-            ax.annotate(m["reference"], (m["pitch_db"], m["irregularity_db"]), fontsize=7,
-                        xytext=(4, 4), textcoords="offset points")
-        ax.set_xlabel("pitch (dB re 1 c/mm)")
-        ax.set_ylabel("irregularity (dB re 1 decade)")
-        ax.text(0.01, 0.99, "o: the matches (size: confidence)\nx: the references' spectral "
-                "positions", transform=ax.transAxes, va="top", fontsize=7)
-    elif h["protocol"] == "quant" and state.config.design == "matrix":
-        refs = list(state.config.references)
-        cells: dict[tuple[int, int], list[int]] = {}
-        for r in state.ratings:
-            cells.setdefault((refs.index(r["reference"]), refs.index(r["match_of"])),
-                             []).append(r["similarity"])
-        import numpy as np
-        grid = np.full((len(refs), len(refs)), np.nan)
-        for (i, j), v in cells.items():
-            grid[i, j] = sum(v) / len(v)
-        im = ax.imshow(grid, vmin=1, vmax=5, cmap="viridis")
-        for (i, j), v in cells.items():
-            ax.text(j, i, "%.1f" % grid[i, j], ha="center", va="center", color="w")
-        ax.set_xticks(range(len(refs)), ["%s's match" % r for r in refs], fontsize=8)
-        ax.set_yticks(range(len(refs)), refs, fontsize=8)
-        ax.set_ylabel("reference")
-        fig.colorbar(im, ax=ax, label="similarity (1..5)")
-    elif h["protocol"] == "quant":
-        by: dict[str, dict[float, list[int]]] = {}
-        for r in state.ratings:
-            by.setdefault(r["reference"], {}).setdefault(r["quant_db"], []).append(r["similarity"])
-        for i, (ref, levels) in enumerate(sorted(by.items())):
-            qs = sorted(levels)
-            ax.plot([q + 0.08 * (i - 1) for q in qs],
-                    [sum(levels[q]) / len(levels[q]) for q in qs], "o-", label=ref)
-        ax.set_xlabel("quantization q (dB)")
-        ax.set_ylabel("similarity (1..5)")
-        ax.set_ylim(0.5, 5.5)
-        ax.set_xticks(list(state.config.levels_db))
-        ax.legend(title="match: %s" % state.config.match_source, fontsize=8, title_fontsize=8)
-    elif h["protocol"] == "pursuit":
-        pts = [state.history[0]["centre_before"]] if state.history else \
-            [{"u": state.centre.u, "v": state.centre.v}]
-        pts += [e["centre_after"] for e in state.history]
-        ax.plot([pitch_db(p["u"]) for p in pts], [irregularity_db(p["v"]) for p in pts], "o-")
-        ax.annotate("start", (pitch_db(pts[0]["u"]), irregularity_db(pts[0]["v"])))
-        ax.set_xlabel("pitch (dB re 1 c/mm)")
-        ax.set_ylabel("irregularity (dB re 1 decade)")
-    elif h["protocol"] == "staircase":
-        track = state.track
-        ax.plot([t["length_mm"] for t in track], "-", color="0.6")
-        for i, t in enumerate(track):
-            ax.plot(i, t["length_mm"], "o" if t["correct"] else "x",
-                    color="C2" if t["correct"] else "C3")
-        rev = [i for i, t in enumerate(track) if t["reversal"]]
-        ax.plot(rev, [track[i]["length_mm"] for i in rev], "s", mfc="none", ms=10,
-                label="reversals")
-        thr = state.threshold_mm()
-        if thr is not None:
-            ax.axhline(thr, ls="--", label="threshold %.2f mm" % thr)
-        ax.set_xlabel("trial")
-        ax.set_ylabel("texel length (mm)")
-        ax.legend()
-    elif h["protocol"] == "search":
-        means = [rec["mean_after"] for rec in state.history]
-        ax.set_xlabel("pitch (dB re 1 c/mm)")
-        ax.set_ylabel("irregularity (dB re 1 decade)")
-        if means:
-            xs = [pitch_db(m[0]) for m in means]
-            ys = [irregularity_db(m[1]) for m in means]
-            ax.plot(xs, ys, "-", color="0.7")
-            sc = ax.scatter(xs, ys, c=range(len(means)), cmap="viridis", zorder=3)
-            fig.colorbar(sc, ax=ax, label="iteration")
-            ax.annotate("end", (xs[-1], ys[-1]))
-            # the step size per iteration, inset
-            steps = [math.dist(a, b) for a, b in zip(means, means[1:])]
-            if steps:
-                inset = ax.inset_axes([0.62, 0.08, 0.35, 0.28])
-                inset.plot(range(2, len(means) + 1), steps, ".-", lw=0.8)
-                inset.set_title("step size", fontsize=7)
-                inset.tick_params(labelsize=6)
+    plot = _PLOTS.get(h["protocol"])
+    if plot is not None:
+        plot(fig, ax, state)
     ax.set_title(title, fontsize=9)
     out = Path(out)
     fig.tight_layout()
     fig.savefig(out, dpi=100)
     plt.close(fig)
     return out
+
+
+def _plot_free(fig: Any, ax: Any, state: Any) -> None:
+    """The free exploration's matches on the plane (size: confidence)."""
+    for m in state.matches:
+        ax.plot(m["pitch_db"], m["irregularity_db"], "o", ms=4 + 2 * m["confidence"],
+                color="C%d" % (list(state.config.references).index(m["reference"]) % 10))
+        ax.annotate(m["reference"], (m["pitch_db"], m["irregularity_db"]), fontsize=7,
+                    xytext=(4, 4), textcoords="offset points")
+    ax.set_xlabel("pitch (dB re 1 c/mm)")
+    ax.set_ylabel("irregularity (dB re 1 decade)")
+    ax.text(0.01, 0.99, "o: the matches (size: confidence)\nx: the references' spectral "
+            "positions", transform=ax.transAxes, va="top", fontsize=7)
+
+
+def _plot_quant(fig: Any, ax: Any, state: Any) -> None:
+    """The quantization test: similarity against q per reference, or the 3x3
+    similarity matrix (design "matrix")."""
+    if state.config.design == "matrix":
+        _plot_matrix(fig, ax, state)
+        return
+    by: dict[str, dict[float, list[int]]] = {}
+    for r in state.ratings:
+        by.setdefault(r["reference"], {}).setdefault(r["quant_db"], []).append(r["similarity"])
+    for i, (ref, levels) in enumerate(sorted(by.items())):
+        qs = sorted(levels)
+        ax.plot([q + 0.08 * (i - 1) for q in qs],
+                [sum(levels[q]) / len(levels[q]) for q in qs], "o-", label=ref)
+    ax.set_xlabel("quantization q (dB)")
+    ax.set_ylabel("similarity (1..5)")
+    ax.set_ylim(0.5, 5.5)
+    ax.set_xticks(list(state.config.levels_db))
+    ax.legend(title="match: %s" % state.config.match_source, fontsize=8, title_fontsize=8)
+
+
+def _plot_matrix(fig: Any, ax: Any, state: Any) -> None:
+    import numpy as np
+    refs = list(state.config.references)
+    cells: dict[tuple[int, int], list[int]] = {}
+    for r in state.ratings:
+        cells.setdefault((refs.index(r["reference"]), refs.index(r["match_of"])),
+                         []).append(r["similarity"])
+    grid = np.full((len(refs), len(refs)), np.nan)
+    for (i, j), v in cells.items():
+        grid[i, j] = sum(v) / len(v)
+    im = ax.imshow(grid, vmin=1, vmax=5, cmap="viridis")
+    for (i, j), v in cells.items():
+        ax.text(j, i, "%.1f" % grid[i, j], ha="center", va="center", color="w")
+    ax.set_xticks(range(len(refs)), ["%s's match" % r for r in refs], fontsize=8)
+    ax.set_yticks(range(len(refs)), refs, fontsize=8)
+    ax.set_ylabel("reference")
+    fig.colorbar(im, ax=ax, label="similarity (1..5)")
+
+
+def _plot_pursuit(fig: Any, ax: Any, state: Any) -> None:
+    """The pursuit's centre, trial by trial."""
+    pts = [state.history[0]["centre_before"]] if state.history else \
+        [{"u": state.centre.u, "v": state.centre.v}]
+    pts += [e["centre_after"] for e in state.history]
+    ax.plot([pitch_db(p["u"]) for p in pts], [irregularity_db(p["v"]) for p in pts], "o-")
+    ax.annotate("start", (pitch_db(pts[0]["u"]), irregularity_db(pts[0]["v"])))
+    ax.set_xlabel("pitch (dB re 1 c/mm)")
+    ax.set_ylabel("irregularity (dB re 1 decade)")
+
+
+def _plot_staircase(fig: Any, ax: Any, state: Any) -> None:
+    """The staircase's track, its reversals and threshold."""
+    track = state.track
+    ax.plot([t["length_mm"] for t in track], "-", color="0.6")
+    for i, t in enumerate(track):
+        ax.plot(i, t["length_mm"], "o" if t["correct"] else "x",
+                color="C2" if t["correct"] else "C3")
+    rev = [i for i, t in enumerate(track) if t["reversal"]]
+    ax.plot(rev, [track[i]["length_mm"] for i in rev], "s", mfc="none", ms=10,
+            label="reversals")
+    thr = state.threshold_mm()
+    if thr is not None:
+        ax.axhline(thr, ls="--", label="threshold %.2f mm" % thr)
+    ax.set_xlabel("trial")
+    ax.set_ylabel("texel length (mm)")
+    ax.legend()
+
+
+def _plot_search(fig: Any, ax: Any, state: Any) -> None:
+    """The search's mean by iteration, with its step size inset."""
+    means = [rec["mean_after"] for rec in state.history]
+    ax.set_xlabel("pitch (dB re 1 c/mm)")
+    ax.set_ylabel("irregularity (dB re 1 decade)")
+    if not means:
+        return
+    xs = [pitch_db(m[0]) for m in means]
+    ys = [irregularity_db(m[1]) for m in means]
+    ax.plot(xs, ys, "-", color="0.7")
+    sc = ax.scatter(xs, ys, c=range(len(means)), cmap="viridis", zorder=3)
+    fig.colorbar(sc, ax=ax, label="iteration")
+    ax.annotate("end", (xs[-1], ys[-1]))
+    # the step size per iteration, inset
+    steps = [math.dist(a, b) for a, b in zip(means, means[1:])]
+    if steps:
+        inset = ax.inset_axes([0.62, 0.08, 0.35, 0.28])
+        inset.plot(range(2, len(means) + 1), steps, ".-", lw=0.8)
+        inset.set_title("step size", fontsize=7)
+        inset.tick_params(labelsize=6)
+
+
+_PLOTS = {"free": _plot_free, "quant": _plot_quant, "pursuit": _plot_pursuit,
+          "staircase": _plot_staircase, "search": _plot_search}
 
 
 def _references_on(ax: Any, header: dict[str, Any]) -> None:
