@@ -36,8 +36,14 @@ from texelpad.sim.virtual import VirtualBoard
 ROOT = mpy.ROOT
 PKG = ROOT / "device" / "texel"
 # every module of the package (subpackages included) but main.py, the board's /main.py
-MODULES = sorted(p for p in PKG.rglob("*.py")
-                 if "__pycache__" not in p.parts and p != PKG / "main.py")
+ALL_MODULES = sorted(p for p in PKG.rglob("*.py")
+                     if "__pycache__" not in p.parts and p != PKG / "main.py")
+# host-only: CPython's numpy plan (docs/generator.md); in the CPython package, in no board's
+# image (deploy's, mip's, the firmware's). engine_numpy is not one: texel.engines() imports it
+# on every runtime (to read its AVAILABLE), so a board without it could not list its engines.
+HOST_ONLY = {"texel/gen/plan_numpy.py"}
+# what a board may get: every module but those
+MODULES = [p for p in ALL_MODULES if p.relative_to(PKG.parent).as_posix() not in HOST_ONLY]
 BOARD_JSONS = sorted((PKG / "boards.d").glob("*.json"))
 NATIVE = {"texel/gen/engine_int_viper.py", "texel/gen/plan_int_viper.py",
           "texel/gen/brush_viper.py", "texel/runtime/refresh_viper.py",
@@ -160,7 +166,7 @@ def cache(tmp_path_factory) -> Path:
 @pytest.fixture(scope="module")
 def images(cache) -> dict:
     return {name: image.build_image(TARGETS[name], cache_dir=cache)
-            for name in ("rp2", "pyboard", "unix", "source")}
+            for name in ("rp2", "pyboard", "unix", "circuitpython", "source")}
 
 
 def _by_remote(files) -> dict:
@@ -190,7 +196,7 @@ def test_board_search_path_of_an_installed_package(monkeypatch, where, want):
 
 
 def test_native_scan_agrees_with_the_tests():
-    found = {p for p in MODULES if image.holds_native_code(p)}
+    found = {p for p in ALL_MODULES if image.holds_native_code(p)}
     assert found == mpy.viper_files()
     assert {rel(p) for p in found} == NATIVE
 
@@ -247,6 +253,8 @@ def test_source_image(images):
     got = _by_remote(files)
     for p in MODULES:                     # no platform: every backend, viper modules too
         assert got["/lib/" + rel(p)].data == p.read_bytes()
+    assert {r for r in got if r.endswith(".py") and r != "/main.py"} == {
+        "/lib/" + rel(p) for p in MODULES}    # and nothing else (no host-only module)
     assert "/lib/texel/boards.d/pico_cpy.json" in got and files[-1].remote == "/main.py"
     assert TARGETS["circuitpython"].form == "source"
     assert image.image_bytes(files) > image.image_bytes(images["rp2"])
@@ -306,7 +314,7 @@ def test_cache_is_keyed_by_content(tmp_path):
 
 def test_mpy_cross_error_names_the_file(tmp_path, monkeypatch):
     pkg = tmp_path / "texel"
-    for p in MODULES + BOARD_JSONS:
+    for p in ALL_MODULES + BOARD_JSONS:
         dst = pkg / p.relative_to(PKG)
         dst.parent.mkdir(parents=True, exist_ok=True)
         dst.write_bytes(p.read_bytes())
@@ -317,6 +325,68 @@ def test_mpy_cross_error_names_the_file(tmp_path, monkeypatch):
         image.build_image(TARGETS["rp2"], cache_dir=tmp_path / "cache")
     assert "broken.py" in str(ei.value) and "line 1; SyntaxError" in str(ei.value)
     assert "mpy-cross" in str(ei.value)
+
+
+# --- host-only modules ----------------------------------------------------------------
+
+def test_host_only_modules_are_in_the_cpython_package_and_in_no_board_image(images):
+    """image.HOST_ONLY, the one list (docs/generator.md: CPython's numpy plan),
+    is in the CPython package - the wheel's packages and this editable
+    install, which the host imports - and in no board's image: deploy's for
+    every target (.mpy, CircuitPython's and --source's .py), mip's
+    package.json, and the firmware's frozen code and ROMFS."""
+    assert {"texel/" + m for m in image.HOST_ONLY} == HOST_ONLY
+    assert set(ALL_MODULES) - set(MODULES) == {ROOT / "device" / r for r in HOST_ONLY}
+    # the CPython package: setuptools' find (pyproject: where device/host, texel*) takes
+    # texel.gen whole, and the installed package the host imports has the modules
+    setuptools = pytest.importorskip("setuptools")
+    pkgs = setuptools.find_packages(where=str(ROOT / "device"), include=["texel*"])
+    import importlib
+    for r in HOST_ONLY:
+        name = r[:-3].replace("/", ".")
+        assert name.rsplit(".", 1)[0] in pkgs
+        mod = importlib.import_module(name)
+        assert Path(mod.__file__).resolve() == image.PACKAGE_DIR.parent / r
+    assert set(image.package_modules()) == set(MODULES)
+    # every board target, and --source for a known platform
+    imgs = dict(images, **{"source-rp2": image.build_image(
+        target_for("micropython", None, (1, 28, 0), "rp2", source=True))})
+    assert set(imgs) >= {"rp2", "pyboard", "unix", "circuitpython", "source"}
+    for name, files in imgs.items():
+        remotes = {f.remote for f in files}
+        for r in HOST_ONLY:
+            assert not {"/lib/" + r, "/lib/" + r[:-3] + ".mpy"} & remotes, (name, r)
+        assert not [f for f in files if f.source.relative_to(PKG.parent).as_posix() in HOST_ONLY
+                    ], name
+    # mip (installs onto boards)
+    urls = dict(image.package_json(ROOT)["urls"])
+    assert not HOST_ONLY & set(urls) and len(urls) == len(MODULES) + len(BOARD_JSONS) + len(
+        list(PKG.rglob("*.bin")))
+    # the firmware: frozen sources and the ROMFS's code
+    from texelpad.firmware import romfs
+    frozen = romfs.frozen_sources()
+    assert not HOST_ONLY & set(frozen)
+    assert set(frozen) == {rel(p) for p in modules_for("rp2")} | {"texel/main.py"}
+    code = romfs.code_files()
+    assert not {"lib/" + r[:-3] + ".mpy" for r in HOST_ONLY} & set(code)
+
+
+def test_board_code_imports_a_host_only_module_only_under_numpy():
+    """What a board gets imports a HOST_ONLY module in two places, neither of
+    which a board reaches: texel.make_plan behind CPython with numpy, and the
+    numpy engine, which renders only where numpy is (engine_numpy.AVAILABLE;
+    the unix-port runs below use the image without them). Adding engine_numpy
+    to the list needs texel._engine_module to stop importing it on every
+    runtime first (texel.engines() does, to read AVAILABLE)."""
+    stems = {r.rsplit("/", 1)[1][:-3] for r in HOST_ONLY}
+    importers = {rel(p) for p in MODULES for n in ast.walk(ast.parse(p.read_text()))
+                 if isinstance(n, ast.ImportFrom) and n.module
+                 and n.module.rsplit(".", 1)[-1] in stems}
+    assert importers == {"texel/__init__.py", "texel/gen/engine_numpy.py"}
+    init = (PKG / "__init__.py").read_text()
+    assert ('    if compat.numpy_mod is not None and compat.IMPL == "cpython":\n'
+            in init.split("def make_plan(")[1].split("\ndef ")[0])
+    assert "AVAILABLE = np is not None" in (PKG / "gen" / "engine_numpy.py").read_text()
 
 
 # --- plan_upload / plan_remove ------------------------------------------------------
@@ -387,6 +457,9 @@ print(repr({'refreshes': app.status()['refreshes'], 'refresh': st.get('refresh')
             'boards_file': boards.__file__, 'app_file': app.__file__, 'viper': ei.VIPER,
             'names': boards.names(), 'path': sys.path,
             'noise': len(texel.reference_u16('pink', 100)),
+            'engines': texel.engines(), 'plan': texel.make_plan({'pitch_db': 6.0,
+                'irregularity_db': -10.0, 'length_samples': 9600}).count,
+            'map2': len(texel.render_u16({'pitch_db': 6.0, 'irregularity_db': -10.0, 'v': 2})),
             'title': boards.load('virtual')['title']}))
 """
 
@@ -413,6 +486,8 @@ def test_image_runs_on_the_unix_port_from_a_flash_folder(images, tmp_path, name)
     # the unix image carries the virtual board; a --source image every board
     assert r["names"] == [b.stem for b in boards_for("virtual" if name == "unix" else None)]
     assert r["noise"] == 100
+    # the generator's API without the host-only modules: the loops' plans, the board's engines
+    assert r["engines"] == ["int", "pure"] and r["plan"] == 192 and r["map2"] == 9600
     assert r["title"] == "my bench"
     assert not [d for d in r["path"] if "device" in d]
 

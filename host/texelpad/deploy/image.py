@@ -18,7 +18,9 @@ A board's image carries only its own hardware backend (texel/hw/<port>.py)
 and the shipped boards of its port; the mip package and --source images for
 an unknown platform carry them all. ``texel.runtime.boards.load`` looks in
 ``<texel package>/boards.d`` last, so a user's ``/boards/<name>.json`` still
-overrides a shipped board.
+overrides a shipped board. No image - deploy's, mip's, the firmware's -
+carries the host-only modules (HOST_ONLY: CPython's numpy plan), which stay in
+the CPython package (a wheel, an editable install).
 
 API:
     target_for(impl_name, mpy, version, platform=None, source=False) -> Target
@@ -59,6 +61,18 @@ MAIN_PY = PACKAGE_DIR / "main.py"            # the board's /main.py, not a modul
 HW_DIR = "hw"                                # texel/hw/<backend>.py
 # The hardware backend module each board port runs (texel.app._make_hw).
 PORT_BACKEND = {"rp2": "rp2", "stm32": "stm32", "circuitpython": "cpy", "virtual": "virtual"}
+# Host-only modules of the texel package (paths under it), the ONE list: every
+# board image leaves them out - deploy's (.mpy and --source), mip's
+# package.json, the firmware's frozen code and ROMFS (texelpad.firmware builds
+# from package_modules/build_image) - while the CPython package (a wheel, an
+# editable install) keeps them, since the host imports them. gen/plan_numpy.py
+# is the plan on numpy arrays, which texel.make_plan runs only on CPython with
+# numpy (docs/generator.md, "On CPython: the numpy engine and the plan on
+# whole arrays"); no board has numpy (ulab boards have ulab.numpy and
+# gen/engine_ulab.py). gen/engine_numpy.py is no use on a board either, but
+# texel.engines() imports it on every runtime to read its AVAILABLE: it joins
+# this list once texel._engine_module stops importing it without numpy.
+HOST_ONLY = ("gen/plan_numpy.py",)
 
 # Where things go on the board.
 LIB = "/lib"
@@ -266,10 +280,10 @@ def holds_native_code(path: Path) -> bool:
 
 
 def _wanted_module(p: Path, port: str | None) -> bool:
-    """Every module but main.py (the board's /main.py) and, for a port,
-    the other ports' backends."""
+    """Every module but main.py (the board's /main.py), the host-only ones
+    (HOST_ONLY) and, for a port, the other ports' backends."""
     rel = p.relative_to(PACKAGE_DIR)
-    if rel == Path("main.py"):
+    if rel == Path("main.py") or rel.as_posix() in HOST_ONLY:
         return False
     if port is not None and rel.parts[0] == HW_DIR and rel.name != "__init__.py":
         return rel.stem == PORT_BACKEND[port]
@@ -277,8 +291,9 @@ def _wanted_module(p: Path, port: str | None) -> bool:
 
 
 def package_modules(port: str | None = None) -> list[Path]:
-    """The texel package's modules (subpackages included), sorted; with a
-    port only that port's hardware backend."""
+    """The texel package's modules a board gets (subpackages included, not
+    main.py nor HOST_ONLY), sorted; with a port only that port's hardware
+    backend."""
     mods = sorted(p for p in PACKAGE_DIR.rglob("*.py")
                   if "__pycache__" not in p.parts and _wanted_module(p, port))
     if not mods:
@@ -459,7 +474,8 @@ def write_tree(files: Iterable[ImageFile], root: Path | str) -> None:
 
 def package_json(base: Path | str) -> dict:
     """mip's package.json for the device package as source .py files: every
-    module, the package data and the shipped boards, targets relative to the
+    module a board gets (mip installs onto boards: no HOST_ONLY module), the
+    package data and the shipped boards, targets relative to the
     device's lib directory, URLs relative to `base` (the directory the
     package.json lives in; mip resolves relative URLs against it, locally and
     on github:/gitlab:). main.py is not in it: mip installs under /lib only."""

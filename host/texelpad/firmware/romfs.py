@@ -141,8 +141,9 @@ def ram_modules() -> dict[str, bytes]:
 
 def frozen_sources(target: image.Target | None = None) -> dict[str, bytes]:
     """texel's .py sources the firmware freezes ({"texel/app.py": bytes}):
-    the modules of the target's image (its own hardware backend only) and
-    texel/main.py (imported only by the frozen main.py: it starts the display)."""
+    the modules of the target's image (image.package_modules: its own
+    hardware backend only, no image.HOST_ONLY module) and texel/main.py
+    (imported only by the frozen main.py: it starts the display)."""
     target = target or image.TARGETS["rp2"]
     out = {}
     for p in image.package_modules(target.port):
