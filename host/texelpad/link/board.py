@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import sys
 import time
+from dataclasses import dataclass
 from typing import Any, Callable, Iterator
 
 import texel
@@ -167,10 +168,11 @@ class Board:
                             "(texelpad push --board NAME, or Board.start)" % self.port)
         return st
 
-    def _push(self, scene: dict[str, Any], st: dict[str, Any],
-              progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
-        scene = host_check(scene, st["display"])
-        return self._send("push", [scene], 0, None, progress, st)
+    def _push(self, scene: "dict[str, Any] | CheckedScene", st: dict[str, Any],
+              progress: Callable[[int, int], None] | None = None,
+              ) -> tuple[dict[str, Any], "CheckedScene"]:
+        checked = checked_for(scene, st["display"])
+        return self._send("push", [checked.plain], 0, None, progress, st), checked
 
     def _send(self, func: str, args: list[Any], scene_at: int, kwargs: dict | None,
               progress: Callable[[int, int], None] | None,
@@ -242,12 +244,22 @@ class Board:
                                "shows what it plays)" % st.get("board"))
         return Interrupted("interrupted: the display is stopped")
 
-    def push(self, scene: dict[str, Any],
+    def push(self, scene: "dict[str, Any] | CheckedScene",
              progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
-        """Play `scene` (a dict of regions). Checked on the host, then on the
-        board; returns the board's status with the new scene. On any error
-        the board keeps playing what it played. progress(done, total): bytes
-        of large sample data sent so far (called during long uploads)."""
+        """Play `scene` (a dict of regions, or what check_scene made of one).
+        Checked on the host once (a CheckedScene checked for this board's
+        display is not checked again), then on the board; returns the
+        board's status with the new scene. On any error the board keeps
+        playing what it played. progress(done, total): bytes of large sample
+        data sent so far (called during long uploads)."""
+        return self._push(scene, self._running_status(), progress)[0]
+
+    def push_checked(self, scene: "dict[str, Any] | CheckedScene",
+                     progress: Callable[[int, int], None] | None = None,
+                     ) -> tuple[dict[str, Any], "CheckedScene"]:
+        """push(), handing back the checked scene it sent with the status:
+        (the board's status, the CheckedScene - its canonical form is what
+        the board now plays, as the host's check made it)."""
         return self._push(scene, self._running_status(), progress)
 
     def push_texel(self, params: dict[str, Any]) -> dict[str, Any]:
@@ -260,7 +272,7 @@ class Board:
         if "v" not in params:
             params = dict(params, v=FORMAT_NEW)
         st = self._running_status()
-        return self._push(full_screen_texel(params, st["display"]), st)
+        return self._push(full_screen_texel(params, st["display"]), st)[0]
 
     def stop(self) -> None:
         """Carrier to its safe off state."""
@@ -387,17 +399,61 @@ class Board:
         return np.frombuffer(data, dtype="<u2").copy()
 
 
+TPAD_DISPLAY = {"positions": 19200, "dx_um": 5.3}
+
+
+@dataclass(frozen=True, eq=False)
+class CheckedScene:
+    """A scene the host has checked (check_scene, the only maker): `plain`,
+    what is sent (numpy as plain numbers and lists: protocol.plain);
+    `canonical`, the board's own canonical form of it (every default filled
+    in, regions sorted: what the board will play and scene_source() will
+    answer); `display`, the display it was checked for; `spans`, each
+    canonical region's [start, end) positions (texel.runtime.scene.check).
+    Board.push takes it without checking it again when `display` is the
+    board's. Treat it as read-only: its dicts are not copies."""
+    plain: Any
+    canonical: dict[str, Any]
+    display: dict[str, Any]
+    spans: tuple[tuple[int, int], ...]
+
+    def fits(self, display: dict[str, Any]) -> bool:
+        """Whether it was checked for this display (positions and dx_um)."""
+        return (self.display["positions"] == display["positions"]
+                and self.display["dx_um"] == display["dx_um"])
+
+
+def check_scene(scene: Any, display: dict[str, Any] | None = None) -> CheckedScene:
+    """THE host's check of a scene, run once per push: the literal check,
+    then the board's own validation (texel.runtime.scene.check). The literal
+    check comes first: it bounds the nesting depth and the integers before
+    the board's validation walks the scene. display None: the TPaD's 19,200
+    x 5.3 um (the board's own display is checked again when it is pushed).
+    ValueError with the board's words when it would be refused."""
+    display = display or TPAD_DISPLAY
+    plain = protocol.plain(scene)
+    literal(plain)
+    canonical, spans, _, _ = texel.runtime.scene.check(plain, display)
+    return CheckedScene(plain, canonical, {"positions": display["positions"],
+                                           "dx_um": display["dx_um"]}, tuple(spans))
+
+
+def checked_for(scene: Any, display: dict[str, Any]) -> CheckedScene:
+    """scene checked for `display`: a CheckedScene checked for it as it is,
+    anything else (a dict; a CheckedScene checked for another display: its
+    plain form) through check_scene."""
+    if isinstance(scene, CheckedScene):
+        if scene.fits(display):
+            return scene
+        scene = scene.plain
+    return check_scene(scene, display)
+
+
 def host_check(scene: Any, display: dict[str, Any] | None = None) -> Any:
-    """The literal check, then the board's own validation, run here first;
-    returns the scene as plain data to send (numpy numbers and arrays as the
-    Python numbers and lists they hold: protocol.plain). The literal check
-    comes first: it bounds the nesting depth and the integers before the
-    board's validation walks the scene. display None: the TPaD's 19,200 x
-    5.3 um (the board's own display is checked again when it is pushed)."""
-    scene = protocol.plain(scene)
-    literal(scene)
-    texel.runtime.scene.validate(scene, display or {"positions": 19200, "dx_um": 5.3})
-    return scene
+    """check_scene's plain form: the scene as plain data to send (numpy
+    numbers and arrays as the Python numbers and lists they hold:
+    protocol.plain), checked."""
+    return check_scene(scene, display).plain
 
 
 def connect(port: str | None = None, timeout: float = 10.0, check: bool = True,
@@ -496,8 +552,7 @@ def boot_config(board_name: str, scene: Any, display: dict[str, Any]) -> dict[st
     updated; ValueError (the board's own words) when it would not start."""
     if not isinstance(board_name, str) or not board_name:
         raise ValueError("board name: expected a board file's name, got %r" % (board_name,))
-    canonical = texel.runtime.scene.validate(host_check(scene, display), display)
-    return {"board": board_name, "scene": protocol.plain(canonical)}
+    return {"board": board_name, "scene": protocol.plain(check_scene(scene, display).canonical)}
 
 
 def write_boot(board: Board, config: dict[str, Any]) -> int:
