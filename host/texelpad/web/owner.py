@@ -8,11 +8,8 @@ from __future__ import annotations
 import threading
 from typing import Any, Callable
 
-from ..link.board import Board, board_display, connect
-from ..link.protocol import plain
+from ..link.board import Board, CheckedScene, board_display, check_scene, connect
 from ..link.transport import LinkError
-
-import texel.runtime.scene as _scene
 
 
 class BoardLost(RuntimeError):
@@ -72,15 +69,25 @@ class BoardOwner:
     def status(self) -> dict[str, Any]:
         return self._call(lambda b: b.status())
 
-    def push(self, scene: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
-        """Play scene; (the board's status, the canonical scene it plays - the
-        board's own validation code run here on the scene Board.push checked
-        and sent). A refused scene raises ValueError and the board plays on."""
-        def go(b: Board) -> tuple[dict[str, Any], dict[str, Any]]:
-            if self._display is None:           # (no status round trip once seen running)
-                self._running(b)
-            st = b.push(scene)
-            return st, _scene.validate(plain(scene), st["display"])
+    def push(self, scene: dict[str, Any] | CheckedScene) -> tuple[dict[str, Any], dict[str, Any]]:
+        """Play scene; (the board's status, the canonical scene it plays).
+        A refused scene raises ValueError and the board plays on."""
+        st, sent = self.push_checked(scene)
+        return st, sent.canonical
+
+    def push_checked(self, scene: dict[str, Any] | CheckedScene,
+                     ) -> tuple[dict[str, Any], CheckedScene]:
+        """Play scene - a dict, checked here once (link.board.check_scene),
+        or what check_scene made of one for this board's display, not
+        checked again; (the board's status, the CheckedScene sent: its
+        canonical form, made by the board's own validation code, is what
+        the board plays). A refused scene raises ValueError and the board
+        plays on."""
+        def go(b: Board) -> tuple[dict[str, Any], CheckedScene]:
+            # (no status round trip once seen running)
+            display = self._display or self._running(b)
+            checked = scene if isinstance(scene, CheckedScene) else check_scene(scene, display)
+            return b.push_checked(checked)
         return self._call(go)
 
     def scene_source(self) -> dict[str, Any] | None:
