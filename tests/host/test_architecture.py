@@ -63,7 +63,7 @@ def _bad(paths: list[Path], forbidden: tuple[str, ...]) -> dict[str, list[str]]:
 def test_the_resolver_sees_relative_imports():
     got = imports(DEVICE / "runtime" / "scene.py")
     assert "texel.gen.params" in got and "texel.make_plan" in got
-    assert "texelpad.link.transport" in imports(HOST / "cli" / "common.py")
+    assert "texelpad.link.transport" in imports(HOST / "cli" / "connection.py")
 
 
 @pytest.mark.parametrize("sub, forbidden", [
@@ -111,11 +111,18 @@ def test_the_link_imports_no_command():
 
 
 def test_commands_import_no_other_command():
-    cmds = [p for p in modules(HOST, "cli") if p.name not in ("__init__.py", "__main__.py")]
-    for p in cmds:
-        mine = _module_name(p)
-        others = [m for m in imports(p) if m.startswith("texelpad.cli.")
-                  and m.split(".")[2] not in ("common", mine.split(".")[-1])]
+    """A command's module (a row of cli.COMMANDS) imports the shared modules
+    of cli/ (errors, parsing, connection, ...) but no other command's; a
+    shared module imports no command's."""
+    from texelpad.cli import COMMANDS
+    commands = {mod for mod, _, _ in COMMANDS.values()}
+    shared = {p.stem for p in modules(HOST, "cli")} - commands - {"__init__", "__main__"}
+    assert {"errors", "parsing", "connection"} <= shared, shared
+    for p in modules(HOST, "cli"):
+        if p.stem in ("__init__", "__main__"):
+            continue
+        others = sorted({m.split(".")[2] for m in imports(p) if m.startswith("texelpad.cli.")}
+                        & (commands - {p.stem}))
         assert others == [], (p.name, others)
 
 

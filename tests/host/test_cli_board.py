@@ -261,7 +261,7 @@ def test_deploy_refuses_an_image_that_does_not_fit(capsys, tmp_path, monkeypatch
 
 def test_progress_bar_lines_without_a_terminal():
     import io
-    from texelpad.cli.common import ProgressBar
+    from texelpad.cli.progress import ProgressBar
     s = io.StringIO()
     bar = ProgressBar(s)
     for done, name in ((0, "/lib/texel/a.mpy"), (50, "/lib/texel/a.mpy"), (100, "/main.py")):

@@ -1,5 +1,5 @@
 """The texel flags are derived from the device's own parameter spec
-(texel.gen.params.SPEC), declared once (texelpad.cli.common.add_texel_flags),
+(texel.gen.params.SPEC), declared once (texelpad.cli.texel_flags.add_texel_flags),
 and the command table imports a command's module only when it runs."""
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import pytest
 
 from texel.gen.params import SPEC
 from texelpad import cli
-from texelpad.cli import common
+from texelpad.cli import texel_flags
 
 
 def _parser_for(command: str):
@@ -24,8 +24,8 @@ def _texel_flags(p) -> dict:
 
 
 def test_every_spec_key_but_the_version_has_a_flag():
-    assert set(common.TEXEL_KEYS) == set(SPEC) - {"v"}
-    assert common.PARAM_FLAGS["band_limit_cpmm"] == "--band-limit-cpmm"
+    assert set(texel_flags.TEXEL_KEYS) == set(SPEC) - {"v"}
+    assert texel_flags.PARAM_FLAGS["band_limit_cpmm"] == "--band-limit-cpmm"
 
 
 @pytest.mark.parametrize("command, keys", [
@@ -40,7 +40,7 @@ def test_flags_follow_the_spec(command, keys):
     assert set(flags) == keys
     for key, action in flags.items():
         kind, default, lo, hi = SPEC[key]
-        assert action.option_strings == [common.PARAM_FLAGS[key]]
+        assert action.option_strings == [texel_flags.PARAM_FLAGS[key]]
         assert action.type is (int if kind == "i" else float)
         assert action.default is None              # unset: the device's default applies
         assert ("%g" % hi if kind == "f" else format(hi, ",")) in action.help, action.help
@@ -67,7 +67,9 @@ def test_commands_are_imported_only_when_they_run():
             "print(sorted(m for m in sys.modules if m.startswith('texelpad.cli.')))")
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert p.returncode == 0, p.stderr
-    assert p.stdout.strip() == "['texelpad.cli.common', 'texelpad.cli.tank']"
+    # the parser's and the command's shared modules, and no other command
+    assert p.stdout.strip() == ("['texelpad.cli.errors', 'texelpad.cli.parsing', "
+                                "'texelpad.cli.tank']")
 
 
 def test_the_table_lists_every_command_module_once():

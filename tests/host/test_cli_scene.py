@@ -19,14 +19,15 @@ import pytest
 import texel
 import texel.runtime.scene as scene_mod
 import texelpad
-from texelpad.cli import common
+from texelpad.cli.errors import CliError
+from texelpad.cli.scene_files import read_scene_file, shipped_scenes
 from texelpad.link.board import host_check
 from texelpad.sim.virtual import VirtualBoard
 from support.cli import run_cli
 
 ROOT = Path(__file__).resolve().parents[2]
 TPAD = {"positions": 19200, "dx_um": 5.3}
-SCENES = sorted(common.shipped_scenes())
+SCENES = sorted(shipped_scenes())
 NO_PORT = "/dev/ttyTEXELPAD-none"
 
 SPLIT = {"name": "a test split", "notes": "left: 2sin\nright: texel", "regions": [
@@ -46,7 +47,7 @@ def _plain(v):
 
 @pytest.mark.parametrize("stem", SCENES)
 def test_every_shipped_scene_validates_and_builds(stem):
-    scene = json.loads(common.shipped_scenes()[stem].read_text(encoding="utf-8"))
+    scene = json.loads(shipped_scenes()[stem].read_text(encoding="utf-8"))
     assert isinstance(scene["name"], str) and 1 <= len(scene["name"]) <= scene_mod.NAME_MAX
     assert isinstance(scene["notes"], str) and len(scene["notes"]) <= scene_mod.NOTES_MAX
     assert scene["notes"].splitlines()[0]
@@ -58,7 +59,7 @@ def test_every_shipped_scene_validates_and_builds(stem):
 
 def test_the_library_has_what_the_issue_asked_for():
     def load(stem):
-        return json.loads(common.shipped_scenes()[stem].read_text(encoding="utf-8"))
+        return json.loads(shipped_scenes()[stem].read_text(encoding="utf-8"))
     splits = [s for s in SCENES if s.startswith("split-")]
     assert len(splits) >= 3 and "split-4sin" in splits
     for s in splits:                  # reference left, texel right, half a screen each
@@ -92,7 +93,7 @@ def test_scenes_lists_them(capsys):
     code, out, err = run_cli(capsys, "scenes")
     assert code == 0 and err == ""
     for stem in SCENES:
-        scene = json.loads(common.shipped_scenes()[stem].read_text(encoding="utf-8"))
+        scene = json.loads(shipped_scenes()[stem].read_text(encoding="utf-8"))
         line = next(ln for ln in out.splitlines() if ln.startswith(stem + " "))
         assert scene["name"] in line and scene["notes"].splitlines()[0] in line
     code, out, err = run_cli(capsys, "scenes", "--json")
@@ -100,17 +101,17 @@ def test_scenes_lists_them(capsys):
 
 
 def test_read_scene_file_finds_shipped_scenes_files_first(tmp_path, monkeypatch):
-    assert common.read_scene_file("gradient")["name"] == "gradient 0 -> 1"
-    assert common.read_scene_file("gradient.json")["name"] == "gradient 0 -> 1"
+    assert read_scene_file("gradient")["name"] == "gradient 0 -> 1"
+    assert read_scene_file("gradient.json")["name"] == "gradient 0 -> 1"
     monkeypatch.chdir(tmp_path)
     (tmp_path / "gradient").write_text(json.dumps({"regions": [], "name": "mine"}))
-    assert common.read_scene_file("gradient")["name"] == "mine"      # a file of that name wins
-    with pytest.raises(common.CliError) as e:
-        common.read_scene_file("no-such-scene")
+    assert read_scene_file("gradient")["name"] == "mine"      # a file of that name wins
+    with pytest.raises(CliError) as e:
+        read_scene_file("no-such-scene")
     assert "cannot read no-such-scene" in str(e.value) and "texelpad scenes" in str(e.value)
     assert e.value.code == 2
-    with pytest.raises(common.CliError) as e:
-        common.read_scene_file("sub/gradient")          # a path is a path
+    with pytest.raises(CliError) as e:
+        read_scene_file("sub/gradient")          # a path is a path
     assert "cannot read sub/gradient" in str(e.value)
 
 
@@ -120,10 +121,10 @@ def _stdin(monkeypatch, text):
 
 def test_read_scene_file_from_stdin(monkeypatch):
     _stdin(monkeypatch, json.dumps(SPLIT))
-    assert common.read_scene_file("-") == SPLIT
+    assert read_scene_file("-") == SPLIT
     _stdin(monkeypatch, "{\"regions\": [")
-    with pytest.raises(common.CliError) as e:
-        common.read_scene_file("-")
+    with pytest.raises(CliError) as e:
+        read_scene_file("-")
     assert "--scene: stdin is not valid JSON" in str(e.value)
 
 
@@ -397,7 +398,7 @@ def test_boot_writes_what_main_py_starts(capsys, flash_board, tmp_path):
     boot = flash / "texelpad.json"
     cfg = json.loads(boot.read_text())
     assert cfg["board"] == "virtual"
-    shipped = common.read_scene_file("texel-sweep")
+    shipped = read_scene_file("texel-sweep")
     assert cfg["scene"] == _plain(scene_mod.validate(shipped, TPAD))        # canonical
     assert not (flash / "texelpad.json.new").exists()
     # the board's main.py reads exactly this file and starts it

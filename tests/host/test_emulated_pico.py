@@ -21,7 +21,7 @@ import pytest
 
 import texel.runtime.scene as scene_mod
 import texelpad
-from texelpad.cli import common
+from texelpad.cli.scene_files import shipped_scenes
 from texelpad.link import protocol
 from texelpad.link.board import host_check
 from texelpad.link.transport import DeviceError, Interrupted
@@ -408,7 +408,7 @@ def test_stop_then_status_then_scene_pull_round_trip(capsys, port, tmp_path):
     assert code == 0, err
     assert out.count("\n") == 1 and str(pulled) in out and "2 regions" in out, out
     doc = json.loads(pulled.read_text())
-    shipped = json.loads(common.shipped_scenes()["split-4sin"].read_text(encoding="utf-8"))
+    shipped = json.loads(shipped_scenes()["split-4sin"].read_text(encoding="utf-8"))
     with texelpad.connect(port) as b:
         display = b.status()["display"]
         assert _plain(doc) == _plain(b.scene_source())

@@ -17,7 +17,8 @@ import texel.app
 import texel.runtime.scene as scene_mod
 import texelpad
 from texel.gen import params as P
-from texelpad.cli import common
+from texelpad.cli.scene_files import shipped_scenes
+from texelpad.cli.texel_flags import render_params
 from texelpad.study import configs as C
 from texelpad.study import protocols, questions
 from texelpad.study import scenes as S
@@ -74,9 +75,9 @@ def test_the_texel_flags_write_v():
                        (["--pitch-db", "6", "--irregularity-db", "-9", "--format", "1"], 1),
                        (["--pitch-db", "6", "--irregularity-db", "-9", "--format", "2"], 2)):
         for cmd in ("push", "render"):
-            assert common.render_params(_args(cmd, *argv))["v"] == want, (cmd, argv)
+            assert render_params(_args(cmd, *argv))["v"] == want, (cmd, argv)
     # no texel flag: no texel texture (push --scene is not a texel push)
-    assert common.render_params(_args("push", "--scene", "split-4sin")) == {}
+    assert render_params(_args("push", "--scene", "split-4sin")) == {}
 
 
 def test_encode_writes_format_2_unless_asked():
@@ -91,7 +92,7 @@ def test_encode_writes_format_2_unless_asked():
 
 def test_every_shipped_texel_texture_says_its_format():
     found = 0
-    for stem, f in common.shipped_scenes().items():
+    for stem, f in shipped_scenes().items():
         scene = json.loads(f.read_text(encoding="utf-8"))
         for tex in _texels(scene):
             found += 1

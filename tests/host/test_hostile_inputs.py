@@ -287,7 +287,7 @@ def test_output_into_a_directory_is_refused(tmp_path, capsys):
 
 
 def test_check_output_leaves_no_probe(tmp_path):
-    from texelpad.cli.common import check_output
+    from texelpad.cli.files import check_output
     assert check_output("--out", str(tmp_path / "m.png"), (".png",)) == tmp_path / "m.png"
     assert list(tmp_path.iterdir()) == []
 

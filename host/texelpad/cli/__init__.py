@@ -3,12 +3,12 @@ it runs, so `texelpad --help` is fast and no command module imports another.
 
 To add a command: write `add_<name>(p)` (set p.description, add the flags,
 p.set_defaults(func=cmd_<name>)) and `cmd_<name>(args) -> exit code` in a
-module of this package, and add one row to COMMANDS. Conventions (common.py):
+module of this package, and add one row to COMMANDS. Conventions (errors.py):
 a bad flag or a refused request is one line naming the flag and exit 2; a
 failure of the world (no board, a file that cannot be written) exit 1.
 Output closed early (`texelpad render ... | head -1`): exit 1 quietly, no
 traceback (main(), _broken_pipe). Output files are checked before the work
-that fills them (common.check_output).
+that fills them (files.check_output).
 """
 from __future__ import annotations
 
@@ -69,15 +69,15 @@ def _chosen(argv: Sequence[str]) -> str | None:
 def build_parser(argv: Sequence[str] = ()) -> argparse.ArgumentParser:
     """The parser; only the command named in argv gets its flags (its module
     is imported), the others are listed with their summaries."""
-    from .common import _Parser
-    parser = _Parser(
+    from .parsing import Parser
+    parser = Parser(
         prog="texelpad",
         description="texelpad: host toolkit for Single-Pitch Texel friction textures on "
                     "microcontroller boards.")
     import texel
     parser.add_argument("--version", action="version",
                         version="texelpad %s (texel %s)" % (__version__, texel.__version__))
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
     chosen = _chosen(argv)
     for name, (module, func, summary) in COMMANDS.items():
         p = sub.add_parser(name, help=summary, description=summary)
@@ -96,7 +96,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _main(argv: list[str]) -> int:
-    from .common import EXIT_USAGE, CliError, _stderr
+    from .errors import EXIT_USAGE, CliError, to_stderr
     parser = build_parser(argv)
     try:
         args = parser.parse_args(argv)
@@ -111,11 +111,11 @@ def _main(argv: list[str]) -> int:
         sys.stdout.flush()              # a closed pipe shows here, not at exit
         return code
     except CliError as e:
-        _stderr("texelpad %s: error: %s" % (args.command, e))
+        to_stderr("texelpad %s: error: %s" % (args.command, e))
         return e.code
     except KeyboardInterrupt as e:
         # link.transport.Interrupted says what the board does now
-        _stderr("texelpad %s: %s" % (args.command, str(e) or "interrupted"))
+        to_stderr("texelpad %s: %s" % (args.command, str(e) or "interrupted"))
         return 130
 
 
@@ -143,7 +143,7 @@ def _broken_pipe(command: str) -> int:
     stdout's or stderr's (a subprocess the command feeds) is a failure of the
     world: one line, exit 1."""
     import os
-    from .common import EXIT_FAIL, _stderr
+    from .errors import EXIT_FAIL, to_stderr
     quiet = False
     for stream in (sys.stdout, sys.stderr):
         if _closed(stream):
@@ -156,7 +156,7 @@ def _broken_pipe(command: str) -> int:
                 pass
     if not quiet:
         try:
-            _stderr("texelpad%s: error: broken pipe (a process it wrote to went away)"
+            to_stderr("texelpad%s: error: broken pipe (a process it wrote to went away)"
                     % (" " + command if command else ""))
         except OSError:
             pass

@@ -6,8 +6,10 @@ import json
 from pathlib import Path
 
 from ..link.transport import LinkError
-from .common import EXIT_FAIL, EXIT_OK, CliError, _fail, _stderr, check_output, csv_list, \
-    positive_float, positive_int, write_output
+from .connection import link_failure
+from .errors import EXIT_FAIL, EXIT_OK, CliError, to_stderr
+from .files import check_output, write_output
+from .parsing import csv_list, positive_float, positive_int
 
 
 def add_bench(p: argparse.ArgumentParser) -> None:
@@ -56,7 +58,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
                            % (", ".join(map(repr, bad)), ", ".join(HARD_CASES)))
     if args.json:                       # before the minutes of work, not after
         check_output("--json", args.json, (".json",))
-    progress = None if args.quiet else (lambda m: _stderr("bench: " + m))
+    progress = None if args.quiet else (lambda m: to_stderr("bench: " + m))
     res = bench.run(args.cases, args.runtimes, args.repeat, progress, chip=args.chip)
     return _report(bench, res, args.json, progress)
 
@@ -115,7 +117,7 @@ def cmd_bench_refresh(args: argparse.Namespace) -> int:
         why = why_not()
         if why:
             raise CliError("--chip", why, EXIT_FAIL)
-    progress = None if args.quiet else (lambda m: _stderr("bench-refresh: " + m))
+    progress = None if args.quiet else (lambda m: to_stderr("bench-refresh: " + m))
     res = refresh_bench.run(args.seconds, progress, chip=args.chip, soak_s=args.soak_seconds,
                             unix=not args.no_unix)
     return _report(refresh_bench, res, args.json, progress)
@@ -150,10 +152,10 @@ def cmd_bench_link(args: argparse.Namespace) -> int:
         if why:
             raise CliError("--chip", why, EXIT_FAIL)
     try:
-        res = link_bench.run(args.pushes, progress=lambda m: _stderr("bench-link: " + m),
+        res = link_bench.run(args.pushes, progress=lambda m: to_stderr("bench-link: " + m),
                              chip=args.chip)
     except LinkError as e:
-        raise _fail(e) from None
+        raise link_failure(e) from None
     except RuntimeError as e:           # the emulator did not come up
         raise CliError("--chip", str(e), EXIT_FAIL) from None
     print(link_bench.table(res))

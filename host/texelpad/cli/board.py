@@ -12,9 +12,13 @@ import time
 from typing import Any
 
 from ..link.transport import DeviceError, LinkError
-from .common import EXIT_FAIL, EXIT_OK, CliError, ProgressBar, _connect, _fail, _one_board, \
-    _port_arg, device_error, _stderr, _value_error, TEXEL_KEYS, add_texel_flags, not_running, \
-    positive_float, read_scene_file, render_params
+from .connection import add_port_flags, connect_board, link_failure, not_running, one_board, \
+    refused_scene
+from .errors import EXIT_FAIL, EXIT_OK, CliError, to_stderr
+from .parsing import positive_float
+from .progress import ProgressBar
+from .scene_files import read_scene_file
+from .texel_flags import TEXEL_KEYS, add_texel_flags, device_error, render_params
 
 
 def describe_scene(desc: dict[str, Any] | None) -> str:
@@ -63,7 +67,7 @@ def add_push(p: argparse.ArgumentParser) -> None:
                    help="start texelpad with this board file first if it is not running "
                         "(e.g. pico, pyboard, virtual)")
     p.add_argument("--json", action="store_true", help="print the board's status as JSON")
-    _port_arg(p, "the one board plugged in")
+    add_port_flags(p, "the one board plugged in")
     p.set_defaults(func=cmd_push)
 
 
@@ -73,7 +77,7 @@ PROGRESS_MIN_BYTES = 16 * 1024
 
 
 class _UploadProgress:
-    """Board.push's progress(done, total) as common.ProgressBar on stderr."""
+    """Board.push's progress(done, total) as a ProgressBar on stderr."""
 
     def __init__(self) -> None:
         self.bar: ProgressBar | None = None
@@ -131,15 +135,15 @@ def _refused(e: ValueError, kind: str, args: argparse.Namespace) -> CliError:
     if kind == "texture":
         return CliError("--reference" if args.reference is not None else "--constant",
                         ("the board refused it: " if isinstance(e, DeviceError) else "") + str(e))
-    return _value_error(e, kind == "texel")
+    return refused_scene(e, kind == "texel")
 
 
 def cmd_push(args: argparse.Namespace) -> int:
     from ..link.board import full_screen
     kind, what = _what_to_push(args)
-    _one_board(args)
+    one_board(args)
     progress = _UploadProgress()
-    with _connect(args) as b:
+    with connect_board(args) as b:
         try:
             st = b.status()
             if not st.get("running"):
@@ -164,7 +168,7 @@ def cmd_push(args: argparse.Namespace) -> int:
         except ValueError as e:    # LiteralError, DeviceError, the host-side check (the
             raise _refused(e, kind, args) from None     # board's own code)
         except LinkError as e:
-            raise _fail(e) from None
+            raise link_failure(e) from None
         finally:
             progress.end()
         if args.json:
@@ -181,7 +185,7 @@ def add_status(p: argparse.ArgumentParser) -> None:
     p.description = ("Print texel.app.status() of the board: the scene, refresh "
                                    "rate, worst refresh time, overruns, free memory, firmware.")
     p.add_argument("--json", action="store_true", help="print it as JSON")
-    _port_arg(p, "the one board plugged in")
+    add_port_flags(p, "the one board plugged in")
     p.set_defaults(func=cmd_status)
 
 
@@ -221,17 +225,17 @@ def _stepped(b: Any, st: dict[str, Any]) -> bool:
 
 
 def cmd_status(args: argparse.Namespace) -> int:
-    _one_board(args)
-    with _connect(args) as b:
+    one_board(args)
+    with connect_board(args) as b:
         try:
             st = b.status()
             stepped = _stepped(b, st)
         except LinkError as e:
-            raise _fail(e) from None
+            raise link_failure(e) from None
     if args.json:
         print(json.dumps(st, indent=1, sort_keys=True))
         if stepped:
-            _stderr("status: warning: " + STEPPED)
+            to_stderr("status: warning: " + STEPPED)
     else:
         print(format_status(st))
         if stepped:
@@ -244,7 +248,7 @@ def add_stop(p: argparse.ArgumentParser) -> None:
                      "the carrier goes to its safe off state). Says what played; a board "
                      "already stopped is fine (exit 0). Works with an image older than this "
                      "host too. texelpad push --board NAME starts it again.")
-    _port_arg(p, "the one board plugged in")
+    add_port_flags(p, "the one board plugged in")
     p.set_defaults(func=cmd_stop)
 
 
@@ -267,10 +271,10 @@ def scene_line(desc: dict[str, Any] | None) -> str:
 
 
 def cmd_stop(args: argparse.Namespace) -> int:
-    _one_board(args)
+    one_board(args)
     # check=False: a safety command must work on an image older than this host
     # (texel.app.stop and status have been there since the first one)
-    with _connect(args, check=False) as b:
+    with connect_board(args, check=False) as b:
         if b.image is None:
             print("%s has no texelpad image: texelpad plays nothing there" % b.port)
             return EXIT_OK
@@ -282,7 +286,7 @@ def cmd_stop(args: argparse.Namespace) -> int:
             b.stop()
             after = b.status()
         except LinkError as e:
-            raise _fail(e) from None
+            raise link_failure(e) from None
     if after.get("running"):         # the board's stop() returned but the display runs
         raise CliError("", "%s still runs texelpad after stop(); unplug the board's power "
                        "stage" % b.port, EXIT_FAIL)
@@ -301,7 +305,7 @@ def add_monitor(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seconds", type=positive_float, metavar="S", help="stop after S seconds")
     p.add_argument("--csv", metavar="FILE", help="write t_us,position,position_mm,amplitude rows "
                    "(checked writable before the board is opened)")
-    _port_arg(p, "the one board plugged in")
+    add_port_flags(p, "the one board plugged in")
     p.set_defaults(func=cmd_monitor)
 
 
@@ -334,8 +338,8 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     b = None
     failed = True
     try:
-        _one_board(args)
-        with _connect(args) as b:
+        one_board(args)
+        with connect_board(args) as b:
             try:
                 st = b.status()
                 if not st.get("running"):
@@ -368,12 +372,12 @@ def cmd_monitor(args: argparse.Namespace) -> int:
                     samples.close()         # the stream off before the link closes
                 actual = hz / b.divider if b.divider else 0
                 if actual and abs(actual - args.rate) > 0.01 * args.rate:
-                    _stderr("monitor: the board sampled every %srefresh of %s Hz: %.1f "
+                    to_stderr("monitor: the board sampled every %srefresh of %s Hz: %.1f "
                             "samples/s, not %d" % ("%d%s " % (b.divider, _ordinal(b.divider))
                                                    if b.divider > 1 else "", hz, actual,
                                                    args.rate))
             except LinkError as e:
-                raise _fail(e) from None
+                raise link_failure(e) from None
         failed = False
     except KeyboardInterrupt:
         failed = False
@@ -391,10 +395,10 @@ def cmd_monitor(args: argparse.Namespace) -> int:
                 except OSError:
                     pass
             elif not failed:
-                _stderr("monitor: %d samples written to %s" % (n, args.csv))
+                to_stderr("monitor: %d samples written to %s" % (n, args.csv))
         lost = getattr(b, "lost", 0) if b is not None else 0
         if lost:
-            _stderr("monitor: warning: %s of %s samples lost: the board's 256-sample telemetry "
+            to_stderr("monitor: warning: %s of %s samples lost: the board's 256-sample telemetry "
                     "ring was lapped between two reads (the link did not keep up with %d "
                     "samples/s; a lower --rate loses fewer)"
                     % (format(lost, ","), format(lost + n, ","), args.rate))

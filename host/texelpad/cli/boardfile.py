@@ -17,18 +17,18 @@ from typing import Any
 
 from ..deploy import boardcheck
 from ..link.transport import DeviceError, LinkError
-from .common import EXIT_OK, CliError, _connect, _fail, _one_board, \
-    _port_arg, _stderr
+from .connection import add_port_flags, connect_board, link_failure, one_board
+from .errors import EXIT_OK, CliError, to_stderr
 
 BOARDS_DIR = "/boards"          # texel.runtime.boards.search_path(): the board's own first
 
 
 def add_boardfile(p: argparse.ArgumentParser) -> None:
-    from .common import _Parser
+    from .parsing import Parser
     p.description = ("Your own board file (docs/runtime.md has the schema, hardware/README.md "
                      "the wiring): check it for the chip and firmware it will run on, or "
                      "install it on the board as /boards/NAME.json.")
-    sub = p.add_subparsers(dest="action", metavar="ACTION", parser_class=_Parser)
+    sub = p.add_subparsers(dest="action", metavar="ACTION", parser_class=Parser)
     s = sub.add_parser("check", help="say exactly what is wrong with a board file",
                        description="Check a board file with the board's own validation and "
                                    "the chip's facts (RP2040: GPIO, PWM slices and channels, "
@@ -55,7 +55,7 @@ def add_boardfile(p: argparse.ArgumentParser) -> None:
                         "texelpad scene boot --board NAME does), with the scene playing now "
                         "or else the default scene")
     _firmware_arg(s)
-    _port_arg(s, "the one board plugged in, or the running texelpad virtual")
+    add_port_flags(s, "the one board plugged in, or the running texelpad virtual")
     s.set_defaults(func=cmd_boardfile_install)
     p.set_defaults(func=_no_action)
 
@@ -108,7 +108,7 @@ def _checked(args: argparse.Namespace, name: str | None = None) -> tuple[str, by
     doc, probs = boardcheck.read_board(data)
     if any(p.level == "error" for p in probs):
         for p in probs:
-            _stderr(p.line(shown))
+            to_stderr(p.line(shown))
         raise CliError("", "%s is not a board file" % shown)
     if name is not None and isinstance(doc, dict) and doc.get("name") != name:
         doc = dict(doc, name=name)
@@ -117,7 +117,7 @@ def _checked(args: argparse.Namespace, name: str | None = None) -> tuple[str, by
     rep = boardcheck.check(doc, args.firmware, None if name is not None else _stem(args.file))
     rep.problems[:0] = probs
     for p in rep.problems:
-        _stderr(p.line(shown))
+        to_stderr(p.line(shown))
     if rep.errors:
         n, w = len(rep.errors), len(rep.warnings)
         raise CliError("", "%s: %d problem%s%s for %s: fix %s and check again" % (
@@ -169,8 +169,8 @@ def cmd_boardfile_install(args: argparse.Namespace) -> int:
         data = (text[1:] if text.startswith("\ufeff") else text).encode("utf-8")
     else:                               # renamed (--name): "name" is the file's name
         data = (json.dumps(doc, indent=2, ensure_ascii=False) + "\n").encode("utf-8")
-    _one_board(args)
-    with _connect(args) as b:
+    one_board(args)
+    with connect_board(args) as b:
         here = _board_port(b.firmware)
         if port != "virtual" and here != port:
             raise CliError("", "%s is for %s, but %s runs %s on %r (%s): nothing was written"
@@ -195,7 +195,7 @@ def cmd_boardfile_install(args: argparse.Namespace) -> int:
             b.link.exec(protocol.replace_file(path, tmp))
         except LinkError as e:
             _undo(b, path, tmp, old if kind == "f" else None)
-            raise _fail(e) from None
+            raise link_failure(e) from None
         try:
             display = board_display(b, name)    # the board loads it with its own code
         except DeviceError as e:
@@ -203,13 +203,13 @@ def cmd_boardfile_install(args: argparse.Namespace) -> int:
             raise CliError("", "the board refused it: %s; %s" % (
                 e, "its old %s is back" % path if kind == "f" else "nothing was left on it"))
         except LinkError as e:
-            raise _fail(e) from None
+            raise link_failure(e) from None
         try:
             if kind == "f":
                 b.link.exec(protocol.remove_file(old))
             st = b.status()
         except LinkError as e:
-            raise _fail(e) from None
+            raise link_failure(e) from None
         print("installed %s on %s as %s/%s.json (%s bytes%s%s)" % (
             shown, b.port, BOARDS_DIR, name, format(len(data), ","),
             "; it replaced the one there" if kind == "f" else "",
@@ -228,7 +228,7 @@ def cmd_boardfile_install(args: argparse.Namespace) -> int:
                 raise CliError("--boot", "%s; the board file is installed, the power-up "
                                "unchanged" % e) from None
             except LinkError as e:
-                raise _fail(e) from None
+                raise link_failure(e) from None
             print("power-up: board %s with %s (%s bytes in %s)" % (
                 name, "the scene playing now" if st.get("running") else "the default scene",
                 format(size, ","), BOOT_FILE))

@@ -21,8 +21,9 @@ import math
 import time
 from pathlib import Path
 
-from .common import EXIT_OK, CliError, _stderr, check_output, scene_json, write_atomic, \
-    write_output
+from .errors import EXIT_OK, CliError, to_stderr as _stderr
+from .files import check_output, write_atomic, write_output
+from .scene_files import scene_json
 
 METRICS = ("euclidean", "canberra", "braycurtis")
 
@@ -30,7 +31,7 @@ METRICS = ("euclidean", "canberra", "braycurtis")
 def add_brush(p: argparse.ArgumentParser) -> None:
     from texel.gen.brush import NYQ
 
-    from .common import _Parser
+    from .parsing import Parser as _Parser
     p.description = ("The Tactile Paintbrush (seed 002): a texture as the Weibull distribution "
                      "of its spectral magnitudes per wavenumber - fitted from a recording, "
                      "designed by hand, painted onto a map or a board's region.")

@@ -15,8 +15,11 @@ import texel.app
 
 from ..link.protocol import LiteralError
 from ..link.transport import DeviceError, LinkError
-from .common import EXIT_FAIL, EXIT_OK, CliError, _fail, _port_arg, _stderr, _value_error, \
-    check_output, positive_float, read_scene_file, write_output
+from .connection import add_port_flags, link_failure, refused_scene
+from .errors import EXIT_FAIL, EXIT_OK, CliError, to_stderr
+from .files import check_output, write_output
+from .parsing import positive_float
+from .scene_files import read_scene_file
 
 DEFAULT_SCENE = texel.app.DEFAULT_SCENE
 
@@ -152,7 +155,7 @@ def add_demo(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seconds", type=positive_float, default=6.0, metavar="S",
                    help="with --port: how long to record your swipe (default 6)")
     p.add_argument("--json", metavar="PATH", help="also write the figures here")
-    _port_arg(p, "the virtual board")
+    add_port_flags(p, "the virtual board")
     p.set_defaults(func=cmd_demo)
 
 
@@ -165,18 +168,18 @@ def cmd_demo(args: argparse.Namespace) -> int:
         try:                      # the board's own check, before starting anything
             host_check(scene)
         except ValueError as e:
-            raise _value_error(e, False) from None
+            raise refused_scene(e, False) from None
     # both output files are checked before the board is started, not after
     check_output("--out", args.out, (".png",))
     if args.json:
         check_output("--json", args.json, (".json",))
     try:
         rep = run(args.port, args.out, scene, args.board, args.seconds,
-                       timeout=args.timeout, progress=lambda m: _stderr("demo: " + m))
+                       timeout=args.timeout, progress=lambda m: to_stderr("demo: " + m))
     except (LiteralError, DeviceError) as e:
-        raise _value_error(e, False) from None
+        raise refused_scene(e, False) from None
     except LinkError as e:
-        raise _fail(e) from None
+        raise link_failure(e) from None
     except OSError as e:                # the figure (its directory was checked: a full disk)
         raise CliError("--out", "cannot write %s: %s" % (args.out, e.strerror or e),
                        EXIT_FAIL) from None

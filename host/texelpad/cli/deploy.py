@@ -4,8 +4,9 @@ from __future__ import annotations
 import argparse
 
 from ..link.transport import LinkError
-from .common import EXIT_FAIL, EXIT_OK, CliError, ProgressBar, _connect, _fail, _one_board, \
-    _port_arg, _stderr
+from .connection import add_port_flags, connect_board, link_failure, one_board
+from .errors import EXIT_FAIL, EXIT_OK, CliError, to_stderr
+from .progress import ProgressBar
 
 
 def add_deploy(p: argparse.ArgumentParser) -> None:
@@ -32,7 +33,7 @@ def add_deploy(p: argparse.ArgumentParser) -> None:
                    help="on the texelpad firmware: rewrite its ROMFS partition with this "
                         "texelpad's code in it (run instead of the frozen copy), even when it "
                         "holds what it should")
-    _port_arg(p, "the one board plugged in")
+    add_port_flags(p, "the one board plugged in")
     p.set_defaults(func=cmd_deploy)
 
 
@@ -40,16 +41,16 @@ def cmd_deploy(args: argparse.Namespace) -> int:
     from ..deploy.install import deploy
     from ..deploy.image import ImageError
     bar = ProgressBar()
-    _one_board(args)        # no --port: the one board there is, a texelpad virtual included
-    with _connect(args, check=False, import_image=False) as b:
+    one_board(args)        # no --port: the one board there is, a texelpad virtual included
+    with connect_board(args, check=False, import_image=False) as b:
         try:
             rep = deploy(b, source=args.source, include_main=not args.no_main,
-                         dry_run=args.dry_run, progress=lambda m: _stderr("deploy: " + m), bar=bar,
-                         force=args.force)
+                         dry_run=args.dry_run, progress=lambda m: to_stderr("deploy: " + m),
+                         bar=bar, force=args.force)
         except ImageError as e:
             raise CliError("", str(e), EXIT_FAIL) from None
         except LinkError as e:
-            raise _fail(e) from None
+            raise link_failure(e) from None
         finally:
             bar.end()
     if rep.get("form") == "romfs":          # the texelpad firmware (deploy/romfs_install.py)

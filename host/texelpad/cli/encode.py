@@ -7,8 +7,13 @@ import json
 import math
 from typing import Any
 
-from .common import (EXIT_OK, FORMAT_HELP, FORMAT_NEW, PARAM_FLAGS, CliError, check_output,
-                     positive_float, positive_int, read_scene_file, write_output)
+from texel.gen.params import FORMAT_NEW
+
+from .errors import EXIT_OK, CliError
+from .files import check_output, write_output
+from .parsing import positive_float, positive_int
+from .scene_files import read_scene_file
+from .texel_flags import FORMAT_HELP, PARAM_FLAGS
 
 FIGURE_TYPES = (".png", ".pdf", ".svg")
 # EncodeError messages start with what they are about; the flag it came from

@@ -5,7 +5,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from .common import EXIT_FAIL, EXIT_OK, CliError
+from .errors import EXIT_FAIL, EXIT_OK, CliError
 
 
 def add_firmware(p: argparse.ArgumentParser) -> None:

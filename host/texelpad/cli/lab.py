@@ -14,7 +14,7 @@ import socket
 import sys
 import webbrowser
 
-from .common import EXIT_FAIL, EXIT_OK, CliError, _stderr
+from .errors import EXIT_FAIL, EXIT_OK, CliError, to_stderr
 
 
 def add_lab(p: argparse.ArgumentParser) -> None:
@@ -74,7 +74,7 @@ def cmd_lab(args: argparse.Namespace) -> int:
             vb = None
             try:
                 if args.port is None:
-                    _stderr("lab: starting the virtual board")
+                    to_stderr("lab: starting the virtual board")
                     vb = open_virtual(source=True)
                     owner = BoardOwner(vb.port, args.board or "virtual", realtime=True)
                 else:
@@ -83,7 +83,7 @@ def cmd_lab(args: argparse.Namespace) -> int:
                     try:
                         owner.check_board_name()
                     except BoardLost as e:      # (said on the pages too; it may come back)
-                        _stderr("lab: could not check --board %s: %s" % (args.board, e))
+                        to_stderr("lab: could not check --board %s: %s" % (args.board, e))
                     except ValueError as e:
                         owner.close()
                         raise CliError("--board", str(e)) from None
@@ -163,7 +163,7 @@ def _bind(asked: int | None, last: object) -> socket.socket:
                 sock.bind(("127.0.0.1", last))
                 return sock
             except OSError as e:
-                _stderr("lab: the last port of this data folder, %d, is taken (%s): serving "
+                to_stderr("lab: the last port of this data folder, %d, is taken (%s): serving "
                         "on another one" % (last, e.strerror or e))
         sock.bind(("127.0.0.1", 0))
         return sock
@@ -184,9 +184,9 @@ def _export(args: argparse.Namespace) -> int:
     print("wrote %s (%d answers) and %d figures to %s"
           % (res["csv"], res["rows"], len(res["figures"]), args.out))
     for _, why in res["broken"]:
-        _stderr("lab export: left out %s" % why)
+        to_stderr("lab export: left out %s" % why)
     if res["broken"]:
-        _stderr("lab export: %d of %d sessions left out (the rest are exported)"
+        to_stderr("lab export: %d of %d sessions left out (the rest are exported)"
                 % (len(res["broken"]), res["sessions"]))
         return EXIT_FAIL
     return EXIT_OK

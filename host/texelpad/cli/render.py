@@ -7,8 +7,9 @@ from typing import Any
 
 import texel
 
-from .common import EXIT_FAIL, EXIT_OK, CliError, add_texel_flags, check_output, \
-    device_error, render_params
+from .errors import EXIT_FAIL, EXIT_OK, CliError
+from .files import check_output
+from .texel_flags import add_texel_flags, device_error, render_params
 
 
 OUT_TYPES = (".png", ".csv", ".npy")

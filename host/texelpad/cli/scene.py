@@ -16,23 +16,24 @@ import json
 import sys
 
 from ..link.transport import DeviceError, LinkError
-from .common import EXIT_FAIL, EXIT_OK, CliError, _connect, _fail, _one_board, _port_arg, \
-    check_output, not_running, read_scene_file, scene_json, shipped_scenes, write_atomic, \
-    write_output
+from .connection import add_port_flags, connect_board, link_failure, not_running, one_board
+from .errors import EXIT_FAIL, EXIT_OK, CliError
+from .files import check_output, write_atomic, write_output
+from .scene_files import read_scene_file, scene_json, shipped_scenes
 
 
 def add_scene(p: argparse.ArgumentParser) -> None:
-    from .common import _Parser
+    from .parsing import Parser
     p.description = ("Scenes as files: save what the board plays (pull), or make a scene the "
                      "one the board plays at power-up (boot).")
-    sub = p.add_subparsers(dest="action", metavar="ACTION", parser_class=_Parser)
+    sub = p.add_subparsers(dest="action", metavar="ACTION", parser_class=Parser)
     s = sub.add_parser("pull", aliases=["save"], help="write the scene playing now to a file",
                        description="Write the scene the board plays now (its canonical form: "
                                    "every default filled in) to FILE as JSON, ready for "
                                    "texelpad push --scene FILE. FILE is checked writable "
                                    "before the board is opened and written atomically.")
     s.add_argument("file", metavar="FILE", help="the JSON file to write; - for stdout")
-    _port_arg(s, "the one board plugged in")
+    add_port_flags(s, "the one board plugged in")
     s.set_defaults(func=cmd_scene_pull)
     s = sub.add_parser("boot", help="set (or --clear) the scene the board plays at power-up",
                        description="Make a scene the board's power-up scene: it is checked on "
@@ -49,7 +50,7 @@ def add_scene(p: argparse.ArgumentParser) -> None:
                    help="remove /texelpad.json: the board plays its default at power-up")
     s.add_argument("--board", metavar="NAME",
                    help="the board file to start at power-up (default: the one running now)")
-    _port_arg(s, "the one board plugged in")
+    add_port_flags(s, "the one board plugged in")
     s.set_defaults(func=cmd_scene_boot)
     p.set_defaults(func=_no_action)
 
@@ -64,15 +65,15 @@ def _no_action(args: argparse.Namespace) -> int:
 def cmd_scene_pull(args: argparse.Namespace) -> int:
     if args.file != "-":
         check_output("", args.file)          # before the board is opened
-    _one_board(args)
-    with _connect(args) as b:
+    one_board(args)
+    with connect_board(args) as b:
         try:
             st = b.status()
             if not st.get("running"):
                 raise not_running(b.port)
             scene = b.scene_source()
         except LinkError as e:
-            raise _fail(e) from None
+            raise link_failure(e) from None
     if scene is None:
         raise not_running(b.port)
     text = scene_json(scene)
@@ -98,8 +99,8 @@ def cmd_scene_boot(args: argparse.Namespace) -> int:
     if args.clear and args.board:
         raise CliError("--board", "--clear removes the power-up file; there is no board to name")
     scene = read_scene_file(args.file, "FILE") if args.file is not None else None
-    _one_board(args)
-    with _connect(args) as b:
+    one_board(args)
+    with connect_board(args) as b:
         try:
             if args.clear:
                 removed = clear_boot(b)
@@ -128,7 +129,7 @@ def cmd_scene_boot(args: argparse.Namespace) -> int:
         except ValueError as e:                 # the host-side check (the board's own code)
             raise CliError("", "%s: %s" % (_source(args), e)) from None
         except LinkError as e:
-            raise _fail(e) from None
+            raise link_failure(e) from None
     desc = config["scene"]
     print("power-up scene of %s: board %s, %s (%d region%s); %s bytes in %s"
           % (b.port, name, repr(desc["name"]) if desc.get("name") else _source(args),

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import argparse
 
-from .common import EXIT_OK, CliError
+from .errors import EXIT_OK, CliError
 
 
 def add_tank(p: argparse.ArgumentParser) -> None:

@@ -10,7 +10,9 @@ from pathlib import Path
 
 from ..link.transport import LinkError
 from ..sim.virtual import open_virtual, stop_on_signals
-from .common import EXIT_FAIL, EXIT_OK, CliError, _fail, _stderr, positive_float
+from .connection import link_failure
+from .errors import EXIT_FAIL, EXIT_OK, CliError, to_stderr
+from .parsing import positive_float
 
 
 def add_virtual(p: argparse.ArgumentParser) -> None:
@@ -95,7 +97,7 @@ def check_flash(flash: str | None, chip: str | None) -> None:
 
 
 def cmd_virtual(args: argparse.Namespace) -> int:
-    progress = lambda m: _stderr("virtual: " + m)       # noqa: E731
+    progress = lambda m: to_stderr("virtual: " + m)       # noqa: E731
     if args.finger != "lifted" and not args.chip:
         raise CliError("--finger", "the unix-port virtual board's finger is scripted over the "
                        "link (Board.finger); --finger is for --chip rp2040")
@@ -118,12 +120,12 @@ def cmd_virtual(args: argparse.Namespace) -> int:
                 else:
                     vb = open_virtual(args.flash, args.source, not args.no_start, progress)
             except LinkError as e:
-                raise _fail(e) from None
+                raise link_failure(e) from None
             except RuntimeError as e:       # the emulator did not come up
                 raise CliError("--chip", str(e), EXIT_FAIL) from None
             vb.announce()
             print(vb.port, flush=True)
-            _stderr("virtual: %s is on %s (flash: %s); Ctrl-C stops it"
+            to_stderr("virtual: %s is on %s (flash: %s); Ctrl-C stops it"
                     % ("an emulated %s" % args.chip.upper() if args.chip else "a virtual board",
                        vb.port, vb.flash))
             t_end = None if args.seconds is None else time.monotonic() + args.seconds

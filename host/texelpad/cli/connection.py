@@ -1,0 +1,75 @@
+"""The board a command talks to: the --port and --timeout flags, finding the
+one board there is, connecting, and the one line a failure of the link or a
+refusal of the board becomes (texelpad.link is the connection itself)."""
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from ..link.transport import DeviceError, LinkError
+from .errors import EXIT_FAIL, EXIT_USAGE, CliError
+from .parsing import positive_float
+from .texel_flags import PARAM_FLAGS
+
+
+def add_port_flags(p: argparse.ArgumentParser, help_none: str) -> None:
+    p.add_argument("--port", metavar="PORT",
+                   help="the board's serial port (/dev/ttyACM0, COM3, or a virtual board's "
+                        "/dev/pts/N); default: %s" % help_none)
+    p.add_argument("--timeout", type=positive_float, default=10.0, metavar="S",
+                   help="seconds to wait for the board to answer (default 10)")
+
+
+def link_failure(e: LinkError) -> CliError:
+    """A link/board error as a CliError: the board's refusal of what the user
+    asked is a usage error (2), the rest a failure (1)."""
+    if isinstance(e, DeviceError):
+        return CliError("", "the board refused it: %s" % e, EXIT_USAGE)
+    return CliError("", str(e), EXIT_FAIL)
+
+
+def connect_board(args: argparse.Namespace, check: bool = True,
+                  import_image: bool = True) -> Any:
+    from ..link.board import connect
+    try:
+        return connect(args.port, timeout=args.timeout, check=check, import_image=import_image)
+    except LinkError as e:
+        raise link_failure(e) from None
+
+
+def one_board(args: argparse.Namespace) -> None:
+    """No --port: the one board there is, a running `texelpad virtual`
+    included (connect() itself only knows USB boards)."""
+    if getattr(args, "port", None) is not None:
+        return
+    from ..link.transport import ports
+    from ..sim.virtual import running_boards
+    found = [p["port"] for p in ports()] + [e["port"] + " (virtual)" for e in running_boards()]
+    if len(found) > 1:
+        raise CliError("--port", "%d boards found (%s): say which with --port"
+                       % (len(found), ", ".join(found)), EXIT_FAIL)
+    if found:
+        args.port = found[0].split(" ")[0]
+
+
+def not_running(port: str, hint: str = "texelpad push --board NAME starts it") -> CliError:
+    """texelpad is not running on the board: a state of the world, not a
+    bad flag (exit 1), in the same words from every command."""
+    return CliError("", "texelpad is not running on %s (%s)" % (port, hint), EXIT_FAIL)
+
+
+def refused_scene(e: Exception, from_flags: bool) -> CliError:
+    """A refused parameter: name the flag when it came from one."""
+    text = str(e)
+    if from_flags:
+        path, sep, rest = text.partition(": ")
+        key = path.rsplit(".", 1)[-1]
+        if sep and path.startswith("regions[0].texture.") and key in PARAM_FLAGS:
+            return CliError(PARAM_FLAGS[key], rest)
+        missing = "missing required key '"
+        if path == "regions[0].texture" and rest.startswith(missing):
+            key, _, more = rest[len(missing):].partition("'")
+            if key in PARAM_FLAGS:
+                return CliError(PARAM_FLAGS[key], "required%s" % more)
+    prefix = "the board refused it: " if isinstance(e, DeviceError) else ""
+    return CliError("--scene" if not from_flags else "", prefix + text)
