@@ -157,7 +157,7 @@ def _broken_pipe(command: str) -> int:
     if not quiet:
         try:
             to_stderr("texelpad%s: error: broken pipe (a process it wrote to went away)"
-                    % (" " + command if command else ""))
+                      % (" " + command if command else ""))
         except OSError:
             pass
     return EXIT_FAIL

@@ -11,9 +11,8 @@ import sys
 import time
 from typing import Any
 
-from ..link.transport import DeviceError, LinkError
-from .connection import add_port_flags, connect_board, link_failure, not_running, one_board, \
-    refused_scene
+from ..link.transport import DeviceError
+from .connection import add_port_flags, connected_board, refused_scene, running_board
 from .errors import EXIT_FAIL, EXIT_OK, CliError, to_stderr
 from .parsing import positive_float
 from .progress import ProgressBar
@@ -130,6 +129,11 @@ def _what_to_push(args: argparse.Namespace) -> tuple[str, Any]:
     return "texture", {"kind": "constant", "level": args.constant}
 
 
+def _fitting_hint(b: Any) -> str:
+    return ("--board NAME starts it; board files that fit this board: %s"
+            % (", ".join(b.fitting()) or "none"))
+
+
 def _refused(e: ValueError, kind: str, args: argparse.Namespace) -> CliError:
     """A refused push, naming the flag it came from."""
     if kind == "texture":
@@ -141,22 +145,16 @@ def _refused(e: ValueError, kind: str, args: argparse.Namespace) -> CliError:
 def cmd_push(args: argparse.Namespace) -> int:
     from ..link.board import full_screen
     kind, what = _what_to_push(args)
-    one_board(args)
     progress = _UploadProgress()
-    with connect_board(args) as b:
+    # not running: --board starts it; a ValueError (LiteralError, DeviceError, the
+    # host-side check: the board's own code) names the flag it came from (_refused)
+    with running_board(args, _fitting_hint, start=args.board,
+                       refused=lambda e: _refused(e, kind, args)) as (b, st):
+        if args.board and args.board != st.get("board"):    # another board file runs
+            raise CliError("--board", "%s already runs board file %r, not %r; the scene "
+                           "was not sent (texelpad stop first to start another board file)"
+                           % (b.port, st.get("board"), args.board))
         try:
-            st = b.status()
-            if not st.get("running"):
-                if not args.board:
-                    raise not_running(b.port, "--board NAME starts it; board files that fit "
-                                      "this board: %s" % (", ".join(b.fitting()) or "none"))
-                # realtime: a virtual board started from the host plays in real
-                # time (stepped, it would play nothing); other ports ignore it
-                st = b.start(args.board, realtime=True)
-            elif args.board and args.board != st.get("board"):
-                raise CliError("--board", "%s already runs board file %r, not %r; the scene "
-                               "was not sent (texelpad stop first to start another board file)"
-                               % (b.port, st.get("board"), args.board))
             sent0 = b.link.sent
             t0 = time.perf_counter()
             if kind == "texel":
@@ -165,10 +163,6 @@ def cmd_push(args: argparse.Namespace) -> int:
                 scene = what if kind == "scene" else full_screen(what, st["display"])
                 st = b.push(scene, progress=progress)
             dt = time.perf_counter() - t0
-        except ValueError as e:    # LiteralError, DeviceError, the host-side check (the
-            raise _refused(e, kind, args) from None     # board's own code)
-        except LinkError as e:
-            raise link_failure(e) from None
         finally:
             progress.end()
         if args.json:
@@ -225,13 +219,9 @@ def _stepped(b: Any, st: dict[str, Any]) -> bool:
 
 
 def cmd_status(args: argparse.Namespace) -> int:
-    one_board(args)
-    with connect_board(args) as b:
-        try:
-            st = b.status()
-            stepped = _stepped(b, st)
-        except LinkError as e:
-            raise link_failure(e) from None
+    with connected_board(args) as b:
+        st = b.status()
+        stepped = _stepped(b, st)
     if args.json:
         print(json.dumps(st, indent=1, sort_keys=True))
         if stepped:
@@ -271,22 +261,18 @@ def scene_line(desc: dict[str, Any] | None) -> str:
 
 
 def cmd_stop(args: argparse.Namespace) -> int:
-    one_board(args)
     # check=False: a safety command must work on an image older than this host
     # (texel.app.stop and status have been there since the first one)
-    with connect_board(args, check=False) as b:
+    with connected_board(args, check=False) as b:
         if b.image is None:
             print("%s has no texelpad image: texelpad plays nothing there" % b.port)
             return EXIT_OK
-        try:
-            st = b.status()
-            if not st.get("running"):
-                print("texelpad is not running on %s: the carrier is already off" % b.port)
-                return EXIT_OK
-            b.stop()
-            after = b.status()
-        except LinkError as e:
-            raise link_failure(e) from None
+        st = b.status()
+        if not st.get("running"):
+            print("texelpad is not running on %s: the carrier is already off" % b.port)
+            return EXIT_OK
+        b.stop()
+        after = b.status()
     if after.get("running"):         # the board's stop() returned but the display runs
         raise CliError("", "%s still runs texelpad after stop(); unplug the board's power "
                        "stage" % b.port, EXIT_FAIL)
@@ -338,46 +324,39 @@ def cmd_monitor(args: argparse.Namespace) -> int:
     b = None
     failed = True
     try:
-        one_board(args)
-        with connect_board(args) as b:
+        with running_board(args) as (b, st):
+            hz = st["refresh_hz"]
+            if args.rate > hz:
+                raise CliError("--rate", "must be 1 .. %s samples/s, the refresh rate of %s "
+                               "(one sample per refresh at most), got %d"
+                               % (hz, b.port, args.rate))
+            if _stepped(b, st):
+                raise CliError("", "no samples would come: " + STEPPED, EXIT_FAIL)
+            dx = st["display"]["dx_um"] / 1000.0
+            if not out:
+                print("%10s  %9s  %6s  amplitude" % ("t_ms", "mm", "amp"))
+            samples = b.monitor(args.seconds, rate_hz=args.rate)
             try:
-                st = b.status()
-                if not st.get("running"):
-                    raise not_running(b.port)
-                hz = st["refresh_hz"]
-                if args.rate > hz:
-                    raise CliError("--rate", "must be 1 .. %s samples/s, the refresh rate of %s "
-                                   "(one sample per refresh at most), got %d"
-                                   % (hz, b.port, args.rate))
-                if _stepped(b, st):
-                    raise CliError("", "no samples would come: " + STEPPED, EXIT_FAIL)
-                dx = st["display"]["dx_um"] / 1000.0
-                if not out:
-                    print("%10s  %9s  %6s  amplitude" % ("t_ms", "mm", "amp"))
-                samples = b.monitor(args.seconds, rate_hz=args.rate)
-                try:
-                    for t, pos, amp in samples:
-                        n += 1
-                        mm = pos * dx if pos >= 0 else float("nan")
-                        if out:
-                            try:
-                                out.write("%d,%d,%.4f,%d\n" % (t, pos, mm, amp))
-                            except OSError as e:
-                                raise _csv_error(args.csv, e) from None
-                        else:
-                            print("%10.1f  %9s  %6d  %s" % (t / 1000, "lifted" if pos < 0 else
-                                                            "%.3f" % mm, amp, _bar(amp)),
-                                  flush=True)
-                finally:
-                    samples.close()         # the stream off before the link closes
-                actual = hz / b.divider if b.divider else 0
-                if actual and abs(actual - args.rate) > 0.01 * args.rate:
-                    to_stderr("monitor: the board sampled every %srefresh of %s Hz: %.1f "
-                            "samples/s, not %d" % ("%d%s " % (b.divider, _ordinal(b.divider))
-                                                   if b.divider > 1 else "", hz, actual,
-                                                   args.rate))
-            except LinkError as e:
-                raise link_failure(e) from None
+                for t, pos, amp in samples:
+                    n += 1
+                    mm = pos * dx if pos >= 0 else float("nan")
+                    if out:
+                        try:
+                            out.write("%d,%d,%.4f,%d\n" % (t, pos, mm, amp))
+                        except OSError as e:
+                            raise _csv_error(args.csv, e) from None
+                    else:
+                        print("%10.1f  %9s  %6d  %s" % (t / 1000, "lifted" if pos < 0 else
+                                                        "%.3f" % mm, amp, _bar(amp)),
+                              flush=True)
+            finally:
+                samples.close()         # the stream off before the link closes
+            actual = hz / b.divider if b.divider else 0
+            if actual and abs(actual - args.rate) > 0.01 * args.rate:
+                to_stderr("monitor: the board sampled every %srefresh of %s Hz: %.1f "
+                          "samples/s, not %d" % ("%d%s " % (b.divider, _ordinal(b.divider))
+                                                 if b.divider > 1 else "", hz, actual,
+                                                 args.rate))
         failed = False
     except KeyboardInterrupt:
         failed = False
@@ -399,9 +378,9 @@ def cmd_monitor(args: argparse.Namespace) -> int:
         lost = getattr(b, "lost", 0) if b is not None else 0
         if lost:
             to_stderr("monitor: warning: %s of %s samples lost: the board's 256-sample telemetry "
-                    "ring was lapped between two reads (the link did not keep up with %d "
-                    "samples/s; a lower --rate loses fewer)"
-                    % (format(lost, ","), format(lost + n, ","), args.rate))
+                      "ring was lapped between two reads (the link did not keep up with %d "
+                      "samples/s; a lower --rate loses fewer)"
+                      % (format(lost, ","), format(lost + n, ","), args.rate))
     return EXIT_OK
 
 

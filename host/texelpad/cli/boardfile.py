@@ -17,7 +17,7 @@ from typing import Any
 
 from ..deploy import boardcheck
 from ..link.transport import DeviceError, LinkError
-from .connection import add_port_flags, connect_board, link_failure, one_board
+from .connection import add_port_flags, connected_board
 from .errors import EXIT_OK, CliError, to_stderr
 
 BOARDS_DIR = "/boards"          # texel.runtime.boards.search_path(): the board's own first
@@ -169,8 +169,7 @@ def cmd_boardfile_install(args: argparse.Namespace) -> int:
         data = (text[1:] if text.startswith("\ufeff") else text).encode("utf-8")
     else:                               # renamed (--name): "name" is the file's name
         data = (json.dumps(doc, indent=2, ensure_ascii=False) + "\n").encode("utf-8")
-    one_board(args)
-    with connect_board(args) as b:
+    with connected_board(args) as b:
         here = _board_port(b.firmware)
         if port != "virtual" and here != port:
             raise CliError("", "%s is for %s, but %s runs %s on %r (%s): nothing was written"
@@ -193,23 +192,18 @@ def cmd_boardfile_install(args: argparse.Namespace) -> int:
             if kind == "f":                 # the old copy kept until the board takes the new
                 b.link.exec(protocol.replace_file(old, path))
             b.link.exec(protocol.replace_file(path, tmp))
-        except LinkError as e:
+        except LinkError:
             _undo(b, path, tmp, old if kind == "f" else None)
-            raise link_failure(e) from None
+            raise
         try:
             display = board_display(b, name)    # the board loads it with its own code
         except DeviceError as e:
             _undo(b, path, tmp, old if kind == "f" else None)
             raise CliError("", "the board refused it: %s; %s" % (
                 e, "its old %s is back" % path if kind == "f" else "nothing was left on it"))
-        except LinkError as e:
-            raise link_failure(e) from None
-        try:
-            if kind == "f":
-                b.link.exec(protocol.remove_file(old))
-            st = b.status()
-        except LinkError as e:
-            raise link_failure(e) from None
+        if kind == "f":
+            b.link.exec(protocol.remove_file(old))
+        st = b.status()
         print("installed %s on %s as %s/%s.json (%s bytes%s%s)" % (
             shown, b.port, BOARDS_DIR, name, format(len(data), ","),
             "; it replaced the one there" if kind == "f" else "",
@@ -227,8 +221,6 @@ def cmd_boardfile_install(args: argparse.Namespace) -> int:
             except ValueError as e:
                 raise CliError("--boot", "%s; the board file is installed, the power-up "
                                "unchanged" % e) from None
-            except LinkError as e:
-                raise link_failure(e) from None
             print("power-up: board %s with %s (%s bytes in %s)" % (
                 name, "the scene playing now" if st.get("running") else "the default scene",
                 format(size, ","), BOOT_FILE))

@@ -1,10 +1,13 @@
-"""The board a command talks to: the --port and --timeout flags, finding the
-one board there is, connecting, and the one line a failure of the link or a
-refusal of the board becomes (texelpad.link is the connection itself)."""
+"""The board a command talks to: the --port and --timeout flags, and two
+context managers - `connected_board(args)`, the board of --port (or the one
+there is), and `running_board(args)`, that board running texelpad (else
+one line, exit 1) - within which a failure of the link or a refusal of the
+board is one line (link_failure). texelpad.link is the connection itself."""
 from __future__ import annotations
 
 import argparse
-from typing import Any
+from contextlib import contextmanager
+from typing import Any, Callable, Iterator
 
 from ..link.transport import DeviceError, LinkError
 from .errors import EXIT_FAIL, EXIT_USAGE, CliError
@@ -28,16 +31,62 @@ def link_failure(e: LinkError) -> CliError:
     return CliError("", str(e), EXIT_FAIL)
 
 
-def connect_board(args: argparse.Namespace, check: bool = True,
-                  import_image: bool = True) -> Any:
+START_HINT = "texelpad push --board NAME starts it"
+
+
+def not_running(port: str, hint: str = START_HINT) -> CliError:
+    """texelpad is not running on the board: a state of the world, not a
+    bad flag (exit 1), in the same words from every command."""
+    return CliError("", "texelpad is not running on %s (%s)" % (port, hint), EXIT_FAIL)
+
+
+@contextmanager
+def connected_board(args: argparse.Namespace, check: bool = True, import_image: bool = True,
+                    refused: Callable[[ValueError], CliError] | None = None) -> Iterator[Any]:
+    """`with connected_board(args) as b:` the board of --port (no --port:
+    the one board there is, a running texelpad virtual included), connected
+    (check, import_image: link.board.connect's); closed after the block.
+    A LinkError, connecting or in the block, is one line (link_failure);
+    with `refused`, a ValueError in the block (a DeviceError too: the board
+    refused it) is refused(e) instead - the command names the flag."""
     from ..link.board import connect
+    _one_board(args)
     try:
-        return connect(args.port, timeout=args.timeout, check=check, import_image=import_image)
+        board = connect(args.port, timeout=args.timeout, check=check, import_image=import_image)
     except LinkError as e:
         raise link_failure(e) from None
+    with board:
+        try:
+            yield board
+        except (ValueError, LinkError) as e:
+            if refused is not None and isinstance(e, ValueError):
+                raise refused(e) from None
+            if isinstance(e, LinkError):
+                raise link_failure(e) from None
+            raise
 
 
-def one_board(args: argparse.Namespace) -> None:
+@contextmanager
+def running_board(args: argparse.Namespace, hint: str | Callable[[Any], str] = START_HINT,
+                  start: str | None = None, stopped_ok: bool = False,
+                  refused: Callable[[ValueError], CliError] | None = None,
+                  ) -> Iterator[tuple[Any, dict[str, Any]]]:
+    """`with running_board(args) as (b, st):` a connected_board on which
+    texelpad runs, and its status. Where it does not: board file `start`
+    is started (in real time: a virtual board started from the host plays
+    in real time, stepped it would play nothing; other ports ignore it),
+    or with `stopped_ok` the board is taken as it is (st says so), or else
+    not_running(port, hint) - hint a text or hint(board) - one line, exit 1."""
+    with connected_board(args, refused=refused) as b:
+        st = b.status()
+        if not st.get("running") and not stopped_ok:
+            if not start:
+                raise not_running(b.port, hint(b) if callable(hint) else hint)
+            st = b.start(start, realtime=True)
+        yield b, st
+
+
+def _one_board(args: argparse.Namespace) -> None:
     """No --port: the one board there is, a running `texelpad virtual`
     included (connect() itself only knows USB boards)."""
     if getattr(args, "port", None) is not None:
@@ -50,12 +99,6 @@ def one_board(args: argparse.Namespace) -> None:
                        % (len(found), ", ".join(found)), EXIT_FAIL)
     if found:
         args.port = found[0].split(" ")[0]
-
-
-def not_running(port: str, hint: str = "texelpad push --board NAME starts it") -> CliError:
-    """texelpad is not running on the board: a state of the world, not a
-    bad flag (exit 1), in the same words from every command."""
-    return CliError("", "texelpad is not running on %s (%s)" % (port, hint), EXIT_FAIL)
 
 
 def refused_scene(e: Exception, from_flags: bool) -> CliError:

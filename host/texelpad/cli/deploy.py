@@ -3,8 +3,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..link.transport import LinkError
-from .connection import add_port_flags, connect_board, link_failure, one_board
+from .connection import add_port_flags, connected_board
 from .errors import EXIT_FAIL, EXIT_OK, CliError, to_stderr
 from .progress import ProgressBar
 
@@ -41,16 +40,13 @@ def cmd_deploy(args: argparse.Namespace) -> int:
     from ..deploy.install import deploy
     from ..deploy.image import ImageError
     bar = ProgressBar()
-    one_board(args)        # no --port: the one board there is, a texelpad virtual included
-    with connect_board(args, check=False, import_image=False) as b:
+    with connected_board(args, check=False, import_image=False) as b:
         try:
             rep = deploy(b, source=args.source, include_main=not args.no_main,
                          dry_run=args.dry_run, progress=lambda m: to_stderr("deploy: " + m),
                          bar=bar, force=args.force)
         except ImageError as e:
             raise CliError("", str(e), EXIT_FAIL) from None
-        except LinkError as e:
-            raise link_failure(e) from None
         finally:
             bar.end()
     if rep.get("form") == "romfs":          # the texelpad firmware (deploy/romfs_install.py)

@@ -164,7 +164,7 @@ def _bind(asked: int | None, last: object) -> socket.socket:
                 return sock
             except OSError as e:
                 to_stderr("lab: the last port of this data folder, %d, is taken (%s): serving "
-                        "on another one" % (last, e.strerror or e))
+                          "on another one" % (last, e.strerror or e))
         sock.bind(("127.0.0.1", 0))
         return sock
     except BaseException:
@@ -187,6 +187,6 @@ def _export(args: argparse.Namespace) -> int:
         to_stderr("lab export: left out %s" % why)
     if res["broken"]:
         to_stderr("lab export: %d of %d sessions left out (the rest are exported)"
-                % (len(res["broken"]), res["sessions"]))
+                  % (len(res["broken"]), res["sessions"]))
         return EXIT_FAIL
     return EXIT_OK

@@ -15,8 +15,8 @@ import argparse
 import json
 import sys
 
-from ..link.transport import DeviceError, LinkError
-from .connection import add_port_flags, connect_board, link_failure, not_running, one_board
+from ..link.transport import DeviceError
+from .connection import add_port_flags, connected_board, not_running, running_board
 from .errors import EXIT_FAIL, EXIT_OK, CliError
 from .files import check_output, write_atomic, write_output
 from .scene_files import read_scene_file, scene_json, shipped_scenes
@@ -65,16 +65,9 @@ def _no_action(args: argparse.Namespace) -> int:
 def cmd_scene_pull(args: argparse.Namespace) -> int:
     if args.file != "-":
         check_output("", args.file)          # before the board is opened
-    one_board(args)
-    with connect_board(args) as b:
-        try:
-            st = b.status()
-            if not st.get("running"):
-                raise not_running(b.port)
-            scene = b.scene_source()
-        except LinkError as e:
-            raise link_failure(e) from None
-    if scene is None:
+    with running_board(args) as (b, _):
+        scene = b.scene_source()
+    if scene is None:                           # it stopped since
         raise not_running(b.port)
     text = scene_json(scene)
     if args.file == "-":
@@ -99,37 +92,35 @@ def cmd_scene_boot(args: argparse.Namespace) -> int:
     if args.clear and args.board:
         raise CliError("--board", "--clear removes the power-up file; there is no board to name")
     scene = read_scene_file(args.file, "FILE") if args.file is not None else None
-    one_board(args)
-    with connect_board(args) as b:
-        try:
-            if args.clear:
-                removed = clear_boot(b)
-                print("%s %s on %s: at power-up the board plays its default (the study's split "
-                      "screen, on the board file its firmware picks)"
-                      % ("removed" if removed else "there was no", BOOT_FILE, b.port))
-                return EXIT_OK
-            st = b.status()
-            running = st.get("running")
-            name = args.board or st.get("board")
-            if not name:
-                raise not_running(b.port, "--board NAME says which board file to start at "
-                                  "power-up")
-            if running and name == st.get("board"):
-                display = st["display"]
-            else:                               # the named board file, as the board reads it
-                display = board_display(b, name)
-            if args.current:
-                if not running:
-                    raise not_running(b.port)
-                scene = b.scene_source()
-            config = boot_config(name, scene, display)
-            size = write_boot(b, config)
-        except DeviceError as e:                # only the named board file is the board's
-            raise CliError("--board", "the board refused it: %s" % e) from None
-        except ValueError as e:                 # the host-side check (the board's own code)
-            raise CliError("", "%s: %s" % (_source(args), e)) from None
-        except LinkError as e:
-            raise link_failure(e) from None
+
+    def refused(e: ValueError) -> CliError:
+        if isinstance(e, DeviceError):          # only the named board file is the board's
+            return CliError("--board", "the board refused it: %s" % e)
+        # the host-side check (the board's own code)
+        return CliError("", "%s: %s" % (_source(args), e))
+
+    if args.clear:
+        with connected_board(args, refused=refused) as b:
+            removed = clear_boot(b)
+            print("%s %s on %s: at power-up the board plays its default (the study's split "
+                  "screen, on the board file its firmware picks)"
+                  % ("removed" if removed else "there was no", BOOT_FILE, b.port))
+        return EXIT_OK
+    # the board file: --board, else the one running (stopped, --board must say)
+    with running_board(args, "--board NAME says which board file to start at power-up",
+                       stopped_ok=bool(args.board), refused=refused) as (b, st):
+        running = st.get("running")
+        name = args.board or st.get("board")
+        if running and name == st.get("board"):
+            display = st["display"]
+        else:                                   # the named board file, as the board reads it
+            display = board_display(b, name)
+        if args.current:                        # the scene playing (after --board's check)
+            if not running:
+                raise not_running(b.port)
+            scene = b.scene_source()
+        config = boot_config(name, scene, display)
+        size = write_boot(b, config)
     desc = config["scene"]
     print("power-up scene of %s: board %s, %s (%d region%s); %s bytes in %s"
           % (b.port, name, repr(desc["name"]) if desc.get("name") else _source(args),

@@ -126,8 +126,8 @@ def cmd_virtual(args: argparse.Namespace) -> int:
             vb.announce()
             print(vb.port, flush=True)
             to_stderr("virtual: %s is on %s (flash: %s); Ctrl-C stops it"
-                    % ("an emulated %s" % args.chip.upper() if args.chip else "a virtual board",
-                       vb.port, vb.flash))
+                      % ("an emulated %s" % args.chip.upper() if args.chip else "a virtual board",
+                         vb.port, vb.flash))
             t_end = None if args.seconds is None else time.monotonic() + args.seconds
             while vb.alive() and (t_end is None or time.monotonic() < t_end):
                 time.sleep(0.2)
