@@ -101,7 +101,8 @@ def rater_pitches(shared: str | Path | None = None
             {names[c]: labels[r] for r, c in zip(ri, ci)})
 
 
-def render_pitches(pitches: Sequence[float], texel_samples: int = RATER_TEXEL_SAMPLES
+def render_pitches(pitches: Sequence[float] | np.ndarray,
+                   texel_samples: int = RATER_TEXEL_SAMPLES
                    ) -> np.ndarray:
     """The map (0..1) of texels with these pitches (c/mm), as the lab's
     generator renders them: the phase advances 2 pi f_i DX per sample of texel

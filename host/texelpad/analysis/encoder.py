@@ -94,14 +94,15 @@ def scene_region_map(scene: Any, region: int) -> np.ndarray:
         sc = tscene.build(canonical, display)
     except ValueError as e:
         raise EncodeError("scene: %s" % e) from None
-    spans = [(s, e) for (s, e, _, _) in sc.spans()]
+    spans = [(a, b) for (a, b, _, _) in sc.spans()]
     if not isinstance(region, int) or isinstance(region, bool) or not 0 <= region < len(spans):
         raise EncodeError("region: expected 1 .. %d (the scene has %d region%s), got %r"
                           % (len(spans), len(spans), "" if len(spans) == 1 else "s",
                              region + 1 if isinstance(region, int) else region))
-    s, e = spans[region]
+    start, end = spans[region]
     amp = sc.amp
-    return np.fromiter((amp(i) for i in range(s, e)), dtype=np.float64, count=e - s) / U16_FULL
+    return np.fromiter((amp(i) for i in range(start, end)), dtype=np.float64,
+                       count=end - start) / U16_FULL
 
 
 def read_map(path: str | Path) -> tuple[np.ndarray, list[str]]:
@@ -402,6 +403,7 @@ def _nelder_mead(objective: Any, starts: list[tuple[float, float, float]],
                               "maxfev": 160})
         if res is None or r.fun < res.fun:
             res = r
+    assert res is not None                      # runs holds at least the best start
     pitch = _clip_pitch(_round_db(float(res.x[0])))
     irr = min(max(_round_db(float(res.x[1])), bounds[1][0]), bounds[1][1])
     return pitch, irr

@@ -300,7 +300,7 @@ def _demo_data(scene: Any, display: dict | None, telemetry: Any) -> _Demo:
     t0 = float(t_us[0]) if len(tel) else None
     # one colour per region: tab10, then the light tab20 shades (16 regions at most)
     from matplotlib import colormaps
-    t20 = colormaps["tab20"].colors
+    t20 = colormaps["tab20"].colors            # type: ignore[attr-defined]  # a ListedColormap
     return _Demo(sc=sc, u16=u16, fmap=fmap, dx=dx, x=np.arange(npos) * dx, spans=spans,
                  texs=[r["texture"] for r in regions],
                  edges=sorted({s for s, _ in spans} | {e for _, e in spans}),

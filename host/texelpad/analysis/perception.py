@@ -574,7 +574,7 @@ class FeltPoint:
         return math.hypot(self.pitch_db - other.pitch_db,
                           self.noisiness_db - other.noisiness_db)
 
-    def as_dict(self) -> dict[str, float]:
+    def as_dict(self) -> dict[str, float | None]:
         return {"pitch_db": round(self.pitch_db, 3),
                 "noisiness_db": round(self.noisiness_db, 3),
                 "level_db": round(self.level_db, 3) if math.isfinite(self.level_db) else None,

@@ -53,7 +53,8 @@ def _time(fn, repeat=3) -> float:
 def synthesis(chip: bool) -> dict:
     doc = D.design("pink", 0.04)
     v = B.validate({"k": doc["k"], "lam": doc["lam"], "range": doc["range"]})
-    out = {"cpython_numpy_s": _time(lambda: B.paint(v, 1, FULL, how="numpy")),
+    out: dict[str, float | None] = {
+        "cpython_numpy_s": _time(lambda: B.paint(v, 1, FULL, how="numpy")),
            "cpython_python_s": _time(lambda: B.paint(v, 1, FULL, how="python"), 1)}
     code = """
 import time

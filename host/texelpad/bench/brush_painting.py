@@ -76,7 +76,7 @@ import sys
 import textwrap
 import time
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -182,7 +182,7 @@ def _source(i: int, name: str, swipes: int, paint_seeds: Sequence[int], seed: in
     max_lag = max(lags.values())
     r_src = autocorrelation(m, max_lag)
     r_pnt = [autocorrelation(p, max_lag) for p in paintings]
-    acf = {"source": {k: float(r_src[v]) for k, v in lags.items()},
+    acf: dict[str, Any] = {"source": {k: float(r_src[v]) for k, v in lags.items()},
            "paintings": [{k: float(r[v]) for k, v in lags.items()} for r in r_pnt]}
     acf["painting_mean"] = {k: float(np.mean([p[k] for p in acf["paintings"]])) for k in lags}
     acf["max_abs_source"] = max(abs(v) for v in acf["source"].values())
@@ -247,15 +247,18 @@ def compare_swipes(per: dict, names: Sequence[str]) -> dict:
             cnt[own] -= 1.0
             mean_to[:, jj] = tot / np.maximum(cnt, 1.0)
         per_src = {}
-        sil_src_all, sil_pnt_all, ok_src, ok_pnt = [], [], [], []
+        sil_src_all: list[float] = []
+        sil_pnt_all: list[float] = []
+        ok_src: list[bool] = []
+        ok_pnt: list[bool] = []
         for ii, name in enumerate(names):
             within = _pairs(Dm, src_rows[ii])
             sp = Dm[np.ix_(src_rows[ii], pnt_rows[ii])]
             pp = _pairs(Dm, pnt_rows[ii])
             others = {names[jj]: _median(Dm[np.ix_(src_rows[ii], src_rows[jj])])
                       for jj in range(len(names)) if jj != ii}
-            nearest = min(others, key=others.get)
-            res = {"within_source": _median(within), "source_to_painting": _median(sp),
+            nearest = min(others, key=lambda o: others[o])
+            res: dict[str, Any] = {"within_source": _median(within), "source_to_painting": _median(sp),
                    "within_painting": _median(pp), "nearest_other": nearest,
                    "to_nearest_other": others[nearest], "to_others_median": _median(
                        list(others.values()))}
@@ -299,7 +302,7 @@ def perception(per: dict, names: Sequence[str]) -> dict:
         pats = [P.map_pattern(p) for p in per[n]["_paintings"][:2]]
         pts = [p.felt_point() for p in pats]
         others = {o: pt_src[n].distance(pt_src[o]) for o in names if o != n}
-        nearest = min(others, key=others.get)
+        nearest = min(others, key=lambda o: others[o])
         out[n] = {"source_painting": pt_src[n].distance(pts[0]),
                   "source_painting2": pt_src[n].distance(pts[1]),
                   "painting_painting2": pts[0].distance(pts[1]),

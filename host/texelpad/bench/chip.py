@@ -207,7 +207,7 @@ def _irq_cost(b: Any, reps: int, say: Progress) -> dict[str, Any]:
     # by the split screen's half under the finger at the window's end (the
     # finger moves ~2 % of the display per window): reference map | texel plan
     half = b.link.eval("print(repr(_tpb_app._rt.board['display']['positions'] // 2))")
-    by = {}
+    by: dict[str, list[float]] = {}
     for r in per:
         r["region"] = "reference map" if r["position"] < half else "texel plan"
         by.setdefault(r["region"], []).append(r["us"])

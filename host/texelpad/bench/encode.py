@@ -100,7 +100,7 @@ def people() -> dict[str, Any]:
             v = E.encode(m, model=model, intervals=False)
             row["variants"][label] = [v["pitch_db"], v["irregularity_db"]]
         rows.append(row)
-    errs = {lab: [] for lab, _ in VARIANTS}
+    errs: dict[str, list[float]] = {lab: [] for lab, _ in VARIANTS}
     for row in rows:
         if row["paper_pitch_db"] is None:
             continue
@@ -172,8 +172,8 @@ def model_check() -> list[dict[str, Any]]:
     out = []
     for params in CHECKED:
         _, S = P.expected_periodogram(params, LENGTH)
-        mean = sum(P.periodogram(texel.render(dict(params, length_samples=LENGTH, seed=s)))[1]
-                   for s in range(MODEL_SEEDS)) / MODEL_SEEDS
+        mean = np.sum([P.periodogram(texel.render(dict(params, length_samples=LENGTH, seed=s)))[1]
+                       for s in range(MODEL_SEEDS)], axis=0) / MODEL_SEEDS
         out.append({"params": params, "power_expected": float(S.sum()),
                     "power_rendered": float(mean.sum()),
                     "w2_db": P.w2_db(P.pattern_of_spectrum(S, LENGTH),

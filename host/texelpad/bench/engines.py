@@ -405,8 +405,8 @@ def _run_on_chip(job: dict[str, Any], progress: Progress) -> str:
 
 def float_name(bits: int | None) -> str:
     """A float format by its mantissa bits (texel.compat.FLOAT_BITS)."""
-    return {53: "float64", 24: "float32", 22: "30-bit float (22-bit mantissa)"}.get(
-        bits, "float with a %s-bit mantissa" % bits)
+    names = {53: "float64", 24: "float32", 22: "30-bit float (22-bit mantissa)"}
+    return names.get(bits or 0, "float with a %s-bit mantissa" % bits)
 
 
 def _missing_reason(runtime: str) -> str:
@@ -683,14 +683,13 @@ def _model_notes(res: BenchResult) -> list[str]:
     """The op-count model of the RP2040: against the emulated chip, its costs,
     its check on the unix port, and the estimates per engine."""
     out = []
-    chip = [r for r in res.rows if r.runtime == CHIP and r.est_rp2040]
+    chip = [(r, r.est_rp2040) for r in res.rows if r.runtime == CHIP and r.est_rp2040]
     if chip:
         out.append("op-count model against the emulated chip (estimate / measured ms, plan + "
                    "synthesis): " + "; ".join(
-                       "%s %.0f / %.0f (%+.0f %%)" % (r.label, r.est_rp2040["total_ms"],
-                                                      r.total_ms, 100.0 * (r.est_rp2040[
-                                                          "total_ms"] / r.total_ms - 1))
-                       for r in chip) + ".")
+                       "%s %.0f / %.0f (%+.0f %%)" % (r.label, est["total_ms"], r.total_ms,
+                                                      100.0 * (est["total_ms"] / r.total_ms - 1))
+                       for r, est in chip) + ".")
     c = res.rp2040_costs
     out.append("* ESTIMATE, not a measurement: emulated RP2040 @ 125 MHz, " + model.FORMULA
                + "; no §3 figure for I (integer op), B (built-in float call: sin, floor, "

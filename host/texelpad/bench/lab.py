@@ -84,6 +84,7 @@ def run_http(steps: int = 200) -> dict:
     with tempfile.TemporaryDirectory() as data:
         p = subprocess.Popen([sys.executable, "-m", "texelpad", "lab", "--data", data],
                              stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+        assert p.stdout is not None                 # stdout=PIPE
         try:
             url = p.stdout.readline().strip()
             for _ in range(300):

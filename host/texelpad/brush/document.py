@@ -237,7 +237,7 @@ def felt_point(doc: dict[str, Any], seeds: Sequence[int] = FELT_SEEDS, n: int = 
     d = check(doc)
     if not seeds:
         raise ValueError("seeds: expected at least one")
-    spec = sum(P.periodogram(paint(d, s, n) / 65535.0)[1] for s in seeds) / len(seeds)
+    spec = np.mean([P.periodogram(paint(d, s, n) / 65535.0)[1] for s in seeds], axis=0)
     return P.pattern_of_spectrum(spec, P.segment_length(n)).felt_point()
 
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 import difflib
 import json
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeGuard
 
 from texel.runtime import boards as B
 
@@ -35,7 +35,7 @@ FILE_BYTES_MAX = 65536      # a board file is a few KB; the board json.load()s i
 READ_BYTES_MAX = 1 << 20    # read (and parsed, for a better diagnosis) up to this
 
 # --- RP2040 (RP2040 datasheet, Raspberry Pi Ltd) ----------------------------------------
-RP2040 = {
+RP2040: dict[str, Any] = {
     # 1.4.3 "GPIO Functions" / 2.19 "GPIO": user bank GPIO0 .. GPIO29
     "gpio": range(0, 30),
     # 4.5 "PWM": 8 slices of 2 channels; 4.5.2 "Programmer's Model" (the GPIO -> PWM
@@ -56,7 +56,7 @@ RP2040 = {
 }
 # Raspberry Pi Pico datasheet, "Pinout" and "Powerchain": the header has GP0..GP22 and
 # GP26..GP28; the others are wired on the board.
-PICO = {
+PICO: dict[str, Any] = {
     "header": tuple(range(0, 23)) + (26, 27, 28),
     "internal": {23: "drives the SMPS power-save pin (PS)", 24: "senses VBUS",
                  25: "drives the on-board LED", 29: "reads VSYS/3 (ADC3: the supply)"},
@@ -207,7 +207,7 @@ def read_board(data: bytes | str) -> tuple[Any, list[Problem]]:
 
 # --- the checks ------------------------------------------------------------------------
 
-def _is_int(v: Any) -> bool:
+def _is_int(v: Any) -> TypeGuard[int]:
     return isinstance(v, int) and not isinstance(v, bool)
 
 
@@ -353,7 +353,7 @@ _Found = list[tuple[Problem, tuple[str, ...]]]
 
 def _hardware(d: dict[str, Any], firmware: str) -> _Found:
     found: _Found = []
-    port = d.get("port")
+    port: Any = d.get("port")           # unchecked here: a board file's own value
     if firmware == "texelpad" and port not in ("rp2", "virtual"):
         found.append((Problem("port", "%r: %s runs 'rp2' board files (or 'virtual'); for this "
                                       "board use --firmware stock" % (port, FIRMWARE_TEXT[

@@ -390,6 +390,7 @@ def _restart(board: Any, was: tuple, say: Callable[[str], None]) -> str:
     if the new image refuses that scene, its default scene)."""
     name, scene, virtual = was
     say("starting %s again with the new image and the scene it played" % name)
+    err: LinkError
     try:
         # a fresh import on the board: the modules were dropped (PURGE)
         board.restart(name, scene, virtual)

@@ -227,8 +227,9 @@ class _Transport(SerialTransport):
         super().__init__(port, baudrate=baudrate, exclusive=True, timeout=min(1.0, timeout))
         self.op_timeout = timeout
         # a port that stops reading (a stuck USB device) must not block a write forever
-        self.serial.write_timeout = max(timeout, 1.0)
-        self.serial = _DeadlineSerial(self.serial)
+        serial: Any = self.serial  # type: ignore[has-type]  # pyserial's, set by SerialTransport
+        serial.write_timeout = max(timeout, 1.0)
+        self.serial = _DeadlineSerial(serial)
 
     @contextmanager
     def deadline(self, seconds: float, shown: float | None = None) -> Iterator[None]:
@@ -346,7 +347,7 @@ class Link:
         except Exception:
             pass
         self._close_port()
-        self.t = None
+        self.t = None                           # type: ignore[assignment]  # closed: no transport
 
     def resync(self, timeout: float | None = None) -> None:
         """Interrupt what the board runs (Ctrl-C) and enter the raw REPL again,

@@ -64,7 +64,7 @@ def why_not() -> str | None:
 def group_members(pgid: int) -> list[tuple[int, str, str]]:
     """(pid, state, command line) of every process in process group pgid
     (zombies too: state 'Z'), read from /proc ([] where there is no /proc)."""
-    out = []
+    out: list[tuple[int, str, str]] = []
     try:
         entries = os.listdir("/proc")
     except OSError:
@@ -99,8 +99,9 @@ class EmulatedPico:
                  extra_args: tuple[str, ...] = (),
                  firmware: str | os.PathLike | None = None) -> None:
         why = why_not()
-        if why:
-            raise RuntimeError(why)
+        emu = rp2emu_dir()
+        if why or emu is None:
+            raise RuntimeError(why or "no rp2emu (../shared/instruments/rp2emu)")
         self.dir = Path(tempfile.mkdtemp(prefix="texelpad-pico-"))
         self.temporary = flash is None
         self.flash = self.dir / "flash.img" if flash is None else Path(flash).resolve()
@@ -113,7 +114,7 @@ class EmulatedPico:
         self._err_path = self.dir / "stderr"
         self._out = open(self._out_path, "wb")
         self._err = open(self._err_path, "wb")
-        args = [str(rp2emu_dir() / "run.sh"), "--pty", "--flash", str(self.flash)]
+        args = [str(emu / "run.sh"), "--pty", "--flash", str(self.flash)]
         if instant_flash:
             args.append("--instant-flash")  # flash writes take no emulated time
         self.proc = subprocess.Popen(args + list(extra_args), stdin=subprocess.DEVNULL,

@@ -190,7 +190,7 @@ class VirtualBoard:
         to_port = bytearray()       # what the interpreter said, not yet taken by the port
         boot = bytearray()          # an interpreter's output while it boots
         raw = False                 # the REPL mode (to restore after a soft reset)
-        booting = "friendly"        # None once the interpreter is at the mode's prompt
+        booting: str | None = "friendly"    # None once the interpreter is at the mode's prompt
         tail = b""                  # the last bytes of output (to spot the raw banner)
         restarts: list[float] = []
         try:
@@ -384,7 +384,7 @@ def running_boards() -> list[dict[str, Any]]:
     [{"port", "pid", "flash", ...}]. Stale entries (the process is gone,
     or its pty) are removed, and with them a temporary flash left behind."""
     d = registry_dir()
-    out = []
+    out: list[dict[str, Any]] = []
     try:
         files = sorted(d.glob("*.json"))
     except OSError:
@@ -421,7 +421,7 @@ def stop_on_signals() -> Iterator[None]:
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    fired = []
+    fired: list[int] = []
 
     def handler(signum: int, frame: Any) -> None:
         if fired:

@@ -54,9 +54,9 @@ def rows(s: Session) -> list[dict[str, Any]]:
     out = []
     for k, rec in enumerate(s.answers()):
         tex = _texel(rec.get("scene"))
-        a = rec.get("answer")
+        a: Any = rec.get("answer")          # the protocol's own answer (checked by apply)
         q = rec.get("question") or {}
-        row = {c: "" for c in COLUMNS}
+        row: dict[str, Any] = {c: "" for c in COLUMNS}
         row.update(participant=h["participant"], protocol=proto, session=s.path.stem,
                    config_file=h["config"].get("config_file", ""), seed=h["seed"], n=k,
                    time=rec.get("time"), trial=q.get("trial", q.get("iteration", "")),

@@ -45,7 +45,8 @@ def split(reference: dict[str, Any], texel: dict[str, Any], display: dict[str, A
     """Reference on the left half, a texel texture on the right half."""
     total = _total_mm(display)
     half = round(total / 2, 6)
-    scene = {"regions": [{"start_mm": 0, "end_mm": half, "texture": dict(reference)},
+    scene: dict[str, Any] = {"regions": [{"start_mm": 0, "end_mm": half,
+                                          "texture": dict(reference)},
                          {"start_mm": half, "end_mm": total,
                           "texture": dict(texel, kind="texel")}]}
     if name:
