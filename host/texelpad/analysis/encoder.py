@@ -1,5 +1,5 @@
 """The texel encoder: a friction map -> the few texel parameters that feel the
-same (issue 13; docs/encoder.md).
+same (docs/encoder.md).
 
 Seed 000 calls the Single-Pitch Texel a tactile codec whose decoder is the
 generator and whose encoder was a person moving sliders. This is that

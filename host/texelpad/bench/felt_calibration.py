@@ -42,7 +42,7 @@ from ..analysis import perception as P
 from ..study import references as R
 from . import jsonable
 
-PREVIOUS = P.Model(fingertip_corner_hz=None, line_db=None)     # the encoder before issue 22
+PREVIOUS = P.Model(fingertip_corner_hz=None, line_db=None)     # the encoder before the felt model (docs/encoder.md)
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 
 

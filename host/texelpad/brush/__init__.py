@@ -1,5 +1,5 @@
 """The Tactile Paintbrush (seed 002, ../shared/seeds/002_*.txt; ../shared/SPEC.md §6;
-issue 12): a texture as a "brush" - per wavenumber of a space-frequency
+docs/brush.md): a texture as a "brush" - per wavenumber of a space-frequency
 transform of its friction map (1 mm windows every 0.25 mm, geometry in
 device/texel/gen/brush.py), the Weibull distribution of the spectral
 magnitudes across windows. The analysis side is pure logic (numpy, scipy,

@@ -1,4 +1,4 @@
-"""A brush as a document (issue 12; seed 002's "brush"): what `texelpad brush`
+"""A brush as a document (docs/brush.md; seed 002's "brush"): what `texelpad brush`
 fits, designs, saves, shows, compares and paints, and what a scene region
 carries to a board.
 
