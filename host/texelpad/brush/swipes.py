@@ -1,4 +1,4 @@
-"""The data we have for the paper's comparison (docs/brush.md, "Data"): seed 002
+"""The data we have for the paper's comparison (docs/brush.md, "Fits and the paper's comparison"): seed 002
 recorded ten rightward fingertip swipes on each of eleven real textures with a
 tribometer; those recordings are not public. We have friction *maps* and make
 noisy *swipes* of them.
