@@ -484,21 +484,27 @@ def test_engine_absent_under_stock_micropython():
 
 @pytest.mark.instruments
 def test_report_error_table(device):
-    """Prints (asserts nothing beyond the runs) the error per case in PWM steps."""
+    """The error per case in PWM steps, printed (pytest -s -k report) and
+    checked: every case's worst sample within its bound on every ulab
+    interpreter, its RMS no larger than its worst."""
     runs = [device(n) for n in ULAB_INTERPRETERS if toolchain.interpreter(n)]
     if not runs:
         _interpreter(ULAB_INTERPRETERS[0])          # skips, saying what is missing
     lines = ["", "ulab engine on the instruments vs the float64 reference, PWM steps (1/3676):",
              "%-14s" % "case" + "".join(" | %-29s" % r.name for r in runs),
              "%-14s" % "" + " | %9s %9s %9s" % ("max", "rms", "bound") * len(runs)]
+    bad: list[tuple[str, str, str]] = []
     for case in CASES:
         row = "%-14s" % case
         for r in runs:
             _, ref = r.ref(case)
             f, _ = r.maps(case)
             e = np.abs(f - ref)
-            row += " | %9.4f %9.4f %9.3f" % (pr.in_pwm_steps(e.max()),
-                                             pr.in_pwm_steps(math.sqrt((e ** 2).mean())),
-                                             pr.in_pwm_steps(full_bound(r, case).max()))
+            worst, rms = pr.in_pwm_steps(e.max()), pr.in_pwm_steps(math.sqrt((e ** 2).mean()))
+            bound = full_bound(r, case)
+            row += " | %9.4f %9.4f %9.3f" % (worst, rms, pr.in_pwm_steps(bound.max()))
+            bad.extend([(r.name, case, "over its bound")] if (e > bound).any() else [])
+            bad.extend([(r.name, case, "RMS > max")] if rms > worst + 1e-12 else [])
         lines.append(row)
     print("\n".join(lines))
+    assert bad == []
