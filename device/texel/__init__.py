@@ -6,7 +6,7 @@
 #   texel.make_plan(params, draws=None)             -> per-texel pitches/phases
 #   texel.engines()                                 -> engines usable here
 #   texel.reference(name, length_samples)           -> reference textures
-from .gen.params import validate, FORMAT_VERSION, FORMAT_LATEST, DX_MM, NYQUIST_CPMM
+from .gen.params import validate, FORMAT_VERSION, FORMAT_LATEST, DX_MM, NYQUIST_CPMM  # noqa: F401 (the API above)
 from .gen.plan import Plan
 from . import compat
 

@@ -242,7 +242,7 @@ def _install(canonical, validate_us=0, checked=None):
     t1 = clock()
     old = rt.refresh.swap(sc)
     t2 = clock()
-    old = None
+    del old                     # the old scene's buffers go with the next collection
     gc.collect()
     rt.pushes += 1
     rt.last_push = {"validate_us": validate_us, "build_us": rt.diff(t1, t0),

@@ -21,7 +21,6 @@ import math
 import numpy as np
 import pytest
 
-import texel
 from texel.runtime import scene as tscene
 
 from support.cli import run_cli

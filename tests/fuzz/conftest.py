@@ -54,7 +54,7 @@ def pytest_runtest_makereport(item, call):
     if not rep.failed or call.excinfo is None:
         return
     e = call.excinfo.value
-    errors = list(e.exceptions) if isinstance(e, BaseExceptionGroup) else [e]
+    errors = list(e.exceptions) if isinstance(e, BaseExceptionGroup) else [e]  # noqa: F821 (3.11)
     for x in errors:
         fuzzlib.STATS[target].failures.append(
             {"type": type(x).__name__, "message": fuzzlib.short(str(x), 600)})

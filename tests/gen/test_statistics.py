@@ -1,5 +1,4 @@
 """Statistics of the generator and the texture-format RNG."""
-import math
 
 import numpy as np
 import pytest

@@ -7,13 +7,11 @@ import io
 import json
 import math
 import re
-import shutil
 from contextlib import redirect_stderr, redirect_stdout
 from pathlib import Path
 
 import pytest
 
-from texelpad.bench import engines as bench
 from texelpad import cli, toolchain
 from texelpad.bench import refresh as rb
 

@@ -16,7 +16,6 @@ tests evaluate duty() for every one of the 65,536 amplitudes and measure:
 """
 from __future__ import annotations
 
-import json
 import math
 import random
 

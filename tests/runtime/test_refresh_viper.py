@@ -3,7 +3,6 @@ Python refresh computes from the same sensor, scene and duty-law objects:
 same position, amplitude and duty at every refresh (integers: no tolerance),
 same telemetry; its rp2 IRQ entry reads the ADC and writes the compare
 register through the addresses it is given; and nothing allocates."""
-import json
 
 import pytest
 

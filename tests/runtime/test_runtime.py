@@ -17,7 +17,6 @@ Tolerances, and why:
   back within 3 after ~25 refreshes).
 - Lift: carrier at idle within LIFT_DEBOUNCE = 3 refreshes.
 """
-from pathlib import Path
 
 import pytest
 

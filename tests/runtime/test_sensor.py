@@ -25,7 +25,6 @@ import numpy as np
 import pytest
 
 from support import mpy
-from texel.runtime import sensor as tsensor
 from texel.runtime.sensor import AdcLinearSensor, AdcRatioSensor, ScriptedSensor, make_sensor
 
 P = 19200

@@ -6,7 +6,6 @@ step (../shared/SPEC.md §5, §7)."""
 from __future__ import annotations
 
 import math
-import shutil
 
 import pytest
 

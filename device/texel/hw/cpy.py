@@ -25,7 +25,7 @@ import pwmio
 import analogio
 import board as _pins
 
-from ..compat import const, ticks_us, ticks_diff
+from ..compat import ticks_us, ticks_diff
 
 
 def _pin(p):

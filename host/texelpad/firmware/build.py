@@ -276,12 +276,12 @@ def build_firmware(board_dir: str | os.PathLike, out_dir: str | os.PathLike,
             cm = Path(ulab).resolve() / "code" / "micropython.cmake"
             if not cm.is_file():
                 raise FirmwareError("%s: not a ulab checkout (no code/micropython.cmake)" % ulab)
-        mods = ["USER_C_MODULES=%s" % user_modules(out, cm, say)]
+        user_mods = ["USER_C_MODULES=%s" % user_modules(out, cm, say)]
         say("building MicroPython from %s (log: %s)" % (mp, log))
         jobs = "-j%d" % (os.cpu_count() or 2)
         _run(["make", "-C", str(mp / "mpy-cross"), jobs], log)
         _run(["make", "-C", str(port), "BOARD_DIR=%s" % stage, "BUILD=%s" % (fw / "build"), jobs]
-             + mods, log)
+             + user_mods, log)
         bin_, uf2, elf = (fw / "build" / n for n in ("firmware.bin", "firmware.uf2", "firmware.elf"))
     fw_bytes = bin_.stat().st_size
     if fw_bytes > base:

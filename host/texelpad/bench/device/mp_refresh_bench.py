@@ -478,7 +478,7 @@ def measure_memory():
         emit({"event": "memory", "scene": key, "what": what, "regions": sc.count,
               "nbytes": sc.nbytes, "buffer_bytes": sc.buffer_bytes,
               "table_bytes": sc.table_bytes, "mem_alloc_delta": held})
-        sc = None
+        del sc
         canonical = None
         gc.collect()
 
@@ -498,7 +498,7 @@ def measure_churn():
             churn = gc.mem_alloc() - a0
         finally:
             gc.enable()
-        sc = None
+        del sc
         canonical = None
         gc.collect()
         emit({"event": "churn", "scene": key, "build_churn_bytes": churn})

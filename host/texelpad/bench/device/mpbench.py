@@ -115,7 +115,7 @@ def time_variant(variant, params, repeat, churn=True):
     p2 = texel.make_plan(params)
     gc.collect()
     plan_bytes = gc.mem_alloc() - base
-    p2 = None
+    del p2
     engine_int._fill = _FILL_NATIVE
     return {"event": "timing", "variant": variant, "plan_us": plan_us, "synth_us": synth_us,
             "map_bytes": map_bytes, "held_bytes": held, "churn_bytes": churn,
