@@ -54,14 +54,25 @@ resolved inside that folder and nowhere else (a link out of it is refused).
 
 Every request is checked whole before anything happens: a refused one (400,
 the reason with the request's own path, regions[2].texture.design.level)
-pushes nothing and writes no file; the board's own validation
-(texelpad.link.board.host_check, then the board's on push) is the last word;
-503 when the board is gone (web/api.handle). "base" (the scene_id the page
-edited) refuses a push when another page changed the board's scene since:
-the editor sends the whole scene, and would otherwise silently replace a
-study's scene playing for a participant. While a study session's question
-plays, a push is refused (409, web/server.py Lab.claim_board) whatever its
-base.
+pushes nothing and writes no file; the board's own validation is the last
+word; 503 when the board is gone (web/api.handle). "base" (the scene_id the
+page edited) refuses a push when another page changed the board's scene
+since: the editor sends the whole scene, and would otherwise silently
+replace a study's scene playing for a participant. While a study session's
+question plays, a push is refused (409, web/server.py Lab.claim_board)
+whatever its base.
+
+The painted scene is validated once on the host (issue 23 item 2):
+Editor.paint (the request alone: no HTTP, no board) reads the regions,
+resolves the overlaps and checks the scene of the pieces with
+texelpad.link.board.check_scene; that CheckedScene goes through the owner
+and Board.push unchecked, and its canonical form and positions are what the
+answer and the strip show. A refusal answers as the request reads, region by
+region (the first region whose own check - its texture over its own span,
+check_one - fails, before anything found after it): each region is checked
+on its own only then, or when the painting has no piece of it (covered by a
+later one: not in the scene, still refused when bad).
+tests/web/test_editor_push.py counts the checks.
 """
 from __future__ import annotations
 
@@ -71,6 +82,7 @@ import json
 import math
 import threading
 from collections import OrderedDict
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -86,7 +98,7 @@ from texel.gen import brush as B
 from texel.gen import params as P
 
 from ..brush import document as D
-from ..link.board import host_check
+from ..link.board import CheckedScene, check_scene
 from ..study.session import check_name
 from . import strip as _strip
 from .api import Refused, body_of, handle, keys
@@ -374,7 +386,7 @@ def resolve(tex: Any, path: str, folder: Path, memory: Memory,
         board = dict(tex)
         if kind == "texel" and "v" not in board:
             board["v"] = 2          # format 2: the same texture on every board (web/strip.py)
-        return board, board, ""     # checked, labelled and made canonical by check_one
+        return board, board, ""     # checked, labelled and made canonical by Editor.paint
     if kind == "samples":
         raise Refused("%s.kind: the editor paints brushes, texel textures, references and "
                       "constants; upload a map with texelpad push --scene" % path)
@@ -385,7 +397,9 @@ def resolve(tex: Any, path: str, folder: Path, memory: Memory,
 def check_one(i: int, start: float, end: float, board: dict[str, Any],
               display: dict[str, Any]) -> dict[str, Any]:
     """The board's validation of one region over its own span (its messages,
-    renumbered to the request's region); the canonical texture."""
+    renumbered to the request's region); the canonical texture. Editor.paint
+    asks it of a region the painting has no piece of, and of each region in
+    turn when something is refused (which one the refusal names)."""
     try:
         c = _scene.validate({"regions": [{"start_mm": start, "end_mm": end,
                                           "texture": board}]}, display)
@@ -464,13 +478,18 @@ class Renders:
         return u16
 
     def get(self, canonical: dict[str, Any] | None, display: dict[str, Any],
-            idle: int) -> tuple[str, np.ndarray, list]:
+            idle: int, where: Any = None) -> tuple[str, np.ndarray, list]:
         """(scene_id, the uint16 amplitude at every position, [(start, end,
-        texture)] in positions as the board rounds them)."""
+        texture)] in positions as the board rounds them). where: the
+        canonical regions' positions when the host's check of it gave them
+        (CheckedScene.spans), else they are found here (scene.check)."""
         out = np.full(display["positions"], idle, dtype=np.uint16)
         spans: list = []
         if canonical is not None:
-            c, where, _, dx = _scene.check(canonical, display)
+            if where is None:
+                c, where, _, dx = _scene.check(canonical, display)
+            else:
+                c, dx = canonical, float(display["dx_um"])
             for r, (s, e) in zip(c["regions"], where):
                 out[s:e] = self.region(r["texture"], e - s, dx, idle)
                 spans.append((s, e, r["texture"]))
@@ -485,12 +504,17 @@ def scene_id(canonical: dict[str, Any] | None, display: dict[str, Any], idle: in
 
 
 def strip_answer(renders: Renders, memory: Memory, st: dict[str, Any],
-                 canonical: dict[str, Any] | None) -> dict[str, Any]:
+                 canonical: dict[str, Any] | None,
+                 checked: CheckedScene | None = None) -> dict[str, Any]:
     """GET /api/strip's answer (web/strip.strip_answer) with the editor's
-    labels: a brush region names its file or design."""
+    labels: a brush region names its file or design. checked: the scene
+    just pushed, whose positions are known when `canonical` is its
+    canonical form (the board took it as it was checked)."""
     display = {"positions": st["display"]["positions"], "dx_um": st["display"]["dx_um"]}
     idle = _strip.idle_of(st)
-    sid, u16, spans = renders.get(canonical, display, idle)
+    where = checked.spans if checked is not None and checked.canonical is canonical \
+        and checked.fits(display) else None
+    sid, u16, spans = renders.get(canonical, display, idle, where)
     dx = display["dx_um"]
     return dict(_strip.status_fields(st, display, idle),
                 amplitude=base64.b64encode(_strip.to_u8(u16).tobytes()).decode("ascii"),
@@ -540,43 +564,86 @@ def editor_regions(canonical: dict[str, Any] | None, display: dict[str, Any], id
     return out
 
 
-# --- the routes -------------------------------------------------------------------------------
-def routes(lab: Any) -> list[Route]:
-    folder = brush_folder(lab)
-    memory, renders = Memory(), Renders()
-    lab.editor_memory, lab.editor_renders = memory, renders     # (the tests look at them)
+# --- the editor: a request painted, pushed -------------------------------------------------
+@dataclass(frozen=True)
+class Order:
+    """A POST /api/editor/scene body, its shape checked (read_order): the
+    regions in painting order (each read by Editor.paint), the scene's name,
+    the scene_id the page edited."""
+    regions: list
+    name: str | None
+    base: str | None
 
-    def running() -> dict[str, Any]:
-        st = lab.owner.status()
+
+def read_order(body: Any) -> Order:
+    keys(body, SCENE_KEYS)
+    regs = body.get("regions")
+    if not isinstance(regs, list) or len(regs) > PAINT_MAX:
+        raise Refused("regions: expected a list of at most %d regions in painting order "
+                      "(a later one wins where they overlap), got %s" % (PAINT_MAX, _shown(regs)))
+    name = body.get("name")
+    if name is not None and (not isinstance(name, str) or not 1 <= len(name) <=
+                             _scene.NAME_MAX):
+        raise Refused("name: expected a string of 1 .. %d characters, got %s"
+                      % (_scene.NAME_MAX, _shown(name)))
+    base = body.get("base")
+    if base is not None and not isinstance(base, str):
+        raise Refused("base: expected the scene_id the page edited, got %s" % _shown(base))
+    return Order(regs, name, base)
+
+
+# A region read from a request: (start_mm, end_mm, (its index in the request,
+# the board's texture, the editor's form to send back, its label))
+Read = tuple[float, float, tuple[int, dict, dict, str]]
+
+
+@dataclass(frozen=True)
+class Painting:
+    """What Editor.paint made of a request: `pieces`, the regions left after
+    the overlaps (Read tuples, sorted by start; the editor's form and label
+    of a texel, reference or constant are its canonical form's); `scene`,
+    the scene of those pieces as the host's one check made it (link.board.
+    check_scene), None when no piece is left (the blank scene: the board's
+    idle level, which the board's status tells, not the request)."""
+    pieces: list[Read]
+    name: str | None
+    scene: CheckedScene | None
+
+    def regions(self) -> list[dict[str, Any]]:
+        """The pieces as the answer lists them."""
+        return [{"start_mm": s, "end_mm": e, "texture": t[2], "label": t[3], "from": t[0]}
+                for s, e, t in self.pieces]
+
+
+class Editor:
+    """The scene editor of one lab: its brush folder, what it remembers
+    (Memory, Renders), and what each route does. paint() is the request's
+    painting alone (no HTTP, no board); push() claims the board, checks the
+    page's base, plays the painting and answers."""
+
+    def __init__(self, lab: Any) -> None:
+        self.lab = lab
+        self.folder = brush_folder(lab)
+        self.memory, self.renders = Memory(), Renders()
+
+    # --- what plays --------------------------------------------------------------------
+    def running(self) -> dict[str, Any]:
+        st = self.lab.owner.status()
         if not st.get("running"):
-            lab.owner.display()         # starts it (the owner's board file), as every page does
-            st = lab.owner.status()
+            self.lab.owner.display()    # starts it (the owner's board file), as every page does
+            st = self.lab.owner.status()
         return st
 
-    def playing() -> tuple[dict[str, Any], dict[str, Any] | None, dict[str, Any]]:
-        st = running()
-        canonical = lab.owner.scene_source()
-        display = {"positions": st["display"]["positions"], "dx_um": st["display"]["dx_um"]}
-        return st, canonical, display
-
-    async def page(request: Request) -> FileResponse:
-        return FileResponse(STATIC_DIR / "editor.html", media_type="text/html")
-
-    def no_query(request: Request) -> None:
-        if request.query_params:
-            raise Refused("GET %s takes no parameters" % request.url.path)
-
-    def palette(request: Request) -> dict[str, Any]:
-        no_query(request)
-        display = lab.owner.display()
+    def palette(self) -> dict[str, Any]:
+        display = self.lab.owner.display()
         texel_spec = {}
         for k in ("pitch_db", "irregularity_db", "texel_samples", "seed"):
             kind, default, lo, hi = P.SPEC[k]
             texel_spec[k] = {"kind": "int" if kind == "i" else "number", "default": default,
                              "min": lo, "max": hi}
         return {"references": texel.reference_names(),
-                "brushes": list_brushes(folder),
-                "brush_folder": str(folder),
+                "brushes": list_brushes(self.folder),
+                "brush_folder": str(self.folder),
                 "shapes": {name: {"slope_db_per_octave": s} for name, s in D.SHAPES.items()},
                 "design": {k: {"min": lo, "max": hi, "default": d}
                            for k, (lo, hi, d) in DESIGN_RANGES.items()},
@@ -586,104 +653,113 @@ def routes(lab: Any) -> list[Route]:
                                                / 1000.0, 6)},
                 "max_regions": _scene.MAX_REGIONS}
 
-    def get_scene(request: Request) -> dict[str, Any]:
-        no_query(request)
-        st, canonical, display = playing()
-        idle = _strip.idle_of(st)
-        strip = strip_answer(renders, memory, st, canonical)
-        return {"regions": editor_regions(canonical, display, idle, memory),
+    def scene(self) -> dict[str, Any]:
+        """The playing scene in the editor's form, its scene_id and strip."""
+        st = self.running()
+        canonical = self.lab.owner.scene_source()
+        display = {"positions": st["display"]["positions"], "dx_um": st["display"]["dx_um"]}
+        strip = strip_answer(self.renders, self.memory, st, canonical)
+        return {"regions": editor_regions(canonical, display, _strip.idle_of(st), self.memory),
                 "name": canonical.get("name") if canonical else None,
                 "scene_id": strip["scene_id"], "strip": strip}
 
-    def get_strip(request: Request) -> dict[str, Any]:
-        no_query(request)
-        st = running()
-        return strip_answer(renders, memory, st, lab.owner.scene_source())
+    def strip(self) -> dict[str, Any]:
+        st = self.running()
+        return strip_answer(self.renders, self.memory, st, self.lab.owner.scene_source())
 
-    def push(request: Request) -> dict[str, Any]:
-        body = body_of(request)
-        keys(body, SCENE_KEYS)
-        regs = body.get("regions")
-        if not isinstance(regs, list) or len(regs) > PAINT_MAX:
-            raise Refused("regions: expected a list of at most %d regions in painting order "
-                          "(a later one wins where they overlap), got %s" % (PAINT_MAX, _shown(regs)))
-        name = body.get("name")
-        if name is not None and (not isinstance(name, str) or not 1 <= len(name) <=
-                                 _scene.NAME_MAX):
-            raise Refused("name: expected a string of 1 .. %d characters, got %s"
-                          % (_scene.NAME_MAX, _shown(name)))
-        base = body.get("base")
-        if base is not None and not isinstance(base, str):
-            raise Refused("base: expected the scene_id the page edited, got %s" % _shown(base))
-        display = lab.owner.display()
-        # 1. every region checked, every brush resolved - nothing sent yet
-        painted = []
-        for i, r in enumerate(regs):
-            path = "regions[%d]" % i
-            if not isinstance(r, dict):
-                raise Refused("%s: expected {start_mm, end_mm, texture}, got %s" % (path, _shown(r)))
-            bad = sorted(k for k in r if k not in REGION_KEYS)
-            if bad:
-                raise Refused("%s: unknown key %r (allowed: end_mm, start_mm, texture)"
-                              % (path, bad[0]))
-            for k in REGION_KEYS:
-                if k not in r:
-                    raise Refused("%s: missing required key %r" % (path, k))
-            s = _mm(r["start_mm"], path + ".start_mm", display)
-            e = _mm(r["end_mm"], path + ".end_mm", display)
-            if not s < e:
-                raise Refused("%s.end_mm: %g is not after start_mm %g" % (path, e, s))
-            board, editor, label = resolve(r["texture"], path + ".texture", folder, memory)
-            canon = check_one(i, s, e, board, display)
-            if canon["kind"] != "brush":
-                board = canon
-                if editor["kind"] != "kept":
-                    editor = canon
-                label = label or label_of(canon, dx_um=display["dx_um"])
-            painted.append((s, e, (i, board, editor, label)))
-        pieces = paint_order(painted, display["dx_um"])
-        if len(pieces) > _scene.MAX_REGIONS:
-            raise Refused("regions: painting these gives %d regions; a board plays at most %d "
-                          "(remove some, or paint over several at once)"
-                          % (len(pieces), _scene.MAX_REGIONS))
-        claim = getattr(lab, "claim_board", None)   # a study's scene is not replaced: 409
+    # --- painting ------------------------------------------------------------------------
+    def paint(self, body: Any, display: dict[str, Any]) -> Painting:
+        """A request (its body, or the Order read from it) painted on
+        `display`: every region read and its texture resolved (a brush file
+        read, a design made), the overlaps resolved (paint_order), and the
+        scene of the pieces checked once (check_scene: the board's own
+        validation). No HTTP, no board. Refused (400) as the request reads,
+        region by region: the first region whose own check fails (its
+        texture over its own span: check_one, the request's paths) before
+        anything found after it - so a region is checked on its own only
+        when the painting has no piece of it (covered by later ones, or
+        rounding to no position) or something was refused."""
+        order = body if isinstance(body, Order) else read_order(body)
+        read: list[Read] = []
+        try:
+            for i, r in enumerate(order.regions):
+                read.append(self._read(i, r, display))
+            pieces = paint_order(read, display["dx_um"])
+            if len(pieces) > _scene.MAX_REGIONS:
+                raise Refused("regions: painting these gives %d regions; a board plays at most "
+                              "%d (remove some, or paint over several at once)"
+                              % (len(pieces), _scene.MAX_REGIONS))
+            kept = {t[0] for _, _, t in pieces}
+            for s, e, (i, board, _, _) in read:
+                if i not in kept:       # not in the scene: checked alone (refused anywhere)
+                    check_one(i, s, e, board, display)
+        except Refused:
+            _first_refusal(read, display)
+            raise
+        if not pieces:
+            return Painting([], order.name, None)
+        scene: dict[str, Any] = {"regions": [{"start_mm": s, "end_mm": e, "texture": t[1]}
+                                             for s, e, t in pieces]}
+        if order.name is not None:
+            scene["name"] = order.name
+        try:
+            checked = check_scene(scene, display)
+        except ValueError as err:
+            _first_refusal(read, display)
+            raise Refused("the painted scene: %s" % err) from None
+        return Painting(_canonical_forms(pieces, checked), order.name, checked)
+
+    def _read(self, i: int, r: Any, display: dict[str, Any]) -> Read:
+        """Region i of a request: its span (mm on the display) and its
+        texture resolved; Refused with the request's path."""
+        path = "regions[%d]" % i
+        if not isinstance(r, dict):
+            raise Refused("%s: expected {start_mm, end_mm, texture}, got %s" % (path, _shown(r)))
+        bad = sorted(k for k in r if k not in REGION_KEYS)
+        if bad:
+            raise Refused("%s: unknown key %r (allowed: end_mm, start_mm, texture)"
+                          % (path, bad[0]))
+        for k in REGION_KEYS:
+            if k not in r:
+                raise Refused("%s: missing required key %r" % (path, k))
+        s = _mm(r["start_mm"], path + ".start_mm", display)
+        e = _mm(r["end_mm"], path + ".end_mm", display)
+        if not s < e:
+            raise Refused("%s.end_mm: %g is not after start_mm %g" % (path, e, s))
+        board, editor, label = resolve(r["texture"], path + ".texture", self.folder, self.memory)
+        return s, e, (i, board, editor, label)
+
+    # --- pushing -------------------------------------------------------------------------
+    def push(self, body: Any) -> dict[str, Any]:
+        order = read_order(body)        # (a body of the wrong shape: 400 before the board is asked)
+        owner = self.lab.owner
+        display = owner.display()
+        painting = self.paint(order, display)
+        claim = getattr(self.lab, "claim_board", None)  # a study's scene is not replaced: 409
         if claim is not None:
             claim("the editor")
-        st0 = lab.owner.status() if base is not None or not pieces else None
-        if base is not None:
-            now = scene_id(lab.owner.scene_source(), display, _strip.idle_of(st0))
-            if now != base:
+        st0 = owner.status() if order.base is not None or painting.scene is None else None
+        if order.base is not None:
+            now = scene_id(owner.scene_source(), display, _strip.idle_of(st0))
+            if now != order.base:
                 raise Refused("base: the board's scene changed since this page loaded it "
                               "(another page pushed one): reload the editor to edit what "
                               "plays now")
-        if pieces:
-            scene: dict[str, Any] = {"regions": [{"start_mm": s, "end_mm": e, "texture": t[1]}
-                                                 for s, e, t in pieces]}
-            if name is not None:
-                scene["name"] = name
-        else:
-            scene = blank(display, _strip.idle_of(st0), name)
-        # 2. the board's own validation here, then the board's on push
-        try:
-            scene = host_check(scene, display)
-        except ValueError as e:
-            raise Refused("the painted scene: %s" % e) from None
-        st, canonical = lab.owner.push(scene)
-        for s, e, (i, board, editor, label) in pieces:
-            memory.remember(board, editor, label)
-        strip = strip_answer(renders, memory, st, canonical)
-        return {"regions": [{"start_mm": s, "end_mm": e, "texture": t[2], "label": t[3],
-                             "from": t[0]} for s, e, t in pieces],
-                "name": canonical.get("name"), "scene_id": strip["scene_id"],
-                "scene": canonical, "status": st, "strip": strip}
+        checked = painting.scene or _blank_checked(display, _strip.idle_of(st0), order.name)
+        st, canonical = owner.push(checked)
+        for _, _, (i, board, editor, label) in painting.pieces:
+            self.memory.remember(board, editor, label)
+        strip = strip_answer(self.renders, self.memory, st, canonical, checked)
+        return {"regions": painting.regions(), "name": canonical.get("name"),
+                "scene_id": strip["scene_id"], "scene": canonical, "status": st, "strip": strip}
 
-    def save_brush(request: Request) -> dict[str, Any]:
-        body = body_of(request)
+    # --- brush files ---------------------------------------------------------------------
+    def save_brush(self, body: Any) -> dict[str, Any]:
         keys(body, SAVE_KEYS)
         name = body.get("name")
         if isinstance(name, str) and "." not in name:
             name += ".json"
-        p = brush_path(folder, name, "name")
+        p = brush_path(self.folder, name, "name")
         d = check_design(body.get("design"), "design")
         replace = body.get("replace", False)
         if not isinstance(replace, bool):
@@ -693,18 +769,72 @@ def routes(lab: Any) -> list[Route]:
                           "overwrite it)" % p.name)
         doc = designed(d, "design", name=p.name.rsplit(".", 1)[0])
         try:
-            folder.mkdir(parents=True, exist_ok=True)
+            self.folder.mkdir(parents=True, exist_ok=True)
             D.save(doc, p)              # beside and renamed: never half a brush
         except OSError as e:
             p.with_name(p.name + ".tmp").unlink(missing_ok=True)
             raise Refused("name: could not write %s in the brush folder: %s"
                           % (p.name, e.strerror or e)) from None
-        return {"saved": p.name, "design": d, "brushes": list_brushes(folder)}
+        return {"saved": p.name, "design": d, "brushes": list_brushes(self.folder)}
 
-    h = lambda fn: handle(lab.lock, fn)             # noqa: E731
+
+def _first_refusal(read: list[Read], display: dict[str, Any]) -> None:
+    """Each region read so far checked on its own, in the request's order:
+    the first refusal raised (what a refused request answers: the first
+    region whose own check fails comes before anything found after it)."""
+    for s, e, (i, board, _, _) in read:
+        check_one(i, s, e, board, display)
+
+
+def _canonical_forms(pieces: list[Read], checked: CheckedScene) -> list[Read]:
+    """The pieces with the canonical texture of a texel, reference or
+    constant (the host's check's; the canonical regions are the pieces, in
+    the same order: both sorted by start) as the board's texture, the
+    editor's form (a kept one stays kept) and the label's source; a brush
+    keeps its editor's form (its file or design) and label."""
+    out = []
+    for (s, e, (i, board, editor, label)), r in zip(pieces, checked.canonical["regions"]):
+        canon = r["texture"]
+        if canon["kind"] != "brush":
+            board = canon
+            if editor["kind"] != "kept":
+                editor = canon
+            label = label or label_of(canon, dx_um=checked.display["dx_um"])
+        out.append((s, e, (i, board, editor, label)))
+    return out
+
+
+def _blank_checked(display: dict[str, Any], idle: int, name: str | None) -> CheckedScene:
+    try:
+        return check_scene(blank(display, idle, name), display)
+    except ValueError as err:
+        raise Refused("the painted scene: %s" % err) from None
+
+
+# --- the routes -------------------------------------------------------------------------------
+def routes(lab: Any) -> list[Route]:
+    editor = Editor(lab)
+    lab.editor_memory, lab.editor_renders = editor.memory, editor.renders   # (the tests look)
+
+    async def page(request: Request) -> FileResponse:
+        return FileResponse(STATIC_DIR / "editor.html", media_type="text/html")
+
+    def no_query(request: Request) -> None:
+        if request.query_params:
+            raise Refused("GET %s takes no parameters" % request.url.path)
+
+    def getter(fn: Any) -> Any:
+        def get(request: Request) -> dict[str, Any]:
+            no_query(request)
+            return fn()
+        return handle(lab.lock, get)
+
+    def poster(fn: Any) -> Any:
+        return handle(lab.lock, lambda request: fn(body_of(request)))
+
     return [Route("/editor", page),
-            Route("/api/editor/palette", h(palette)),
-            Route("/api/editor/scene", h(get_scene)),
-            Route("/api/editor/scene", h(push), methods=["POST"]),
-            Route("/api/editor/strip", h(get_strip)),
-            Route("/api/editor/brushes", h(save_brush), methods=["POST"])]
+            Route("/api/editor/palette", getter(editor.palette)),
+            Route("/api/editor/scene", getter(editor.scene)),
+            Route("/api/editor/scene", poster(editor.push), methods=["POST"]),
+            Route("/api/editor/strip", getter(editor.strip)),
+            Route("/api/editor/brushes", poster(editor.save_brush), methods=["POST"])]
