@@ -552,8 +552,9 @@ def editor_regions(canonical: dict[str, Any] | None, display: dict[str, Any], id
     out = []
     for r in canonical["regions"]:
         tex = r["texture"]
-        if tex["kind"] == "brush" and memory.source(tex):
-            editor, label = memory.source(tex)
+        known = memory.source(tex) if tex["kind"] == "brush" else None
+        if known:
+            editor, label = known
         elif tex["kind"] in ("brush", "samples"):
             label = label_of(tex, memory, display["dx_um"]) + " (as loaded)"
             editor = {"kind": "kept", "id": memory.keep(tex, label)}
@@ -738,14 +739,16 @@ class Editor:
         claim = getattr(self.lab, "claim_board", None)  # a study's scene is not replaced: 409
         if claim is not None:
             claim("the editor")
-        st0 = owner.status() if order.base is not None or painting.scene is None else None
+        # the board's idle level: to name what plays (base) or to play it (nothing left)
+        idle = _strip.idle_of(owner.status()) \
+            if order.base is not None or painting.scene is None else 0
         if order.base is not None:
-            now = scene_id(owner.scene_source(), display, _strip.idle_of(st0))
+            now = scene_id(owner.scene_source(), display, idle)
             if now != order.base:
                 raise Refused("base: the board's scene changed since this page loaded it "
                               "(another page pushed one): reload the editor to edit what "
                               "plays now")
-        checked = painting.scene or _blank_checked(display, _strip.idle_of(st0), order.name)
+        checked = painting.scene or _blank_checked(display, idle, order.name)
         st, canonical = owner.push(checked)
         for _, _, (i, board, editor, label) in painting.pieces:
             self.memory.remember(board, editor, label)

@@ -111,12 +111,13 @@ class BoardOwner:
         with the board's words and the names it can run when not, BoardLost
         when the board does not answer. `texelpad lab --board` asks it at
         startup, not at the first session."""
-        if not self.board_name:
+        name = self.board_name
+        if not name:
             return
 
         def go(b: Board) -> None:
             try:
-                board_display(b, self.board_name)
+                board_display(b, name)
             except ValueError as e:
                 try:
                     names = b.fitting()
