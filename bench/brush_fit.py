@@ -3,7 +3,7 @@ issue 12 items 1-2): noisy swipes of the eleven textures we have, each
 transformed and fitted per wavenumber with Rayleigh, Rice and Weibull, then
 the paper's comparison.
 
-    .venv/bin/python -m texelpad.bench.brush_fit [--swipes N] [--seed S] [--jobs J]
+    .venv/bin/python -m bench.brush_fit [--swipes N] [--seed S] [--jobs J]
         [--json PATH] [--figure-dir DIR]
 
 What it does (texelpad.brush: swipes, transform, fits, compare):
@@ -48,10 +48,10 @@ import numpy as np
 from texel.gen.brush import HOP, K, WINDOW
 
 from . import jsonable
-from ..brush import compare as C
-from ..brush import fits as F
-from ..brush import swipes as S
-from ..brush import transform as T
+from texelpad.brush import compare as C
+from texelpad.brush import fits as F
+from texelpad.brush import swipes as S
+from texelpad.brush import transform as T
 
 Progress = Callable[[str], None]
 # seed 002 Table II: silhouette coefficients (rows: metric; columns: Rayleigh, Rice, Weibull)
@@ -279,7 +279,7 @@ def _unwritable_dir(path: str) -> str | None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m texelpad.bench.brush_fit", description=__doc__,
+    p = argparse.ArgumentParser(prog="python -m bench.brush_fit", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--swipes", type=int, default=S.SWIPES_PER_TEXTURE,
                    help="swipes per texture (default %(default)s)")

@@ -3,7 +3,7 @@
 against the map it paints, and the round trip brush -> painted maps -> fitted
 brush.
 
-    .venv/bin/python -m texelpad.bench.brush_paint [--chip] [--json PATH] [--figure PATH]
+    .venv/bin/python -m bench.brush_paint [--chip] [--json PATH] [--figure PATH]
 
 - synthesis time of a full-screen region (19,200 samples, 404 windows) on
   CPython (texel.gen.brush.paint how="numpy"; and how="python", the Python
@@ -35,8 +35,8 @@ import numpy as np
 
 from texel.gen import brush as B
 
-from .. import toolchain
-from ..brush import document as D
+from texelpad import toolchain
+from texelpad.brush import document as D
 
 FULL = 19200
 
@@ -76,9 +76,9 @@ print(viper, time.ticks_diff(t1, t0), time.ticks_diff(t2, t1))
 
 
 def _chip(doc: dict) -> dict:
-    from ..deploy.install import deploy
-    from ..link.board import connect
-    from ..sim.emulated import EmulatedPico, why_not
+    from texelpad.deploy.install import deploy
+    from texelpad.link.board import connect
+    from texelpad.sim.emulated import EmulatedPico, why_not
     why = why_not()
     if why:
         return {"chip": "skipped: %s" % why}
@@ -108,7 +108,7 @@ def _chip(doc: dict) -> dict:
 
 
 def sizes() -> dict:
-    from ..link.protocol import scene_text
+    from texelpad.link.protocol import scene_text
     doc = D.design("pink", 0.04)
     scene = {"regions": [D.region(doc, 1, 0, 101.76)]}
     return {"brush_json_bytes": len(json.dumps(doc)), "brush_binary_bytes": len(D.to_bytes(doc)),
@@ -139,7 +139,7 @@ def round_trip(screens: int = 10) -> dict:
 def textures() -> dict:
     """Maps we have -> fitted brush -> painted (10 screens) -> refitted."""
     import texel
-    from ..analysis.encoder import reference_map
+    from texelpad.analysis.encoder import reference_map
     maps = {"pink": np.asarray(reference_map("pink", FULL), float),
             "sawtooth": np.asarray(reference_map("sawtooth", FULL), float),
             "texel 6 dB, -15 dB": np.array(texel.render_u16(
@@ -159,7 +159,7 @@ def figure(tex: dict, path: str) -> None:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from ..brush.transform import wavelengths_mm
+    from texelpad.brush.transform import wavelengths_mm
     wl = wavelengths_mm()[1:] * 1000
     n = int(10 / 0.0053)
     x = np.arange(n) * 0.0053
@@ -185,7 +185,7 @@ def figure(tex: dict, path: str) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m texelpad.bench.brush_paint", description=__doc__,
+    p = argparse.ArgumentParser(prog="python -m bench.brush_paint", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--chip", action="store_true", help="also the emulated RP2040 (~2 min)")
     p.add_argument("--json", metavar="PATH")

@@ -2,7 +2,7 @@
 turned on the Tactile Paintbrush's own output): does a map painted from a
 brush read, feel and correlate like the map the brush was fitted to?
 
-    .venv/bin/python -m texelpad.bench.brush_painting [--quick] [--json PATH]
+    .venv/bin/python -m bench.brush_painting [--quick] [--json PATH]
         [--figure [PATH]] [--sources A,B] [--swipes N] [--paint-seeds N] [--seed S]
 
 For each source (texelpad.brush.swipes.TEXTURES: the nine reference textures
@@ -15,7 +15,7 @@ and the two texel renderings, a full screen each, values in amplitude units):
    3 % warp, 5 % gain, 0.02 noise): --swipes of the source (default 10, the
    paper's count; --quick 3), drawn exactly as swipes.make_swipes draws them
    (SeedSequence(seed, spawn_key=(i, j)), i the source's place in TEXTURES,
-   so they are the swipes of texelpad.bench.brush_fit), and as many of the
+   so they are the swipes of bench.brush_fit), and as many of the
    paintings (swipe j of painting seed j mod seeds; spawn_key=(i, j, 1):
    independent starts, warps, gains and noise);
 3. per swipe, Weibull per wavenumber (transform.stft_magnitudes - the plain
@@ -83,13 +83,13 @@ import numpy as np
 from texel.gen import brush as B
 from texel.gen.params import DX_MM
 
-from ..analysis import perception as P
+from texelpad.analysis import perception as P
 from . import jsonable
-from ..brush import compare as C
-from ..brush import document as D
-from ..brush import fits as F
-from ..brush import swipes as S
-from ..brush import transform as T
+from texelpad.brush import compare as C
+from texelpad.brush import document as D
+from texelpad.brush import fits as F
+from texelpad.brush import swipes as S
+from texelpad.brush import transform as T
 
 Progress = Callable[[str], None]
 QUICK_SWIPES = 3
@@ -582,7 +582,7 @@ def _cannot_write(path: str) -> str | None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m texelpad.bench.brush_painting",
+    p = argparse.ArgumentParser(prog="python -m bench.brush_painting",
                                 description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--quick", action="store_true",

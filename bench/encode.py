@@ -17,7 +17,7 @@ docs/encoder.md):
    --seeds seeds, 9,600 samples) encoded back: the largest error per cell
    and whether the truth lies within the reported range that feels the same.
 
-    .venv/bin/python -m texelpad.bench.encode [--seeds N] [--runs N] [--json PATH]
+    .venv/bin/python -m bench.encode [--seeds N] [--runs N] [--json PATH]
 
 Prints the tables; --json writes every encoded result's figures. Never fails
 on time (tests never assert on time: docs/architecture.md).
@@ -36,9 +36,9 @@ import numpy as np
 
 import texel
 
-from ..analysis import encoder as E
-from ..analysis import perception as P
-from ..study import references as R
+from texelpad.analysis import encoder as E
+from texelpad.analysis import perception as P
+from texelpad.study import references as R
 
 PITCHES = (-10.0, -5.0, 0.0, 5.0, 10.0, 15.0, 19.0)
 IRREGS = (-30.0, -20.0, -15.0, -10.0, -5.0, 0.0)
@@ -396,7 +396,7 @@ def format_bounds(bs: list[dict[str, Any]]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m texelpad.bench.encode", description=__doc__,
+    p = argparse.ArgumentParser(prog="python -m bench.encode", description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--seeds", type=int, default=DEFAULT_SEEDS,
                    help="round-trip seeds per cell (default %(default)s)")

@@ -20,7 +20,7 @@
 
 The lab's per-subject result files are the held-out test: never read here.
 
-    .venv/bin/python -m texelpad.bench.felt_calibration [--json PATH] [--figure PATH]
+    .venv/bin/python -m bench.felt_calibration [--json PATH] [--figure PATH]
 
 Prints the tables; --json writes every figure; --figure a PNG/PDF/SVG of
 the pitches and the felt plane. Never fails on time.
@@ -36,10 +36,10 @@ import sys
 import time
 from typing import Any
 
-from ..analysis import calibration as C
-from ..analysis import encoder as E
-from ..analysis import perception as P
-from ..study import references as R
+from texelpad.analysis import calibration as C
+from texelpad.analysis import encoder as E
+from texelpad.analysis import perception as P
+from texelpad.study import references as R
 from . import jsonable
 
 PREVIOUS = P.Model(fingertip_corner_hz=None, line_db=None)     # the encoder before the felt model (docs/encoder.md)
@@ -300,7 +300,7 @@ def figure(res: dict, path: str) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m texelpad.bench.felt_calibration",
+    p = argparse.ArgumentParser(prog="python -m bench.felt_calibration",
                                 description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--shared", metavar="DIR", help="the shared folder (default ../shared)")

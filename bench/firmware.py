@@ -1,5 +1,5 @@
 """Issue 19's goals measured on the emulated Pico running the texelpad firmware:
-`python -m texelpad.bench.firmware [--uf2 PATH] [--json OUT] [--stock] [--quick]`.
+`python -m bench.firmware [--uf2 PATH] [--json OUT] [--stock] [--quick]`.
 
 The board is rp2emu (../shared/instruments: rp2040js, time from cycle counts)
 booting the .uf2 as if dragged onto a Pico (texelpad.sim.emulated,
@@ -36,7 +36,7 @@ The sequence (one emulator, one boot):
      design): each push's figures, refusals, the refresh's overruns over the
      run and free memory after each push (gc.collect(); gc.mem_free()):
      its least-squares slope per push;
-  3. refresh cost (bench/device/rp2_chip_bench.py's method: a viper busy
+  3. refresh cost (texelpad/bench/device/rp2_chip_bench.py's method: a viper busy
      loop timed with the refresh interrupt on and off; the finger sweeps)
      with a full-screen scene of each region kind the refresh tells apart
      (constant, reference from flash, texel plan, brush map, uploaded
@@ -63,7 +63,7 @@ import time
 from pathlib import Path
 from typing import Any, Callable
 
-from .link import slope_per_push
+from texelpad.bench.link import slope_per_push
 
 Progress = Callable[[str], None]
 
@@ -71,7 +71,7 @@ BOARD = "pico"
 PUSHES = 100
 QUICK_SCENES = 3
 QUICK_PUSHES = 5
-IRQ_SPIN = 300_000          # as bench/chip.py: ~29 ms per window on the chip
+IRQ_SPIN = 300_000          # as texelpad/bench/chip.py: ~29 ms per window on the chip
 IRQ_REPS = 3
 
 # issue 19's goals (ms unless said)
@@ -131,7 +131,8 @@ def _total(display: dict[str, Any]) -> float:
 
 
 def shipped_scenes() -> list[tuple[str, dict[str, Any]]]:
-    d = Path(__file__).resolve().parents[1] / "scenes"
+    from texelpad import scenes
+    d = Path(scenes.__file__).resolve().parent       # texelpad/scenes/*.json
     out = []
     for p in sorted(d.glob("*.json")):
         sc = json.loads(p.read_text())
@@ -143,7 +144,7 @@ def study_scenes(display: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
     """What the lab pushes: the nine free-exploration trials (each reference
     left, the sliders' start texture right), then the first question's
     scenes of every other shipped study config."""
-    from ..study import configs, protocols, questions, scenes as S
+    from texelpad.study import configs, protocols, questions, scenes as S
     out = []
     every = configs.available()
     for name, c in sorted(every.items()):
@@ -166,7 +167,7 @@ def study_scenes(display: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
 
 
 def regions16(display: dict[str, Any], seed: int) -> dict[str, Any]:
-    from .link import regions16 as r16
+    from texelpad.bench.link import regions16 as r16
     return r16(display, 2, seed)
 
 
@@ -179,7 +180,7 @@ def reference_scenes(display: dict[str, Any]) -> list[tuple[str, dict[str, Any]]
 
 
 def brush_scene(display: dict[str, Any], seed: int = 1) -> dict[str, Any]:
-    from ..brush import document
+    from texelpad.brush import document
     return {"regions": [document.region(document.design("pink", 0.05), seed, 0,
                                          _total(display))]}
 
@@ -204,9 +205,9 @@ def scene_list(display: dict[str, Any]) -> list[tuple[str, str, dict[str, Any]]]
 
 def _request(b: Any, scene: dict[str, Any]) -> dict[str, Any]:
     """One push through the wrapper: the board's figures (module docstring)."""
-    from ..link import protocol
-    from ..link.board import host_check
-    from ..link.transport import LinkError
+    from texelpad.link import protocol
+    from texelpad.link.board import host_check
+    from texelpad.link.transport import LinkError
     scene = host_check(scene)
     plain, uploads = protocol.split_uploads(scene)
     if uploads:                          # the data goes first, as Board.push sends it
@@ -238,8 +239,8 @@ def _request(b: Any, scene: dict[str, Any]) -> dict[str, Any]:
 
 def _irq_costs(b: Any, display: dict[str, Any], reps: int, say: Progress) -> dict[str, Any]:
     """Refresh cost incl. IRQ entry/exit for a full-screen scene of each
-    region kind (and 16 texel regions), bench/chip.py's method."""
-    from .chip import CPU_HZ, EXCEPTION_CYCLES
+    region kind (and 16 texel regions), texelpad/bench/chip.py's method."""
+    from texelpad.bench.chip import CPU_HZ, EXCEPTION_CYCLES
     total = _total(display)
     kinds = [
         ("constant", {"regions": [{"start_mm": 0, "end_mm": total,
@@ -285,10 +286,10 @@ def run_board(firmware: str | None, pushes: int, scenes: int | None, irq_reps: i
     """The sequence of the module docstring on one emulated Pico: booted from
     `firmware` (a .uf2), or with None the stock path (stock MicroPython +
     texelpad deploy + start, as open_emulated)."""
-    from ..link.board import connect
-    from ..sim.emulated import EmulatedPico, finger_js, why_not
-    from ..sim.virtual import stop_on_signals
-    from .engines import DEVICE_SCRIPTS
+    from texelpad.link.board import connect
+    from texelpad.sim.emulated import EmulatedPico, finger_js, why_not
+    from texelpad.sim.virtual import stop_on_signals
+    from texelpad.bench.engines import DEVICE_SCRIPTS
     why = why_not()
     if why:
         raise RuntimeError(why)
@@ -300,7 +301,7 @@ def run_board(firmware: str | None, pushes: int, scenes: int | None, irq_reps: i
         say("%s: booting the emulated Pico" % label)
         emu.start()
         if not firmware:
-            from ..deploy.install import deploy
+            from texelpad.deploy.install import deploy
             with connect(emu.port, check=False, import_image=False, timeout=120) as b:
                 deploy(b, progress=lambda m: None)
             with connect(emu.port, timeout=120) as b:
@@ -359,9 +360,9 @@ def profile_push(uf2: str, scene: dict[str, Any], elf: str | None,
     """rp2emu's script mode with --profile: the board pushes `scene` (texel.app
     playing since boot) and the PC histogram is folded onto the .elf's
     function symbols. None when it cannot run."""
-    from ..link import protocol
-    from ..sim.emulated import rp2emu_dir
-    from ..firmware import romfs
+    from texelpad.link import protocol
+    from texelpad.sim.emulated import rp2emu_dir
+    from texelpad.firmware import romfs
     nm = shutil.which("arm-none-eabi-nm")
     d = rp2emu_dir()
     if not (nm and elf and os.path.isfile(elf) and d):
@@ -591,8 +592,8 @@ def notes(out: dict[str, Any]) -> list[str]:
 # --- the run ------------------------------------------------------------------------------
 
 def uf2_sizes(uf2: str) -> dict[str, int]:
-    from ..firmware import romfs
-    from ..sim.emulated import FS_OFFSET
+    from texelpad.firmware import romfs
+    from texelpad.sim.emulated import FS_OFFSET
     blocks = romfs.read_uf2(Path(uf2).read_bytes())
     low = sum(len(p) for a, p, _ in blocks if a - romfs.XIP_BASE < FS_OFFSET)
     high = b"".join(p for a, p, _ in sorted(blocks) if a - romfs.XIP_BASE >= FS_OFFSET)
@@ -619,7 +620,7 @@ def default_uf2(say: Progress) -> str:
         "firmware-pico"
     uf2 = out / "texelpad-pico.uf2"
     if not uf2.is_file():
-        from ..firmware.build import build_firmware, repo_boards_dir
+        from texelpad.firmware.build import build_firmware, repo_boards_dir
         boards = repo_boards_dir()
         if boards is None:
             raise RuntimeError("no boards/ folder (a wheel): give --uf2")
@@ -637,7 +638,7 @@ def run(uf2: str, stock: bool = False, quick: bool = False, pushes: int | None =
     reps = 1 if quick else IRQ_REPS
     cap = None
     try:
-        from ..firmware.build import layout, repo_boards_dir
+        from texelpad.firmware.build import layout, repo_boards_dir
         bd = repo_boards_dir()
         cap = layout(bd / BOARD)[1] if bd else None
     except Exception:
@@ -662,7 +663,7 @@ def run(uf2: str, stock: bool = False, quick: bool = False, pushes: int | None =
         ok = [r for r in fw["rows"] if "refused" not in r]
         if ok:
             worst = max(ok, key=lambda r: r["playing_us"])
-            from ..link.board import host_check
+            from texelpad.link.board import host_check
             disp = {"positions": 19200, "dx_um": 5.3}
             sc = dict((name, s) for _c, name, s in scene_list(disp))[worst["name"]]
             say("profile: %s in script mode" % worst["name"])
@@ -675,7 +676,7 @@ def run(uf2: str, stock: bool = False, quick: bool = False, pushes: int | None =
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m texelpad.bench.firmware",
+    ap = argparse.ArgumentParser(prog="python -m bench.firmware",
                                  description=__doc__.split("\n\n")[0])
     ap.add_argument("--uf2", help="the texelpad firmware (.uf2; its .elf beside it for the "
                     "profile); default $TEXELPAD_FIRMWARE_UF2 or built once into ~/.cache")

@@ -6,7 +6,7 @@ exploration sends (study/questions.slider_scene): the reference on the left
 half, the texel rendering (format 2, 0.25 mm texels, a fresh seed per change)
 on the right.
 
-    .venv/bin/python -m texelpad.bench.lab [--steps N] [--json PATH]
+    .venv/bin/python -m bench.lab [--steps N] [--json PATH]
 
 Two paths, both measured: "owner" pushes through the lab's BoardOwner in
 this process (the board's part); "http" is what a participant's slider does -
@@ -23,10 +23,10 @@ import json
 import statistics
 import time
 
-from ..sim.virtual import open_virtual, stop_on_signals
-from ..study.free import Free
-from ..study.questions import slider_scene
-from ..web.owner import BoardOwner
+from texelpad.sim.virtual import open_virtual, stop_on_signals
+from texelpad.study.free import Free
+from texelpad.study.questions import slider_scene
+from texelpad.web.owner import BoardOwner
 
 
 def run(steps: int = 200) -> dict:
@@ -122,7 +122,7 @@ def run_http(steps: int = 200) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m texelpad.bench.lab", description=__doc__)
+    p = argparse.ArgumentParser(prog="python -m bench.lab", description=__doc__)
     p.add_argument("--steps", type=int, default=200)
     p.add_argument("--json", metavar="PATH")
     a = p.parse_args(argv)

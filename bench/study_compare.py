@@ -3,7 +3,7 @@ to bring the guided exploration (the pursuit vector, seed 000; ../shared/
 SPEC.md §5) and the preference-driven search (CMA-ES, seed 003; SPEC §7)
 within 1 dB of each of the nine reference textures, side by side.
 
-    .venv/bin/python -m texelpad.bench.study_compare [--seeds N] [--noise DB [DB ...]]
+    .venv/bin/python -m bench.study_compare [--seeds N] [--noise DB [DB ...]]
         [--max-answers N] [--json PATH] [--figure PATH]
 
 The model (docs/lab-benchmark.md):
@@ -48,12 +48,12 @@ import time
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
-from ..search.preference import PreferenceSearch
-from ..study import references as R
-from ..analysis.perception import JND_DB
-from ..study.participant import FEELS, SimulatedParticipant
-from ..study.pursuit import Pursuit
-from ..study.space import PITCH_DB_PER_U, Point, irregularity_db, pitch_db
+from texelpad.search.preference import PreferenceSearch
+from texelpad.study import references as R
+from texelpad.analysis.perception import JND_DB
+from texelpad.study.participant import FEELS, SimulatedParticipant
+from texelpad.study.pursuit import Pursuit
+from texelpad.study.space import PITCH_DB_PER_U, Point, irregularity_db, pitch_db
 
 WITHIN_DB = 1.0
 PROTOCOL_SEED_OFFSET = 1000     # protocol seed = participant seed + this (independent streams)
@@ -319,7 +319,7 @@ def _unwritable(path: str) -> str | None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m texelpad.bench.study_compare",
+    p = argparse.ArgumentParser(prog="python -m bench.study_compare",
                                 description=__doc__,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--seeds", type=int, default=DEFAULT_SEEDS,

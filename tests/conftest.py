@@ -5,7 +5,11 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(Path(__file__).resolve().parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))     # support (tests/support)
+# the research benchmarks (bench/: not in the installed package; they run as
+# `python -m bench.NAME` from the repository root) for the tests that import them
+if str(ROOT) not in sys.path:
+    sys.path.append(str(ROOT))
 
 
 def shared_dir() -> Path:

@@ -4,7 +4,7 @@
 - the model: the threshold curve, the analytic expected spectrum against
   rendered maps, the distance's properties;
 - round trip: maps rendered from known parameters encoded back within the
-  bounds docs/encoder.md states (from `python -m texelpad.bench.encode`),
+  bounds docs/encoder.md states (from `python -m bench.encode`),
   and never farther from the map than the truth is;
 - robustness: noisy, short, clipped, constant, NaN-bearing and malformed maps
   get an answer or an EncodeError, never a crash;
@@ -104,7 +104,7 @@ def test_expected_aliased_fraction_matches_the_drawn_one():
 
 # --- round trip -----------------------------------------------------------------------
 # Bounds stated in docs/encoder.md ("Against itself"), measured by
-# `python -m texelpad.bench.encode` (4 seeds) with a margin; the grid here is a
+# `python -m bench.encode` (4 seeds) with a margin; the grid here is a
 # subset of the bench's, 2 seeds.
 
 PITCHES = (-10.0, 0.0, 10.0, 19.0)

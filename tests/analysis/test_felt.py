@@ -277,7 +277,7 @@ def test_brushes_that_feel_different_and_the_same():
 
 
 def test_the_calibration_bench_writes_its_report(tmp_path, capsys):
-    from texelpad.bench import felt_calibration as FC
+    from bench import felt_calibration as FC
     js, fig = tmp_path / "cal.json", tmp_path / "cal.png"
     assert FC.main(["--json", str(js), "--figure", str(fig)]) == 0
     out = capsys.readouterr().out

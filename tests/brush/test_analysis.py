@@ -542,7 +542,7 @@ def test_ks_table_and_consistency_on_a_tiny_set(tiny):
 
 
 def test_the_benchmark_report(tmp_path):
-    from texelpad.bench import brush_fit as B, jsonable
+    from bench import brush_fit as B, jsonable
     res = B.run(swipes_per_texture=2, names=("2sin", "pink"),
                 model=S.SwipeModel(length_samples=1200), full_screen=False)
     text = B.format_tables(res)

@@ -1,4 +1,4 @@
-"""The report on what painting makes (texelpad.bench.brush_painting; issue 21
+"""The report on what painting makes (bench.brush_painting; issue 21
 items 4-5), run small: two sources, three short swipes each. Its structure,
 that every number is finite and in range, the autocorrelation and the
 silhouettes against independent computations, the figure and the JSON.
@@ -14,7 +14,7 @@ import pytest
 
 from texel.gen import brush as B
 from texel.gen.params import DX_MM
-from texelpad.bench import brush_painting as BP, jsonable
+from bench import brush_painting as BP, jsonable
 from texelpad.brush import compare as C
 from texelpad.brush import swipes as S
 

@@ -1,4 +1,4 @@
-"""The firmware benchmark (texelpad.bench.firmware) in its quick mode on the
+"""The firmware benchmark (bench.firmware) in its quick mode on the
 emulated Pico: every goal of issue 19 has its key in the JSON and no push was
 refused. No timing is asserted (the figures are printed: pytest -s)."""
 from __future__ import annotations
@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from texelpad.bench import firmware as bench
+from bench import firmware as bench
 from texelpad.sim.emulated import why_not
 
 pytestmark = [pytest.mark.instruments, pytest.mark.slow]

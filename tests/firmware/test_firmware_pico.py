@@ -1,7 +1,7 @@
 """The texelpad firmware on the emulated Pico: built with the offline kit (boards/pico), the
 .uf2 booted as if dragged onto a Pico in BOOTSEL mode, everything checked through its serial
 port as a user's host sees it. No timing asserted: the figures are the benchmark's
-(python -m texelpad.bench.firmware)."""
+(python -m bench.firmware)."""
 from __future__ import annotations
 
 import hashlib
@@ -142,7 +142,7 @@ def test_the_firmware_paints_a_full_screen_brush_in_c_as_the_host_does(pico, cap
     the same integers once the painting's float setup is (float32 here: within
     one PWM step, 8 u16 measured), with no viper module loaded for it; the
     push's cost on the chip's own clock is printed (the benchmark reports it:
-    python -m texelpad.bench.firmware)."""
+    python -m bench.firmware)."""
     import ast
     from texel.gen import brush as B
     host = B.paint(B.validate(_BRUSH), 21, 19200)

@@ -1,7 +1,7 @@
 """The nine references' positions on the pitch - irregularity plane
 (texelpad.study.references: a spectral model, documented there) and the
 pursuit-vs-search benchmark's run() on a tiny setting
-(texelpad.bench.study_compare). Fast; nothing here asserts on time."""
+(bench.study_compare). Fast; nothing here asserts on time."""
 from __future__ import annotations
 
 import json
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from texel.gen.params import DX_MM, IRREG_DB_MAX, IRREG_DB_MIN, PITCH_DB_MAX, PITCH_DB_MIN
-from texelpad.bench import study_compare as SC
+from bench import study_compare as SC
 from texelpad.study import references as R
 from texelpad.analysis import perception as P
 from texelpad.study.space import Point, irregularity_db, pitch_db, texel_params
