@@ -14,14 +14,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 TREES = (ROOT / "host" / "texelpad", ROOT / "device" / "texel")
 LIMIT = 100
-ALLOWED = {
+ALLOWED: dict[tuple[str, str], str] = {
     # (file relative to the repository, function): why it is still over
-    ("host/texelpad/web/editor.py", "routes"):
-        "the editor's routes and push closure: being split into an editor object with a "
-        "pure paint (issue 23 items 2 and 3)",
-    ("device/texel/runtime/boards.py", "validate"):
-        "a board file's checks: to move onto the shared device validation helpers "
-        "(issue 23 item 7)",
 }
 
 
