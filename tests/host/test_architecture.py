@@ -137,6 +137,44 @@ def test_device_scripts_are_not_host_modules():
     assert not (HOST / "bench" / "device" / "__init__.py").exists()
 
 
+# --- the research benchmarks: the repository's top-level bench/, not the installed package -------
+BENCH = ROOT / "bench"
+
+
+def test_texelpad_bench_is_what_the_bench_commands_run():
+    """Every module of texelpad.bench is reached from the commands (cli/bench.py:
+    texelpad bench | bench-refresh | bench-link), so the package ships no research
+    benchmark (those are bench/, below)."""
+    todo = [m for m in imports(HOST / "cli" / "bench.py") if m.startswith("texelpad.bench.")]
+    reached: set[str] = set()
+    while todo:
+        m = todo.pop()
+        path = HOST.parent.joinpath(*m.split(".")).with_suffix(".py")
+        if m in reached or not path.is_file():
+            continue
+        reached.add(m)
+        todo += [n for n in imports(path) if n.startswith("texelpad.bench.")]
+    shipped = {_module_name(p) for p in modules(HOST, "bench") if "device" not in p.parts}
+    assert shipped - {"texelpad.bench"} <= reached, sorted(shipped - reached)
+
+
+def test_the_research_benchmarks_import_texelpad_as_a_user_and_nothing_imports_them():
+    """bench/ (python -m bench.NAME from the repository root) imports texelpad by its
+    absolute names and never a command; nothing in texel or texelpad imports it."""
+    assert (BENCH / "__init__.py").is_file() and modules(BENCH)
+    for p in modules(BENCH):
+        for node in ast.walk(ast.parse(p.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and node.level:
+                assert node.level == 1, (p.name, node.lineno)          # bench's own modules
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                     [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            assert not any(n == "texelpad.cli" or n.startswith("texelpad.cli.")
+                           for n in names), (p.name, node.lineno)
+    users = {str(p.relative_to(ROOT)) for p in modules(HOST) + modules(DEVICE)
+             if any(m == "bench" or m.startswith("bench.") for m in imports(p))}
+    assert users == set(), users
+
+
 # --- the host's layers as a graph (issue 23) -----------------------------------------------------
 # One node per unit of docs/architecture.md's table: a package of host/texelpad (texelpad.link,
 # texelpad.study, ...) or a top-level module (texelpad.toolchain); texelpad.deploy.image is a unit
