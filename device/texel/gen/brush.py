@@ -28,6 +28,7 @@
 # - give the same integers (tests/brush/test_paint.py).
 import math
 
+from .check import is_int, is_num, finite, fail
 from .plan_int import exp2_m
 from .plan_int_tables import table
 
@@ -219,16 +220,16 @@ Q13 = 8192
 
 
 def _num(path, v, lo, hi):
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise ValueError("%s: expected a number, got %r" % (path, v))
+    if not is_num(v):
+        fail(path, "expected a number, got %r" % (v,))
     try:
         v = float(v)
     except OverflowError:                   # an int beyond a double (CPython)
         v = float("inf")
-    if not (v == v) or v in (float("inf"), float("-inf")):
-        raise ValueError("%s: %r is not finite" % (path, v))
+    if not finite(v):
+        fail(path, "%r is not finite" % (v,))
     if not lo <= v <= hi:
-        raise ValueError("%s: %r is outside %r .. %r" % (path, v, lo, hi))
+        fail(path, "%r is outside %r .. %r" % (v, lo, hi))
     return v
 
 
@@ -237,11 +238,11 @@ def validate(brush, path="brush"):
     naming the key path of the first problem. Geometry keys, when present,
     must be this display's (window, hop, wavenumbers)."""
     if not isinstance(brush, dict):
-        raise ValueError("%s: expected an object with k, lam (and range)" % path)
+        fail(path, "expected an object with k, lam (and range)")
     for key in brush:
         if key not in ("k", "lam", "range", "window", "hop", "wavenumbers", "format", "name",
                        "source", "dx_um", "seed"):
-            raise ValueError("%s: unknown key %r" % (path, key))
+            fail(path, "unknown key %r" % (key,))
     f = brush.get("format", FORMAT)
     if f != FORMAT:
         if f in OLD_FORMATS:
@@ -286,11 +287,10 @@ def region_texture(path, tex):
     kind "brush"; seed 002): the brush by key path (path.brush.lam[3]: ...)
     and the seed it is painted with. The canonical texture."""
     if "brush" not in tex:
-        raise ValueError("%s: missing required key 'brush' ({k, lam, range}: docs/brush.md)"
-                         % path)
+        fail(path, "missing required key 'brush' ({k, lam, range}: docs/brush.md)")
     b = validate(tex["brush"], path + ".brush")
     seed = tex.get("seed", 0)
-    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= 0xFFFFFFFF:
+    if not is_int(seed) or not 0 <= seed <= 0xFFFFFFFF:
         raise ValueError("%s.seed: expected an int in [0, 4294967295], got %r"
                          % (path, seed if isinstance(seed, (int, float, str)) else type(seed)))
     return {"kind": "brush", "brush": b, "seed": seed}

@@ -1,7 +1,8 @@
 # The texture parameter set: a plain dict that crosses the serial link as a
 # literal. validate() is the one gate every path goes through (render, scenes,
 # the REPL entry points); it never mutates its input and returns a new dict
-# with every default filled in, or raises ValueError naming key, value, range.
+# with every default filled in, or raises ValueError naming key, value, range,
+# in the words every device validator shares (gen/check.py: _words()).
 
 FORMAT_VERSION = 1     # what a parameter set without "v" means (saved files keep their texture)
 FORMAT_LATEST = 2      # texture format 2: the integer plan (gen/plan_int.py)
@@ -53,23 +54,11 @@ KEYS = ("pitch_db", "irregularity_db", "texel_samples", "length_samples", "quant
         "seed", "gain", "v", "band_limit_cpmm")
 
 
-def _fmt_range(lo, hi):
-    return "[%r, %r]" % (lo, hi)
-
-
-def _is_finite(x):
-    return x == x and x not in (float("inf"), float("-inf"))
-
-
-# Ints beyond this are shown by name in a message, not by their digits (the
-# same words as texel.runtime.scene): 10**400 must not make a 400-digit line.
-_BIG = 1 << 62
-
-
-def _show(value):
-    if isinstance(value, int) and not -_BIG < value < _BIG:
-        return "a huge int (beyond 2^62)"
-    return repr(value)
+def _words():
+    """gen/check.py, imported at the first refusal: the generator alone
+    (import texel: a full map on a Pico-sized heap) never holds it."""
+    from . import check
+    return check
 
 
 def check_value(key, value):
@@ -83,37 +72,36 @@ def check_value(key, value):
     if value is None:
         if key == "band_limit_cpmm":
             return None
-        raise ValueError("%s: None is not allowed (expected a number in %s)"
-                         % (key, _fmt_range(lo, hi)))
+        c = _words()
+        c.fail(key, "None is not allowed (expected a number in %s)" % c.rng(lo, hi))
     # bool is an int subclass in Python: reject it explicitly.
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError("%s: expected %s in %s, got %s %r"
-                         % (key, "an int" if kind == "i" else "a number",
-                            _fmt_range(lo, hi), type(value).__name__, value))
-    if kind == "i":
-        if not isinstance(value, int):
-            raise ValueError("%s: expected an int in %s, got float %r"
-                             % (key, _fmt_range(lo, hi), value))
-    elif isinstance(value, int):
-        # An int in a float field becomes a float - unless it has none:
+        _words().expected(key, "an int" if kind == "i" else "a number", lo, hi,
+                          "%s %r" % (type(value).__name__, value))
+    if kind == "i" and not isinstance(value, int):
+        _words().expected(key, "an int", lo, hi, "float %r" % (value,))
+    if not lo <= value <= hi:
+        # (NaN fails the comparison too.) A float is shown as a float; an int
+        # in a float field as the float it would become - unless it has none:
         # float(10**400) raised OverflowError on CPython (after the key had
         # been accepted as "a number"), while MicroPython turns it into inf
         # and called it "not finite". Every float range here is far inside
         # +-2^62, so an int beyond that is simply out of range, worded alike
-        # on every port and never converted.
-        if not -_BIG < value < _BIG:
-            raise ValueError("%s: %s is out of range %s" % (key, _show(value), _fmt_range(lo, hi)))
+        # on every port and never converted (compared exactly on CPython, as
+        # inf on MicroPython: out of range either way).
+        c = _words()
+        if isinstance(value, float):
+            if not c.finite(value):
+                c.not_finite(key, value, lo, hi)
+            value = float(value)
+        elif kind == "f" and -c.BIG < value < c.BIG:
+            value = float(value)
+        c.out_of_range(key, value, lo, hi)
+    if kind == "f":
         value = float(value)
-    else:
-        if not _is_finite(value):
-            raise ValueError("%s: %r is not finite (allowed %s)"
-                             % (key, value, _fmt_range(lo, hi)))
-        value = float(value)
-    if value < lo or value > hi:
-        raise ValueError("%s: %s is out of range %s" % (key, _show(value), _fmt_range(lo, hi)))
     if key == "quant_db" and 0.0 < value < QUANT_DB_MIN:
-        raise ValueError("quant_db: %r is too fine a grid (0 = off, else %r .. %r dB)"
-                         % (value, QUANT_DB_MIN, hi))
+        _words().fail(key, "%r is too fine a grid (0 = off, else %r .. %r dB)"
+                      % (value, QUANT_DB_MIN, hi))
     return value
 
 
@@ -139,7 +127,8 @@ def validate(params):
         if key in params:
             out[key] = check_value(key, params[key])
         elif default is None and key != "band_limit_cpmm":
-            raise ValueError("missing required key %r (a number in %s)" % (key, _fmt_range(lo, hi)))
+            raise ValueError("missing required key %r (a number in %s)"
+                             % (key, _words().rng(lo, hi)))
         else:
             out[key] = default
     if out["v"] == 2:
