@@ -70,6 +70,9 @@ from ..gen.params import validate as texel_validate
 from ..gen.params import SPEC as TEXEL_SPEC
 from ..gen.params import KEYS as _TEXEL_ALL_KEYS
 from ..gen.params import LENGTH_MAX
+# the checks every device validator shares (their words: gen/check.py)
+from ..gen.check import BIG, is_int, is_num, finite, show, out_of_range, \
+    not_finite, expected, fail
 
 MAX_REGIONS = 16            # regions per scene (amp() cost grows with the count)
 MAX_SAMPLES = 19200         # values per samples region (one full TPaD screen)
@@ -115,8 +118,6 @@ PLAN_MAX_L = 65535
 _ITEM = len(bytes(array("i", [0])))     # bytes per table int (4)
 
 _SHOW = 40                  # characters of a string shown in a message
-_BIG = 1 << 62              # ints beyond this are shown by name only
-_INF = float("inf")
 
 
 # --- messages ----------------------------------------------------------------
@@ -125,10 +126,8 @@ def _got(v):
     and size for containers; never a repr of unbounded size."""
     if v is None or isinstance(v, (bool, float)):
         return "%s %r" % (type(v).__name__, v)
-    if isinstance(v, int):
-        if -_BIG < v < _BIG:
-            return "int %r" % v
-        return "a huge int (beyond 2^62)"
+    if isinstance(v, int):              # beyond +-2^62 by name only
+        return "int %r" % v if -BIG < v < BIG else show(v)
     if isinstance(v, str):
         return "str " + _qstr(v)
     if isinstance(v, (list, tuple)):
@@ -180,16 +179,8 @@ def _plain_str(s):
     return True
 
 
-def _showint(v):
-    return repr(v) if -_BIG < v < _BIG else "a huge int (beyond 2^62)"
-
-
 def _key(k):
     return _qstr(k) if isinstance(k, str) else _got(k)
-
-
-def _range(lo, hi):
-    return "[%r, %r]" % (lo, hi)
 
 
 def _check_keys(path, d, allowed):
@@ -202,36 +193,36 @@ def _check_keys(path, d, allowed):
             if bad is None or s < bad:
                 bad = s
     if bad is not None:
-        raise ValueError("%s: unknown key %s (allowed: %s)" % (path, bad, ", ".join(allowed)))
+        fail(path, "unknown key %s (allowed: %s)" % (bad, ", ".join(allowed)))
 
 
 def _dict(path, v, what):
     if not isinstance(v, dict):
-        raise ValueError("%s: expected %s, got %s" % (path, what, _got(v)))
+        fail(path, "expected %s, got %s" % (what, _got(v)))
     return v
 
 
 def _num(path, v, lo, hi):
     """A finite number (int accepted, bool refused) in [lo, hi] -> float."""
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise ValueError("%s: expected a number in %s, got %s" % (path, _range(lo, hi), _got(v)))
+    if not is_num(v):
+        expected(path, "a number", lo, hi, _got(v))
     if isinstance(v, int):
         if v < lo or v > hi:            # exact int/float comparison: no overflow
-            raise ValueError("%s: %s is out of range %s" % (path, _showint(v), _range(lo, hi)))
+            out_of_range(path, v, lo, hi)
         return float(v)
-    if not (v == v) or v == _INF or v == -_INF:
-        raise ValueError("%s: %r is not finite (allowed %s)" % (path, v, _range(lo, hi)))
+    if not finite(v):
+        not_finite(path, v, lo, hi)
     if v < lo or v > hi:
-        raise ValueError("%s: %r is out of range %s" % (path, v, _range(lo, hi)))
+        out_of_range(path, v, lo, hi)
     return float(v)
 
 
 def _int(path, v, lo, hi):
     """An int (bool refused) in [lo, hi]."""
-    if isinstance(v, bool) or not isinstance(v, int):
-        raise ValueError("%s: expected an int in %s, got %s" % (path, _range(lo, hi), _got(v)))
+    if not is_int(v):
+        expected(path, "an int", lo, hi, _got(v))
     if v < lo or v > hi:
-        raise ValueError("%s: %s is out of range %s" % (path, _showint(v), _range(lo, hi)))
+        out_of_range(path, v, lo, hi)
     return v
 
 
@@ -242,7 +233,7 @@ def _display(display):
     _dict("display", display, "the board's display dict {'positions': ..., 'dx_um': ...}")
     for k in ("positions", "dx_um"):
         if k not in display:
-            raise ValueError("display: missing required key %r" % k)
+            fail("display", "missing required key %r" % (k,))
     positions = _int("display.positions", display["positions"], 1, LENGTH_MAX)
     dx_um = _num("display.dx_um", display["dx_um"], 0.001, 1000000.0)
     return positions, dx_um
@@ -281,12 +272,11 @@ def _texel(path, tex, n):
             # whose repr is small and the same on every port; describe the
             # rest here, in its format.
             if not (v is None or isinstance(v, (bool, float))
-                    or (isinstance(v, int) and -_BIG < v < _BIG)
+                    or (isinstance(v, int) and -BIG < v < BIG)
                     or (isinstance(v, str) and _plain_str(v))):
                 kind, _, lo, hi = TEXEL_SPEC[k]
-                raise ValueError("%s.%s: expected %s in %s, got %s"
-                                 % (path, k, "an int" if kind == "i" else "a number",
-                                    _range(lo, hi), _got(v)))
+                expected(path + "." + k, "an int" if kind == "i" else "a number", lo, hi,
+                         _got(v))
             p[k] = v
     p["length_samples"] = n
     try:
@@ -299,7 +289,7 @@ def _texel(path, tex, n):
         cut = err.find(":")
         if cut > 0 and err[:cut] in TEXEL_SPEC:
             raise ValueError(path + "." + err)
-        raise ValueError(path + ": " + err)
+        fail(path, err)
     out = {"kind": "texel"}
     for k in TEXEL_KEYS:
         out[k] = c[k]
@@ -309,20 +299,18 @@ def _texel(path, tex, n):
 def _reference(path, tex):
     from .. import reference_names
     if "name" not in tex:
-        raise ValueError("%s: missing required key 'name' (one of: %s)"
-                         % (path, ", ".join(reference_names())))
+        fail(path, "missing required key 'name' (one of: %s)" % ", ".join(reference_names()))
     name = tex["name"]
     known = reference_names()
     if not isinstance(name, str) or name not in known:
-        raise ValueError("%s.name: unknown reference texture %s (known: %s)"
-                         % (path, _qstr(name) if isinstance(name, str) else _got(name),
-                            ", ".join(known)))
+        fail(path + ".name", "unknown reference texture %s (known: %s)"
+             % (_qstr(name) if isinstance(name, str) else _got(name), ", ".join(known)))
     return {"kind": "reference", "name": name}
 
 
 def _constant(path, tex):
     if "level" not in tex:
-        raise ValueError("%s: missing required key 'level' (a number in [0.0, 1.0])" % path)
+        fail(path, "missing required key 'level' (a number in [0.0, 1.0])")
     return {"kind": "constant", "level": _num(path + ".level", tex["level"], 0.0, 1.0)}
 
 
@@ -330,28 +318,27 @@ def _samples(path, tex):
     has_v = "values" in tex
     has_u = "u16" in tex
     if has_v == has_u:
-        raise ValueError("%s: give exactly one of 'values' (numbers 0..1) or 'u16' "
-                         "(ints 0..65535), %d at most" % (path, MAX_SAMPLES))
+        fail(path, "give exactly one of 'values' (numbers 0..1) or 'u16' "
+             "(ints 0..65535), %d at most" % MAX_SAMPLES)
     fit = tex.get("fit", "tile")
     if not isinstance(fit, str) or fit not in FITS:
-        raise ValueError("%s.fit: expected one of %s, got %s"
-                         % (path, ", ".join(FITS), _got(fit)))
+        fail(path + ".fit", "expected one of %s, got %s" % (", ".join(FITS), _got(fit)))
     key = "u16" if has_u else "values"
     seq = tex[key]
     p = path + "." + key
     if has_u and getattr(seq, "UPLOAD", False):     # texel.runtime.upload.Upload
         if seq.filled != len(seq.buf):
-            raise ValueError("%s: the upload is incomplete (%d of %d values arrived)"
-                             % (p, seq.filled, len(seq.buf)))
+            fail(p, "the upload is incomplete (%d of %d values arrived)"
+                 % (seq.filled, len(seq.buf)))
         seq = seq.buf
     if has_u and getattr(seq, "CHUNKS", False):     # upload.Chunks: uint16 by construction
         return {"kind": "samples", "u16": seq, "fit": fit}
     if not isinstance(seq, (list, tuple)):
-        raise ValueError("%s: expected a list of %s, got %s"
-                         % (p, "ints in [0, 65535]" if has_u else "numbers in [0.0, 1.0]", _got(seq)))
+        fail(p, "expected a list of %s, got %s"
+             % ("ints in [0, 65535]" if has_u else "numbers in [0.0, 1.0]", _got(seq)))
     m = len(seq)
     if m < 1 or m > MAX_SAMPLES:
-        raise ValueError("%s: %d values; allowed 1 .. %d" % (p, m, MAX_SAMPLES))
+        fail(p, "%d values; allowed 1 .. %d" % (m, MAX_SAMPLES))
     # check every element before anything is converted (index in the path)
     if has_u:
         for i in range(m):
@@ -374,15 +361,13 @@ def _texture(path, tex, n):
     if not isinstance(tex, dict):       # (the message built only when needed: 0.5 ms on a Pico)
         _dict(path, tex, "a texture dict with 'kind' (one of: %s)" % ", ".join(KINDS))
     if "kind" not in tex:
-        raise ValueError("%s: missing required key 'kind' (one of: %s)" % (path, ", ".join(KINDS)))
+        fail(path, "missing required key 'kind' (one of: %s)" % ", ".join(KINDS))
     kind = tex["kind"]
     if not isinstance(kind, str) or kind not in KINDS:
-        raise ValueError("%s.kind: unknown kind %s (one of: %s)"
-                         % (path, _qstr(kind) if isinstance(kind, str) else _got(kind),
-                            ", ".join(KINDS)))
+        fail(path + ".kind", "unknown kind %s (one of: %s)"
+             % (_qstr(kind) if isinstance(kind, str) else _got(kind), ", ".join(KINDS)))
     if kind == "texel" and "length_samples" in tex:
-        raise ValueError("%s.length_samples: set by the region (here %d samples); remove it"
-                         % (path, n))
+        fail(path + ".length_samples", "set by the region (here %d samples); remove it" % n)
     _check_keys(path, tex, TEXTURE_KEYS[kind])
     if kind == "texel":
         return _texel(path, tex, n)
@@ -405,14 +390,13 @@ def _check(scene, display):
     _dict("scene", scene, "a dict with 'regions'")
     _check_keys("scene", scene, SCENE_KEYS)
     if "regions" not in scene:
-        raise ValueError("scene: missing required key 'regions' (a list of 1 .. %d regions)"
-                         % MAX_REGIONS)
+        fail("scene", "missing required key 'regions' (a list of 1 .. %d regions)"
+             % MAX_REGIONS)
     regs = scene["regions"]
     if not isinstance(regs, (list, tuple)):
-        raise ValueError("regions: expected a list of 1 .. %d regions, got %s"
-                         % (MAX_REGIONS, _got(regs)))
+        fail("regions", "expected a list of 1 .. %d regions, got %s" % (MAX_REGIONS, _got(regs)))
     if len(regs) < 1 or len(regs) > MAX_REGIONS:
-        raise ValueError("regions: %d regions; allowed 1 .. %d" % (len(regs), MAX_REGIONS))
+        fail("regions", "%d regions; allowed 1 .. %d" % (len(regs), MAX_REGIONS))
     out = {}
     if "idle_amplitude" in scene:
         out["idle_amplitude"] = _int("idle_amplitude", scene["idle_amplitude"], 0, U16_MAX)
@@ -420,10 +404,9 @@ def _check(scene, display):
         if k in scene:
             v = scene[k]
             if not isinstance(v, str) or (k == "name" and not v) or len(v) > top:
-                raise ValueError("%s: expected a string of %s%d characters, got %s"
-                                 % (k, "1 .. " if k == "name" else "at most ", top,
-                                    _got(v) if not isinstance(v, str)
-                                    else "%d characters" % len(v)))
+                fail(k, "expected a string of %s%d characters, got %s"
+                     % ("1 .. " if k == "name" else "at most ", top,
+                        _got(v) if not isinstance(v, str) else "%d characters" % len(v)))
             out[k] = v
     spans = []
     canon = []
@@ -433,16 +416,16 @@ def _check(scene, display):
         _check_keys(path, r, REGION_KEYS)
         for k in REGION_KEYS:
             if k not in r:
-                raise ValueError("%s: missing required key %r" % (path, k))
+                fail(path, "missing required key %r" % (k,))
         s_mm = _mm_in(path + ".start_mm", r["start_mm"], total_mm, positions, dx_um)
         e_mm = _mm_in(path + ".end_mm", r["end_mm"], total_mm, positions, dx_um)
         if not s_mm < e_mm:
-            raise ValueError("%s.end_mm: %r is not after start_mm %r" % (path, e_mm, s_mm))
+            fail(path + ".end_mm", "%r is not after start_mm %r" % (e_mm, s_mm))
         s = to_position(s_mm, dx_um)
         e = to_position(e_mm, dx_um)
         if s >= e:
-            raise ValueError("%s: %r .. %r mm rounds to no position (one position is %r um)"
-                             % (path, s_mm, e_mm, dx_um))
+            fail(path, "%r .. %r mm rounds to no position (one position is %r um)"
+                 % (s_mm, e_mm, dx_um))
         tex = _texture(path + ".texture", r["texture"], e - s)
         canon.append({"start_mm": s_mm, "end_mm": e_mm, "texture": tex})
         spans.append((s, e, i))
@@ -527,7 +510,7 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
         idle = _int("idle_default", idle_default, 0, U16_MAX)
     need, nbuf, ntab = _need(c, spans, engine)
     if max_bytes is not None:
-        max_bytes = _int("max_bytes", max_bytes, 0, _BIG)
+        max_bytes = _int("max_bytes", max_bytes, 0, BIG)
         if need > max_bytes:
             raise ValueError("scene: needs %d bytes (%d of sample buffers and plans + %d of region table), "
                              "over the budget of %d bytes" % (need, nbuf, ntab, max_bytes))
