@@ -20,6 +20,9 @@
 # /boards/<name>.json still overrides them.
 import json
 
+# the checks every device validator shares (their words: gen/check.py)
+from ..gen.check import rng, is_int, is_num, finite, fail
+
 try:
     import os
 except ImportError:                     # a port without os: load() still works
@@ -112,9 +115,9 @@ def pwm_top(cpu_hz, freq_hz):
     rounded to the nearest count: RP2040 125 MHz / 34 kHz = 3,676.47 -> 3675;
     STM32F405 TIM1/TIM8 168 MHz / 34 kHz = 4,941.2 -> 4940. ValueError when
     the counts do not fit a 16-bit counter (or leave under 2 levels)."""
-    if not _is_int(cpu_hz) or cpu_hz <= 0:
+    if not is_int(cpu_hz) or cpu_hz <= 0:
         raise ValueError("cpu_hz: %r is not a positive int (Hz)" % (cpu_hz,))
-    if not _is_int(freq_hz) or freq_hz <= 0:
+    if not is_int(freq_hz) or freq_hz <= 0:
         raise ValueError("freq_hz: %r is not a positive int (Hz)" % (freq_hz,))
     counts = (cpu_hz + freq_hz // 2) // freq_hz
     if counts < 2 or counts > COUNTS_MAX:
@@ -321,24 +324,8 @@ def load(name, search=None):
 
 
 # --- validation -----------------------------------------------------------------
-class _Ctx:
-    def __init__(self, source):
-        self.source = source
-
-    def fail(self, path, msg):
-        raise ValueError("%s: %s: %s" % (self.source, path, msg))
-
-
-def _is_int(v):
-    return isinstance(v, int) and not isinstance(v, bool)
-
-
-def _is_num(v):
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        return False
-    return v == v and v not in (float("inf"), float("-inf"))
-
-
+# c, in every check below: the head of its messages, "<source>: " (the file),
+# so an error reads "<source>: <key path>: <what is wrong>" (gen/check.fail).
 _KIND_NAMES = {"i": "an integer", "n": "a finite number", "s": "a string",
                "d": "an object", "p": "a list of pins"}
 
@@ -347,27 +334,27 @@ def _section(c, path, d, keys):
     """Check d's keys and types against `keys`; return a new dict with the
     defaults filled in (deep-copied for dicts)."""
     if not isinstance(d, dict):
-        c.fail(path or "(top level)", "expected an object, got %s" % _tname(d))
+        fail(c + (path or "(top level)"), "expected an object, got %s" % _tname(d))
     known = [k[0] for k in keys]
     unknown = sorted([k for k in d if k not in known])
     if unknown:
-        c.fail(_join(path, str(unknown[0])),
-               "unknown key (known: %s)" % (", ".join(known) or "none"))
+        fail(c + _join(path, str(unknown[0])),
+                 "unknown key (known: %s)" % (", ".join(known) or "none"))
     out = {}
     for key, kind, default in keys:
         p = _join(path, key)
         if key not in d:
             if default is None:
-                c.fail(p, "missing (required)")
+                fail(c + p, "missing (required)")
             if default is not OPTIONAL:
                 out[key] = dict(default) if isinstance(default, dict) else default
             continue
         v = d[key]
-        ok = ((kind == "i" and _is_int(v)) or (kind == "n" and _is_num(v))
+        ok = ((kind == "i" and is_int(v)) or (kind == "n" and is_num(v) and finite(v))
               or (kind == "s" and isinstance(v, str)) or (kind == "d" and isinstance(v, dict))
               or (kind == "p" and isinstance(v, list)))
         if not ok:
-            c.fail(p, "expected %s, got %s" % (_KIND_NAMES[kind], _show(v)))
+            fail(c + p, "expected %s, got %s" % (_KIND_NAMES[kind], _show(v)))
         out[key] = v
     return out
 
@@ -398,12 +385,12 @@ def _show(v):
 
 def _range(c, path, v, lo, hi, unit=""):
     if v < lo or v > hi:
-        c.fail(path, "%r%s is out of range [%r, %r]" % (v, unit, lo, hi))
+        fail(c + path, "%r%s is out of range %s" % (v, unit, rng(lo, hi)))
 
 
 def _one_of(c, path, v, choices):
     if v not in choices:
-        c.fail(path, "%r is not one of %s" % (v, ", ".join(choices)))
+        fail(c + path, "%r is not one of %s" % (v, ", ".join(choices)))
 
 
 def _pins(c, path, pins, port, n, what, adc):
@@ -412,16 +399,16 @@ def _pins(c, path, pins, port, n, what, adc):
     circuitpython: a GPIO number n (= board.GP<n>) or a board attribute name;
     virtual: small ints (labels)."""
     if len(pins) != n:
-        c.fail(path, "%s needs %d pin%s, got %d" % (what, n, "" if n == 1 else "s", len(pins)))
+        fail(c + path, "%s needs %d pin%s, got %d" % (what, n, "" if n == 1 else "s", len(pins)))
     for i in range(n):
         v = pins[i]
         p = "%s[%d]" % (path, i)
         if port == "stm32" or (port == "circuitpython" and isinstance(v, str)):
             if not isinstance(v, str) or not v or " " in v:
-                c.fail(p, "expected a pin name such as \"Y1\", got %s" % _show(v))
+                fail(c + p, "expected a pin name such as \"Y1\", got %s" % _show(v))
             continue
-        if not _is_int(v):
-            c.fail(p, "expected a GPIO number, got %s" % _show(v))
+        if not is_int(v):
+            fail(c + p, "expected a GPIO number, got %s" % _show(v))
         if port == "virtual":
             _range(c, p, v, 0, 255)
         elif adc:
@@ -436,23 +423,30 @@ def validate(d, source="board"):
     canonical copy with every default filled in. Errors name the source file
     and the key path: "boards/x.json: carrier.freq_hz: 500 is out of range
     [1000, 200000]"."""
-    c = _Ctx(source)
+    c = "%s: " % (source,)
     b = _section(c, "", d, TOP_KEYS)
 
     # name: must be the file's name, so load("pico") is the board "pico"
     name = b["name"]
     if not _valid_name(name):
-        c.fail("name", "%r: use 1..%d of a-z, 0-9, _ and -" % (name, NAME_MAX))
+        fail(c + "name", "%r: use 1..%d of a-z, 0-9, _ and -" % (name, NAME_MAX))
     stem = _stem(source)
     if stem is not None and stem != name:
-        c.fail("name", "%r does not match the file name (%s.json)" % (name, stem))
+        fail(c + "name", "%r does not match the file name (%s.json)" % (name, stem))
     port = b["port"]
     _one_of(c, "port", port, PORTS)
     if not b["title"]:
         b["title"] = name
     _range(c, "cpu_hz", b["cpu_hz"], CPU_HZ_MIN, CPU_HZ_MAX, " Hz")
+    car = _carrier(c, b, port)
+    _sensor(c, b, port, car["pins"])
+    _refresh(c, b, port, car["freq_hz"])
+    _display(c, b)
+    return b
 
-    # carrier
+
+def _carrier(c, b, port):
+    """b["carrier"] checked and made canonical (in b); returns it."""
     car = _section(c, "carrier", b["carrier"], CARRIER_KEYS)
     b["carrier"] = car
     freq = car["freq_hz"]
@@ -460,18 +454,18 @@ def validate(d, source="board"):
     top = _port_top(port, b["cpu_hz"], freq)
     least = COUNTS_MIN * (2 if port == "circuitpython" else 1)     # floored TOP: 2x
     if top < least - 1 or top > TOP_MAX:
-        c.fail("carrier.freq_hz", "%d Hz on the %d Hz clock (cpu_hz) gives PWM TOP %d; need "
-               "%d .. %d (>= %d counts for resolution and frequency accuracy; compare words "
-               "within small ints)" % (freq, b["cpu_hz"], top, least - 1, TOP_MAX, least))
+        fail(c + "carrier.freq_hz", "%d Hz on the %d Hz clock (cpu_hz) gives PWM TOP %d; need "
+                 "%d .. %d (>= %d counts for resolution and frequency accuracy; compare words "
+                 "within small ints)" % (freq, b["cpu_hz"], top, least - 1, TOP_MAX, least))
     cap = car["duty_cap"]
     if not 0 < cap <= 0.5:
         # above 50 % the PWM fundamental (sin(pi*D)) falls again
-        c.fail("carrier.duty_cap", "%r is out of range (0, 0.5]" % (cap,))
+        fail(c + "carrier.duty_cap", "%r is out of range (0, 0.5]" % (cap,))
     drive = car["drive"]
     _one_of(c, "carrier.drive", drive, DRIVES)
     if drive == "bridge" and port == "circuitpython":
-        c.fail("carrier.drive", "'bridge' needs an inverted (complementary) PWM output, which "
-               "CircuitPython's pwmio cannot make; use 'single'")
+        fail(c + "carrier.drive", "'bridge' needs an inverted (complementary) PWM output, which "
+                 "CircuitPython's pwmio cannot make; use 'single'")
     pins = car["pins"]
     _pins(c, "carrier.pins", pins, port, 2 if drive == "bridge" else 1,
           "drive '%s'" % drive, False)
@@ -485,35 +479,39 @@ def validate(d, source="board"):
         if pwm["slice"] == -1:
             pwm["slice"] = sl
         elif pwm["slice"] != sl:
-            c.fail("carrier.pwm.slice", "%r, but GPIO %d is on PWM slice %d"
-                   % (pwm["slice"], pins[0], sl))
+            fail(c + "carrier.pwm.slice", "%r, but GPIO %d is on PWM slice %d"
+                     % (pwm["slice"], pins[0], sl))
         if drive == "bridge" and (pins[0] >> 1 != pins[1] >> 1 or pins[0] == pins[1]):
-            c.fail("carrier.pins", "%r: a bridge takes the two channels of one PWM slice "
-                   "(GPIO 2k and 2k+1, e.g. [16, 17]); leg B is inverted" % (pins,))
+            fail(c + "carrier.pins", "%r: a bridge takes the two channels of one PWM slice "
+                     "(GPIO 2k and 2k+1, e.g. [16, 17]); leg B is inverted" % (pins,))
     if "deadtime_ns" in car:
         ns = car["deadtime_ns"]
         if port != "stm32":
-            c.fail("carrier.deadtime_ns", "only stm32 timers (TIM1, TIM8) have a dead-time "
-                   "generator; on %r the gate drivers provide it" % (port,))
+            fail(c + "carrier.deadtime_ns", "only stm32 timers (TIM1, TIM8) have a dead-time "
+                     "generator; on %r the gate drivers provide it" % (port,))
         if drive != "bridge":
-            c.fail("carrier.deadtime_ns", "applies to drive 'bridge' (complementary outputs) only")
+            fail(c + "carrier.deadtime_ns",
+                 "applies to drive 'bridge' (complementary outputs) only")
         # ticks as hw/stm32 computes them (cpu_hz is the timer clock on stm32)
         if ns < 0:
-            c.fail("carrier.deadtime_ns", "%d ns: a dead time cannot be negative" % ns)
+            fail(c + "carrier.deadtime_ns", "%d ns: a dead time cannot be negative" % ns)
         ticks = (ns * (b["cpu_hz"] // 1000000) + 500) // 1000
         if ticks > DEADTIME_TICKS_MAX:
-            c.fail("carrier.deadtime_ns", "%d ns is %d ticks of the %d Hz timer clock; pyb "
-                   "allows 0 .. %d" % (ns, ticks, b["cpu_hz"], DEADTIME_TICKS_MAX))
+            fail(c + "carrier.deadtime_ns", "%d ns is %d ticks of the %d Hz timer clock; pyb "
+                     "allows 0 .. %d" % (ns, ticks, b["cpu_hz"], DEADTIME_TICKS_MAX))
     if port == "stm32":
         # an advanced timer, TIM1 or TIM8: complementary outputs (CHx/CHxN,
         # channels 1..3), dead time, and the MOE safe-off state hw/stm32
         # relies on for either drive
         if pwm["timer"] not in ADVANCED_TIMERS:
-            c.fail("carrier.pwm.timer", "%r: the carrier needs an advanced timer, 1 or 8 "
-                   "(complementary outputs, dead time, safe off state)" % (pwm["timer"],))
+            fail(c + "carrier.pwm.timer", "%r: the carrier needs an advanced timer, 1 or 8 "
+                     "(complementary outputs, dead time, safe off state)" % (pwm["timer"],))
         _range(c, "carrier.pwm.channel", pwm["channel"], 1, 3 if drive == "bridge" else 4)
+    return car
 
-    # sensor
+
+def _sensor(c, b, port, carrier_pins):
+    """b["sensor"] checked and made canonical; no pin of the carrier's."""
     s = _section(c, "sensor", b["sensor"], SENSOR_KEYS)
     b["sensor"] = s
     kind = s["kind"]
@@ -525,48 +523,51 @@ def validate(d, source="board"):
         _range(c, "sensor." + key, s[key], 0, U16_MAX)
     a, e = s["raw_at_start"], s["raw_at_end"]
     if abs(e - a) < CAL_SPAN_MIN:
-        c.fail("sensor.raw_at_end", "%d is within %d of raw_at_start (%d): the calibration "
-               "span is too small" % (e, CAL_SPAN_MIN, a))
+        fail(c + "sensor.raw_at_end", "%d is within %d of raw_at_start (%d): the calibration "
+                 "span is too small" % (e, CAL_SPAN_MIN, a))
     if kind == "adc_linear" and s["lift_below"] > min(a, e):
-        c.fail("sensor.lift_below", "%d is above the calibrated range (%d .. %d): a finger "
-               "at the end would read as lifted" % (s["lift_below"], min(a, e), max(a, e)))
+        fail(c + "sensor.lift_below", "%d is above the calibrated range (%d .. %d): a finger "
+                 "at the end would read as lifted" % (s["lift_below"], min(a, e), max(a, e)))
     _range(c, "sensor.filter_shift", s["filter_shift"], 0, FILTER_SHIFT_MAX)
     _range(c, "sensor.latency_us", s["latency_us"], 0, LATENCY_US_MAX, " us")
     _range(c, "sensor.velocity_shift", s["velocity_shift"], 0, FILTER_SHIFT_MAX)
     _range(c, "sensor.lift_debounce", s["lift_debounce"], 1, 1000)
-    used = list(car["pins"])
+    used = list(carrier_pins)
     for i in range(len(s["pins"])):
         if s["pins"][i] in used:
-            c.fail("sensor.pins[%d]" % i, "pin %r is already used" % (s["pins"][i],))
+            fail(c + "sensor.pins[%d]" % i, "pin %r is already used" % (s["pins"][i],))
         used.append(s["pins"][i])
 
-    # refresh
+
+def _refresh(c, b, port, freq):
+    """b["refresh"] checked and made canonical (freq: the carrier's, Hz)."""
     r = _section(c, "refresh", b["refresh"],
                  (REFRESH_KEYS[0], ("mode", "s", DEFAULT_MODE[port]), REFRESH_KEYS[2]))
     b["refresh"] = r
     _range(c, "refresh.hz", r["hz"], REFRESH_HZ_MIN, REFRESH_HZ_MAX, " Hz")
     if r["hz"] > freq:
         # the duty is latched once per carrier period: faster refreshes are lost
-        c.fail("refresh.hz", "%d Hz is faster than the carrier (%d Hz)" % (r["hz"], freq))
+        fail(c + "refresh.hz", "%d Hz is faster than the carrier (%d Hz)" % (r["hz"], freq))
     _one_of(c, "refresh.mode", r["mode"], MODES)
     if r["mode"] not in PORT_MODES[port]:
-        c.fail("refresh.mode", "%r is not available on port %r (use %s)"
-               % (r["mode"], port, ", ".join(PORT_MODES[port])))
+        fail(c + "refresh.mode", "%r is not available on port %r (use %s)"
+                 % (r["mode"], port, ", ".join(PORT_MODES[port])))
     if "timer" in r:
         if port != "stm32":
-            c.fail("refresh.timer", "only stm32 boards choose the refresh timer (pyb.Timer id)")
+            fail(c + "refresh.timer", "only stm32 boards choose the refresh timer (pyb.Timer id)")
         if r["timer"] < 1 or r["timer"] > 14 or r["timer"] in ADVANCED_TIMERS:
-            c.fail("refresh.timer", "%r: need a pyb timer 1 .. 14 other than the carrier "
-                   "timers 1 and 8" % (r["timer"],))
+            fail(c + "refresh.timer", "%r: need a pyb timer 1 .. 14 other than the carrier "
+                     "timers 1 and 8" % (r["timer"],))
 
-    # display
+
+def _display(c, b):
+    """b["display"] checked and made canonical."""
     disp = _section(c, "display", b["display"], DISPLAY_KEYS)
     b["display"] = disp
     _range(c, "display.positions", disp["positions"], 1, POSITIONS_MAX)
     dx = disp["dx_um"]
     if not 0 < dx <= DX_UM_MAX:
-        c.fail("display.dx_um", "%r is out of range (0, %r]" % (dx, DX_UM_MAX))
-    return b
+        fail(c + "display.dx_um", "%r is out of range (0, %r]" % (dx, DX_UM_MAX))
 
 
 def _stem(source):
