@@ -33,7 +33,9 @@ def is_num(v):
 
 
 def finite(x):
-    """x (a number) is neither NaN nor an infinity."""
+    """x (a number) is neither NaN nor an infinity. An int beyond a double
+    is finite on CPython, an infinity on MicroPython (it compares as a
+    float): the validators check ints apart."""
     return x == x and x not in _INFS
 
 
