@@ -39,7 +39,26 @@ _rt = None            # the running runtime (one per board)
 
 
 class _Runtime:
-    pass
+    """What start() sets up and the rest of this module reads: one per board."""
+
+    def __init__(self):
+        self.board = None           # the board file, checked (runtime/boards.py)
+        self.start_opts = None      # {"realtime", "fast"} as start() was called
+        self.hw = None              # the hardware backend (hw/<port>.py)
+        self.hz = 0                 # refreshes per second (the board file's)
+        self.period_us = 0          # 1e6 // hz
+        self.law = None             # the duty law (runtime/duty.py)
+        self.sensor = None          # the finger sensor (runtime/sensor.py)
+        self.refresh = None         # Refresh or FastRefresh (runtime/refresh*.py)
+        self.mode = ""              # "python", "viper" or "viper-irq"
+        self.started_us = 0         # ticks() at start
+        self.ticks = None           # the clock (compat.ticks_us / ticks_diff)
+        self.diff = None
+        self.last_push = None       # the last push's timings (status()["last_push"])
+        self.tel_tail = 0           # telemetry read up to here
+        self.pushes = 0
+        self.loop_mode = False      # run() drives the loop instead of a timer
+        self.loop = None            # the loop mode's last figures
 
 
 def _backend(port):

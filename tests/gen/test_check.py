@@ -13,11 +13,7 @@ import json
 
 import pytest
 
-from texel.gen import brush as BR
 from texel.gen import check as C
-from texel.gen import params as P
-from texel.runtime import boards as B
-from texel.runtime import scene as S
 from texelpad import toolchain
 
 from support import mpy

@@ -122,7 +122,7 @@ def stft_magnitudes(x, demean: bool = False) -> np.ndarray:
     return np.abs(np.fft.rfft(frames * _W, axis=1)) * _SCALE
 
 
-def resample(positions_mm: Sequence[float], friction: Sequence[float],
+def resample(positions_mm: Sequence[float] | np.ndarray, friction: Sequence[float] | np.ndarray,
              dx_um: float = DX_UM) -> np.ndarray:
     """A recording (friction at positions in mm, any step, in any order,
     repeats allowed) on a regular grid of dx_um: sorted by position (stable),

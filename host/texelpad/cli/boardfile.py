@@ -82,7 +82,9 @@ def _read(path: str) -> tuple[str, bytes]:
     limit = boardcheck.READ_BYTES_MAX + 1
     try:
         if path == "-":
-            return "stdin", getattr(sys.stdin, "buffer", sys.stdin).read(limit)
+            stdin: Any = getattr(sys.stdin, "buffer", sys.stdin)   # bytes (a text stdin: str)
+            data = stdin.read(limit)
+            return "stdin", data
         with open(path, "rb") as f:
             return path, f.read(limit)
     except IsADirectoryError:

@@ -26,7 +26,8 @@ DEFAULT_SCENE = texel.app.DEFAULT_SCENE
 # The simulated finger on the virtual board (ms, mm): rests lifted, touches
 # down 2 mm in, sweeps to the far end at ~49 mm/s (a slow, deliberate swipe:
 # about 40 telemetry samples per mm at 2 kHz), holds, lifts.
-SWEEP = [(0, None), (100, 2.0), (2100, 99.76), (2200, 99.76), (2210, None), (2400, None)]
+SWEEP: list[tuple[float, float | None]] = [(0, None), (100, 2.0), (2100, 99.76), (2200, 99.76),
+                                           (2210, None), (2400, None)]
 RATE_HZ = 2083          # telemetry every 4th refresh at 8,333 Hz: the 256-slot ring holds 123 ms
 POLL_S = 0.03           # drain the ring well inside that
 
@@ -38,7 +39,7 @@ def finger_truth(keyframes: list[tuple[float, float | None]], t0_us: int, dx_um:
     rule (linear between keyframes, lifted from a None keyframe to the next,
     the last keyframe holds)."""
     kt = np.array([t * 1000.0 for t, _ in keyframes]) + t0_us
-    kp = [None if p is None else p * 1000.0 / dx_um for _, p in keyframes]
+    kp: list[Any] = [None if p is None else p * 1000.0 / dx_um for _, p in keyframes]
     out = np.full(t_us.shape, -1.0)
     for i, t in enumerate(t_us):
         j = int(np.searchsorted(kt, t, side="right")) - 1
@@ -106,6 +107,7 @@ def run(port: str | None = None, out: str = "texelpad-demo.png", scene: dict | N
                                                                  tel[:, 0].astype(float))])
             st = b.status()
             canonical = b.scene_source()
+            assert canonical is not None        # the scene pushed above plays
         progress("drawing %s" % out)
         figs = demo_figure(out, canonical, tel, display=display, truth=truth,
                            title="texelpad demo on %s (%s, %s refresh): %s"

@@ -14,7 +14,7 @@ class ProgressBar:
         self.label = label
         self.tty = self.stream.isatty()
         self.width = width
-        self.last = None
+        self.last: str | None = None
 
     def __call__(self, done: int, total: int, name: str) -> None:
         frac = done / total if total else 1.0

@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from typing import cast
 
 from ..link.transport import DeviceError
 from .connection import add_port_flags, connected_board, not_running, running_board
@@ -110,7 +111,7 @@ def cmd_scene_boot(args: argparse.Namespace) -> int:
     with running_board(args, "--board NAME says which board file to start at power-up",
                        stopped_ok=bool(args.board), refused=refused) as (b, st):
         running = st.get("running")
-        name = args.board or st.get("board")
+        name = cast(str, args.board or st.get("board"))    # stopped: args.board (above)
         if running and name == st.get("board"):
             display = st["display"]
         else:                                   # the named board file, as the board reads it

@@ -7,6 +7,7 @@ import argparse
 import os
 import time
 from pathlib import Path
+from typing import Any
 
 from ..link.transport import LinkError
 from ..sim.virtual import open_virtual, stop_on_signals
@@ -105,7 +106,7 @@ def cmd_virtual(args: argparse.Namespace) -> int:
         raise CliError("--source", "the emulated %s runs the compiled image from its flash; "
                        "--source is for the unix-port virtual board" % args.chip)
     check_flash(args.flash, args.chip)
-    vb = None
+    vb: Any = None                  # a VirtualBoard or an EmulatedPico: the same few calls
     # SIGTERM/SIGHUP end it as Ctrl-C does: the interpreter killed, the
     # temporary flash and the registry entry removed (also while deploying)
     with stop_on_signals():

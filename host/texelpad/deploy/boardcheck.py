@@ -22,7 +22,7 @@ import json
 from dataclasses import dataclass, field
 from typing import Any, TypeGuard
 
-from texel.runtime import boards as B
+from texel.runtime import boards
 
 FIRMWARES = ("stock", "texelpad")
 FIRMWARE_TEXT = {
@@ -231,10 +231,10 @@ def _within(refused: str, dep: str) -> bool:
 
 
 def _sections(port: Any) -> dict[str, tuple]:
-    out = {"": B.TOP_KEYS, "carrier": B.CARRIER_KEYS, "sensor": B.SENSOR_KEYS,
-           "refresh": B.REFRESH_KEYS, "display": B.DISPLAY_KEYS}
-    if port in B.PWM_KEYS:
-        out["carrier.pwm"] = B.PWM_KEYS[port]
+    out = {"": boards.TOP_KEYS, "carrier": boards.CARRIER_KEYS, "sensor": boards.SENSOR_KEYS,
+           "refresh": boards.REFRESH_KEYS, "display": boards.DISPLAY_KEYS}
+    if port in boards.PWM_KEYS:
+        out["carrier.pwm"] = boards.PWM_KEYS[port]
     return out
 
 
@@ -278,7 +278,7 @@ def _validate_all(doc: dict[str, Any]) -> tuple[dict[str, Any] | None, list[Prob
     probs: list[Problem] = []
     for _ in range(len(INDEPENDENT) + 1):
         try:
-            return B.validate(d, _SOURCE), probs
+            return boards.validate(d, _SOURCE), probs
         except ValueError as e:
             text = str(e)
             if text.startswith(_SOURCE + ": "):
@@ -378,7 +378,7 @@ def _hardware(d: dict[str, Any], firmware: str) -> _Found:
                                             "microcontroller.cpu.frequency differs: set %d"
                                             % (_n(cpu), _n(CPY_RP2040_HZ), CPY_RP2040_HZ),
                                   "warning"), ("cpu_hz",)))
-    if port in B.PORTS:
+    if port in boards.PORTS:
         _counts(found, d, port)
     mode = _get(d, "refresh.mode")
     if isinstance(mode, str) and mode in UNBUILT_MODES:
@@ -514,16 +514,16 @@ def _counts(found: _Found, d: dict[str, Any], port: str) -> None:
     cpu = d.get("cpu_hz")
     freq = _get(d, "carrier.freq_hz") if isinstance(d.get("carrier"), dict) else None
     if freq is None and isinstance(d.get("carrier"), dict):
-        freq = B.FREQ_DEFAULT_HZ
-    if not (_is_int(cpu) and B.CPU_HZ_MIN <= cpu <= B.CPU_HZ_MAX and _is_int(freq)
-            and B.FREQ_MIN_HZ <= freq <= B.FREQ_MAX_HZ):
+        freq = boards.FREQ_DEFAULT_HZ
+    if not (_is_int(cpu) and boards.CPU_HZ_MIN <= cpu <= boards.CPU_HZ_MAX and _is_int(freq)
+            and boards.FREQ_MIN_HZ <= freq <= boards.FREQ_MAX_HZ):
         return
-    top = B.board_top({"port": port, "cpu_hz": cpu, "carrier": {"freq_hz": freq}})
-    least = B.COUNTS_MIN * (2 if port == "circuitpython" else 1)
+    top = boards.board_top({"port": port, "cpu_hz": cpu, "carrier": {"freq_hz": freq}})
+    least = boards.COUNTS_MIN * (2 if port == "circuitpython" else 1)
     counts = top + 1
     deps = ("carrier.freq_hz", "cpu_hz")
     def top_at(f: int) -> int:
-        return B.board_top({"port": port, "cpu_hz": cpu, "carrier": {"freq_hz": f}})
+        return boards.board_top({"port": port, "cpu_hz": cpu, "carrier": {"freq_hz": f}})
     if top < least - 1:
         hi = cpu // (least - 1) + 2
         while hi > 1 and top_at(hi) < least - 1:
@@ -534,15 +534,15 @@ def _counts(found: _Found, d: dict[str, Any], port: str) -> None:
                                                  "at this cpu_hz the carrier can be at most %s Hz"
                                                  % (_n(freq), _n(cpu), _n(counts), _n(least),
                                                     _n(hi))), deps))
-    elif top > B.TOP_MAX:
-        lo = max(1, cpu // (B.TOP_MAX + 2) - 2)
-        while top_at(lo) > B.TOP_MAX:
+    elif top > boards.TOP_MAX:
+        lo = max(1, cpu // (boards.TOP_MAX + 2) - 2)
+        while top_at(lo) > boards.TOP_MAX:
             lo += 1
         found.append((Problem("carrier.freq_hz", "%s Hz on the %s Hz clock gives PWM TOP %s; "
                                                  "the refresh keeps TOP <= %s (compare words "
                                                  "stay small ints): at this cpu_hz the carrier "
                                                  "must be at least %s Hz"
-                                                 % (_n(freq), _n(cpu), _n(top), _n(B.TOP_MAX),
+                                                 % (_n(freq), _n(cpu), _n(top), _n(boards.TOP_MAX),
                                                     _n(lo))), deps))
 
 
@@ -613,8 +613,8 @@ def summary(board: dict[str, Any], firmware: str = "stock") -> list[str]:
     """What a valid board file makes the chip do, a line each."""
     port = board["port"]
     car, sen, ref, disp = board["carrier"], board["sensor"], board["refresh"], board["display"]
-    top = B.board_top(board)
-    hz = B.actual_hz(board["cpu_hz"], top)
+    top = boards.board_top(board)
+    hz = boards.actual_hz(board["cpu_hz"], top)
     want = car["freq_hz"]
     clocks = top + 1
     on = {"rp2": "MicroPython's rp2 port", "stm32": "MicroPython's stm32 port",

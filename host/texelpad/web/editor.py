@@ -47,7 +47,7 @@ dropped. Nothing left: the blank scene, one constant region at the board's
 idle level over the whole display (a board always plays a scene of 1..16
 regions; this plays what no scene would) - loaded back as no region.
 
-Brush files: the folder `lab.brushes` if the Lab has that attribute, else
+Brush files: the folder `lab.brushes` when it is set (texelpad lab --brushes), else
 DATA/brushes (made when missing). A name is NAME.json or NAME.tpb with NAME
 as texelpad.study.session.check_name takes it (letters, digits, '_', '-'),
 resolved inside that folder and nowhere else (a link out of it is refused).
@@ -95,7 +95,7 @@ from starlette.routing import Route
 import texel
 import texel.runtime.scene as _scene
 from texel.gen import brush as B
-from texel.gen import params as P
+from texel.gen import params
 
 from ..brush import document as D
 from ..link.board import CheckedScene, check_scene
@@ -315,7 +315,7 @@ class Memory:
 
 # --- textures: the editor's form -> the board's ----------------------------------------
 def label_of(tex: dict[str, Any], memory: Memory | None = None,
-             dx_um: float = P.DX_MM * 1000) -> str:
+             dx_um: float = params.DX_MM * 1000) -> str:
     """A board texture in a few words (the strip's labels, the region list);
     dx_um: the display's position (a texel's length in mm)."""
     kind = tex["kind"]
@@ -359,9 +359,9 @@ def resolve(tex: Any, path: str, folder: Path, memory: Memory,
         if bad:
             raise Refused("%s: unknown key %r (allowed: kind, %s, seed)" % (path, bad[0], src))
         seed = tex.get("seed", 0)
-        if not _is_num(seed) or not isinstance(seed, int) or not 0 <= seed <= P.SEED_MAX:
+        if not _is_num(seed) or not isinstance(seed, int) or not 0 <= seed <= params.SEED_MAX:
             raise Refused("%s.seed: expected an int in [0, %d], got %s"
-                          % (path, P.SEED_MAX, _shown(seed)))
+                          % (path, params.SEED_MAX, _shown(seed)))
         if src == "file":
             doc = load_brush(folder, tex["file"], path + ".file")
             numbers, editor = doc, {"kind": "brush", "file": tex["file"], "seed": seed}
@@ -639,7 +639,7 @@ class Editor:
         display = self.lab.owner.display()
         texel_spec = {}
         for k in ("pitch_db", "irregularity_db", "texel_samples", "seed"):
-            kind, default, lo, hi = P.SPEC[k]
+            kind, default, lo, hi = params.SPEC[k]
             texel_spec[k] = {"kind": "int" if kind == "i" else "number", "default": default,
                              "min": lo, "max": hi}
         return {"references": texel.reference_names(),

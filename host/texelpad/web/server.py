@@ -62,7 +62,7 @@ from starlette.middleware import Middleware
 from starlette.middleware.trustedhost import TrustedHostMiddleware
 from starlette.requests import Request
 from starlette.responses import FileResponse
-from starlette.routing import Mount, Route
+from starlette.routing import BaseRoute, Mount, Route
 from starlette.staticfiles import StaticFiles
 
 from ..link.board import host_check
@@ -123,6 +123,8 @@ class Lab:
         self.live: dict[str, Live] = {}
         self.lock = threading.Lock()        # one request at a time (web/api.handle)
         self.board_session: str | None = None   # the session whose question plays
+        # the editor's brush files (web/editor.py): texelpad lab --brushes, else DATA/brushes
+        self.brushes: str | Path | None = None
 
     def close(self) -> None:
         self.data_lock.release()
@@ -172,6 +174,7 @@ class Lab:
         return lv.question
 
     def _play(self, lv: Live, k: int) -> None:
+        assert lv.question is not None              # an option is played from its question
         _, canonical = self.owner.push(lv.question.options[k])
         lv.playing, lv.playing_scene = k, canonical
         self._took_board(lv)
@@ -359,6 +362,7 @@ class Lab:
         lv = self.get(participant, name)
         out = self._view(key, lv)
         h = lv.session.header
+        assert lv.question is not None              # _view asked it
         out.update(detail=lv.question.detail, seed=h["seed"], config=h["config"],
                    title=protocols.TITLES[lv.protocol], file=str(lv.session.path),
                    records=len(lv.session.records), finished=lv.session.finished,
@@ -443,7 +447,7 @@ class Lab:
         return {"replayed": n}
 
     def list_sessions(self) -> list[dict[str, Any]]:
-        out = []
+        out: list[dict[str, Any]] = []
         for path in sessions(self.data):
             try:
                 s = Session.open(path)
@@ -494,7 +498,7 @@ def make_app(lab: Lab, allowed_hosts: list[str] | None = None) -> Starlette:
 
     h = lambda fn: handle(lab.lock, fn)             # noqa: E731
     s = "/api/sessions/{participant}/{name}"
-    routes = [Route("/", page("experimenter.html")),
+    routes: list[BaseRoute] = [Route("/", page("experimenter.html")),
               Route("/participant", page("participant.html")),
               Route("/api/status", h(status)),
               Route("/api/scene", h(scene)),

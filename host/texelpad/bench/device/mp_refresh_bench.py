@@ -31,7 +31,7 @@ import time
 import texel
 import texel.app as app
 from texel import compat
-from texel.runtime import scene as S
+from texel.runtime import scene
 
 import mpbench
 
@@ -469,10 +469,10 @@ def measure_memory():
     buffers, region table, the canonical source dict, the Scene)."""
     disp = {"positions": 19200, "dx_um": 5.3}
     for key, what, src in SCENES:
-        canonical = S.validate(src, disp)
+        canonical = scene.validate(src, disp)
         gc.collect()
         a0 = gc.mem_alloc()
-        sc = S.build(canonical, disp)
+        sc = scene.build(canonical, disp)
         gc.collect()
         held = gc.mem_alloc() - a0
         emit({"event": "memory", "scene": key, "what": what, "regions": sc.count,
@@ -489,12 +489,12 @@ def measure_churn():
     the build's transient peak). Needs a large heap: its own run."""
     disp = {"positions": 19200, "dx_um": 5.3}
     for key, what, src in SCENES:
-        canonical = S.validate(src, disp)
+        canonical = scene.validate(src, disp)
         gc.collect()
         gc.disable()
         try:
             a0 = gc.mem_alloc()
-            sc = S.build(canonical, disp)
+            sc = scene.build(canonical, disp)
             churn = gc.mem_alloc() - a0
         finally:
             gc.enable()
@@ -520,7 +520,7 @@ def measure_pushes(variant, repeat):
             for _ in range(repeat):
                 gc.collect()
                 t0 = time.ticks_us()
-                S.validate(src, disp)
+                scene.validate(src, disp)
                 t1 = time.ticks_us()
                 gc.collect()
                 t2 = time.ticks_us()
