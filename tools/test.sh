@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Set up (.venv with the package and its test tools) and run the test suite.
-# This is the README's test command, and what .ci/run calls (everything).
+# This is the README's test command, and what .ci/run calls (everything): the
+# lint (ruff) and the host's types (mypy), then the tests.
 #
 #   bash tools/test.sh            every test (CI)
 #   bash tools/test.sh --fast     the development slice: -m "not slow" (about 2 minutes)
@@ -14,4 +15,8 @@ done
 [ -x .venv/bin/python ] || python3 -m venv .venv
 .venv/bin/python -m pip install -q --upgrade pip >/dev/null
 .venv/bin/python -m pip install -q -e '.[test]'
+# the lint and the types first (pyproject.toml: [tool.ruff], [tool.mypy]); each takes
+# seconds, and a red one stops here with what it found
+.venv/bin/python -m ruff check --quiet host device tools tests
+.venv/bin/python -m mypy --no-error-summary
 exec .venv/bin/python -m pytest -q ${args[@]+"${args[@]}"}
