@@ -17,6 +17,6 @@ done
 .venv/bin/python -m pip install -q -e '.[test]'
 # the lint and the types first (pyproject.toml: [tool.ruff], [tool.mypy]); each takes
 # seconds, and a red one stops here with what it found
-.venv/bin/python -m ruff check --quiet host device tools tests
+.venv/bin/python -m ruff check --quiet host device tools tests bench
 .venv/bin/python -m mypy --no-error-summary
 exec .venv/bin/python -m pytest -q ${args[@]+"${args[@]}"}

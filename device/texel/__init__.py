@@ -16,19 +16,23 @@ _ENGINE_ORDER = ("numpy", "int", "ulab", "pure")
 
 
 def _engine_module(name):
+    """The engine's module where it runs (its available()), else None. The
+    numpy engine is not imported without numpy: boards do not carry it
+    (host/texelpad/deploy/image.py, HOST_ONLY)."""
     if name == "numpy":
+        if compat.numpy_mod is None:
+            return None
         from .gen import engine_numpy as m
-        return m if m.AVAILABLE else None
-    if name == "ulab":
+    elif name == "ulab":
         from .gen import engine_ulab as m
-        return m if m.available() else None
-    if name == "int":
+    elif name == "int":
         from .gen import engine_int as m
-        return m
-    if name == "pure":
+    elif name == "pure":
         from .gen import engine_pure as m
-        return m
-    raise ValueError("engine: unknown engine %r (known: %s)" % (name, ", ".join(_ENGINE_ORDER)))
+    else:
+        raise ValueError("engine: unknown engine %r (known: %s)"
+                         % (name, ", ".join(_ENGINE_ORDER)))
+    return m if m.available() else None
 
 
 def engines():

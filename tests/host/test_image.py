@@ -38,10 +38,9 @@ PKG = ROOT / "device" / "texel"
 # every module of the package (subpackages included) but main.py, the board's /main.py
 ALL_MODULES = sorted(p for p in PKG.rglob("*.py")
                      if "__pycache__" not in p.parts and p != PKG / "main.py")
-# host-only: CPython's numpy plan (docs/generator.md); in the CPython package, in no board's
-# image (deploy's, mip's, the firmware's). engine_numpy is not one: texel.engines() imports it
-# on every runtime (to read its AVAILABLE), so a board without it could not list its engines.
-HOST_ONLY = {"texel/gen/plan_numpy.py"}
+# host-only: CPython's numpy plan and engine (docs/generator.md); in the CPython package, in
+# no board's image (deploy's, mip's, the firmware's)
+HOST_ONLY = {"texel/gen/plan_numpy.py", "texel/gen/engine_numpy.py"}
 # what a board may get: every module but those
 MODULES = [p for p in ALL_MODULES if p.relative_to(PKG.parent).as_posix() not in HOST_ONLY]
 BOARD_JSONS = sorted((PKG / "boards.d").glob("*.json"))
@@ -372,21 +371,20 @@ def test_host_only_modules_are_in_the_cpython_package_and_in_no_board_image(imag
 
 
 def test_board_code_imports_a_host_only_module_only_under_numpy():
-    """What a board gets imports a HOST_ONLY module in two places, neither of
-    which a board reaches: texel.make_plan behind CPython with numpy, and the
-    numpy engine, which renders only where numpy is (engine_numpy.AVAILABLE;
-    the unix-port runs below use the image without them). Adding engine_numpy
-    to the list needs texel._engine_module to stop importing it on every
-    runtime first (texel.engines() does, to read AVAILABLE)."""
+    """What a board gets imports a HOST_ONLY module in texel/__init__.py only,
+    in two places a board never reaches: texel.make_plan behind CPython with
+    numpy, and _engine_module's numpy engine behind numpy (the unix-port runs
+    below use the image without them)."""
     stems = {r.rsplit("/", 1)[1][:-3] for r in HOST_ONLY}
     importers = {rel(p) for p in MODULES for n in ast.walk(ast.parse(p.read_text()))
                  if isinstance(n, ast.ImportFrom) and n.module
                  and n.module.rsplit(".", 1)[-1] in stems}
-    assert importers == {"texel/__init__.py", "texel/gen/engine_numpy.py"}
+    assert importers == {"texel/__init__.py"}
     init = (PKG / "__init__.py").read_text()
     assert ('    if compat.numpy_mod is not None and compat.IMPL == "cpython":\n'
             in init.split("def make_plan(")[1].split("\ndef ")[0])
-    assert "AVAILABLE = np is not None" in (PKG / "gen" / "engine_numpy.py").read_text()
+    assert ('    if name == "numpy":\n        if compat.numpy_mod is None:\n            return None\n'
+            in init.split("def _engine_module(")[1].split("\ndef ")[0])
 
 
 # --- plan_upload / plan_remove ------------------------------------------------------

@@ -10,8 +10,11 @@ import math
 from ..compat import numpy_mod as np
 
 NAME = "numpy"
-AVAILABLE = np is not None
 PRECISION = "float64"
+
+
+def available():
+    return np is not None
 
 
 def _pitches_phases(plan):

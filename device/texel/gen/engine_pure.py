@@ -9,10 +9,13 @@ import math
 from ..compat import float_buffer, check_u16_out
 
 NAME = "pure"
-AVAILABLE = True
 PRECISION = "interpreter float (float64 on CPython/unix, float32 on boards)"
 _MASK = 0x0FFFFFFF
 _RAD_PER_UNIT = 2 * math.pi / (1 << 28)
+
+
+def available():
+    return True                 # the interpreter's own floats: every runtime
 
 
 def _each(plan, put):

@@ -69,10 +69,9 @@ PORT_BACKEND = {"rp2": "rp2", "stm32": "stm32", "circuitpython": "cpy", "virtual
 # is the plan on numpy arrays, which texel.make_plan runs only on CPython with
 # numpy (docs/generator.md, "On CPython: the numpy engine and the plan on
 # whole arrays"); no board has numpy (ulab boards have ulab.numpy and
-# gen/engine_ulab.py). gen/engine_numpy.py is no use on a board either, but
-# texel.engines() imports it on every runtime to read its AVAILABLE: it joins
-# this list once texel._engine_module stops importing it without numpy.
-HOST_ONLY = ("gen/plan_numpy.py",)
+# gen/engine_ulab.py). gen/engine_numpy.py, the numpy engine, likewise:
+# texel._engine_module imports it only where numpy is.
+HOST_ONLY = ("gen/plan_numpy.py", "gen/engine_numpy.py")
 
 # Where things go on the board.
 LIB = "/lib"
