@@ -64,7 +64,7 @@ a NaN parameter):
 - should scipy's optimiser ever return a non-finite value, the moment
   estimates above are used instead (counted in the result's "fallbacks").
 
-Speed (measured by texelpad.bench.brush_fit; this machine, one core): ~5 ms
+Speed (measured by bench/brush_fit.py; this machine, one core): ~5 ms
 per wavenumber for the three models and their K-S, ~0.5 s for a 201-window
 swipe (9,600 samples).
 

@@ -1,6 +1,6 @@
 """The nine reference textures of the matching study (seed 000; ../shared/SPEC.md
 §2) as points of the pitch - irregularity plane: the simulated participant's
-targets (texelpad.bench.study_compare) and the marks a summary figure draws.
+targets (bench/study_compare.py) and the marks a summary figure draws.
 
 Nothing published gives these points: seed 000 quotes only the subjects' mean
 Central Pitch for six of the nine (2sin ~4.8 dB, 3sin ~6.0 dB, 4sin ~7.8 dB,
