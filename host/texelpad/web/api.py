@@ -6,7 +6,7 @@ turns errors into answers (400 refused, 503 the board is gone). Route modules
 (web/server.py, web/strip.py, web/editor.py) build on this; nothing here
 knows a protocol.
 
-The order inside one request (issue 24, item 3): the body is read first, on
+The order inside one request (docs/lab.md): the body is read first, on
 the event loop and without any lock - refused by its Content-Length before a
 byte of it is read when it is over BODY_MAX, cut off at BODY_MAX when it comes
 without one, and given BODY_SECONDS to arrive (408 after that: a client that

@@ -1,4 +1,4 @@
-"""The scene editor (issue 12, item 6: "Painting in the browser"): paint
+"""The scene editor (docs/brush.md, "Painting in the browser"): paint
 textures onto spans of the display strip - a brush (a brush file, or a
 designed spectral shape), texel parameters, a reference texture, a constant -
 and play the result on the board at once.
@@ -62,7 +62,7 @@ replace a study's scene playing for a participant. While a study session's
 question plays, a push is refused (409, web/server.py Lab.claim_board)
 whatever its base.
 
-The painted scene is validated once on the host (issue 23 item 2):
+The painted scene is validated once on the host (link/board.py, check_scene):
 Editor.paint (the request alone: no HTTP, no board) reads the regions,
 resolves the overlaps and checks the scene of the pieces with
 texelpad.link.board.check_scene; that CheckedScene goes through the owner

@@ -140,7 +140,7 @@ class BoardOwner:
                 self._board.close()
                 self._board = None
 
-    # --- see and hear (web/strip.py, issue 11 point 5) ---------------------------------
+    # --- see and hear (web/strip.py; docs/lab.md) ---------------------------------------
     # Whether the board is the virtual one, held per connection: (the Board
     # it was asked of, the answer). A board's kind cannot change while the
     # owner holds its port; a lost board is a new Board object, asked again.

@@ -26,7 +26,7 @@ as texelpad.study.session.check_name; the board's own scene validation is the
 last word) and a refused one changes nothing: 400 with the reason, 503 when
 the board is gone.
 
-One click, one answer (issue 24, item 1): every question a session asks has
+One click, one answer (docs/lab.md): every question a session asks has
 a number, question.number - the answers given before it - and an answer
 names the question it answers ({"question": n}). One for a question already
 answered (a double-click, a page that sent twice) or not yet asked is

@@ -1,4 +1,4 @@
-"""See and hear the playing scene (issue 11, point 5): the display strip and
+"""See and hear the playing scene (docs/lab.md): the display strip and
 the virtual board's finger, for classrooms and anyone without a glass plate.
 
     GET  /api/strip          the amplitude the board plays at every display
