@@ -18,5 +18,6 @@ done
 # the lint and the types first (pyproject.toml: [tool.ruff], [tool.mypy]); each takes
 # seconds, and a red one stops here with what it found
 .venv/bin/python -m ruff check --quiet host device tools tests bench
-.venv/bin/python -m mypy --no-error-summary
+.venv/bin/python -m mypy --no-error-summary               # host/texelpad ([tool.mypy] files)
+.venv/bin/python -m mypy --no-error-summary bench         # the research benchmarks, on their own
 exec .venv/bin/python -m pytest -q ${args[@]+"${args[@]}"}

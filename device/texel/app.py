@@ -284,7 +284,7 @@ def push(scene):
         raise ValueError("scene does not fit in memory (%d bytes free); the current scene keeps playing"
                          % (compat.heap_free() or 0))
     # _install collected already: a second collection here cost ~20 ms of the reply on an
-    # RP2040 (texelpad.bench.firmware)
+    # RP2040 (bench/firmware.py)
     return status(collect=False)
 
 
@@ -420,7 +420,7 @@ def staged(func, text, fill=(), args=(), scene_at=0, kwargs=None):
     func(*args with the scene at scene_at, **kwargs). Returns ('ok', its
     value) or ('err', the ValueError's text). One statement for the board to
     compile instead of eight: 7-11 ms less per push on an RP2040
-    (texelpad.bench.firmware)."""
+    (bench/firmware.py)."""
     if func not in STAGED:
         return ("err", "staged: %r is not one of %s" % (func, STAGED))
     try:

@@ -190,7 +190,7 @@ def test_a_brush_from_a_file_and_from_a_design_is_what_the_board_paints(lab):
     assert lab.post("/api/finger", json={"position_mm": None}).status_code == 200
     # the strip renders only what an edit made or trimmed: a constant painted
     # over the last brush's end is two regions rendered, not four
-    renders = lab.lab.editor_renders
+    renders = lab.lab.editor.renders
     n0 = renders.renders
     b = paint(lab, [{k: x[k] for k in ("start_mm", "end_mm", "texture")} for x in a["regions"]]
               + [region(95.0, 101.76, {"kind": "constant", "level": 0.2})])
@@ -279,7 +279,7 @@ def test_remove_clear_undo_and_a_scene_loaded_from_the_board(lab):
     assert played[0]["texture"]["u16"] == [int(v * 65535 + 0.5) for v in values]
     assert played[2]["texture"]["seed"] == 77
     # a server that forgot what it held says so
-    lab.lab.editor_memory.kept.clear()
+    lab.lab.editor.memory.kept.clear()
     pushes = owner.status()["pushes"]
     r = lab.post("/api/editor/scene", json={"regions": [bare(x) for x in kept["regions"]]})
     assert r.status_code == 400 and "not held any more" in r.json()["error"], r.text

@@ -2,7 +2,7 @@
 # falls back to its Python loop where this module does not load: no native
 # emitter, CircuitPython). Integers only, the same arithmetic as the Python
 # loop, value for value: a stretched full-screen map took 646 ms in Python
-# on an RP2040 (texelpad.bench.firmware, the shipped gradient scene).
+# on an RP2040 (bench/firmware.py, the shipped gradient scene).
 # buf: array('H') of n; vals: array('H') of m values.
 import micropython
 from array import array

@@ -125,6 +125,9 @@ class Lab:
         self.board_session: str | None = None   # the session whose question plays
         # the editor's brush files (web/editor.py): texelpad lab --brushes, else DATA/brushes
         self.brushes: str | Path | None = None
+        # what the strip and the editor hold between requests, made with their routes
+        self.strip_cache: Any = None        # web/strip.py StripCache
+        self.editor: Any = None             # web/editor.py Editor
 
     def close(self) -> None:
         self.data_lock.release()

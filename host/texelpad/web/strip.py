@@ -226,8 +226,7 @@ def check_texel(body: Any) -> dict[str, Any]:
 
 
 def routes(lab: Any) -> list:
-    cache = StripCache()
-    lab.strip_cache = cache             # (the tests look at it)
+    cache = lab.strip_cache = StripCache()
 
     def strip(request: Request) -> dict[str, Any]:
         if request.query_params:
