@@ -20,8 +20,8 @@ import math
 from array import array
 from . import params as _params
 from .plan import Plan, UNITS_PER_TURN, PHASE_MASK, _TWO_PI, _DX, _check_draws, _frac_u28
-from .plan_int import PlanInt, exp2_q24, _round_q, LOG2_LOG2_10, LOG2_STEP0, LN2_Q20, \
-    Y_LO, Y_HI, NYQ_EXP, MASK28, EXP_HI, EXP_MID, NORM, table
+from .plan_int import PlanInt, exp2_q24, _round_q, LOG2_LOG2_10, LOG2_STEP0, \
+    Y_LO, Y_HI, NYQ_EXP, MASK28, NORM, table, mul28, exp2_m
 from .grid import mdb
 from .rng import WARMUP, SEED_CONSTS, uniform_of, phase_fraction_u28, \
     _A, _B, _C, _D, _E, _F, _INV_ODD, _LN2, _SQRT_HALF
@@ -216,21 +216,10 @@ def _tab():
     return _tab64
 
 
-def _mul28(a, b):
-    """plan_int.mul28, elementwise (the same limbs, the same rounding)."""
-    a1 = a >> 15
-    a0 = a & 0x7FFF
-    b1 = b >> 15
-    b0 = b & 0x7FFF
-    t = a1 * b0 + a0 * b1 + ((a0 * b0) >> 15) + 4096
-    return ((a1 * b1) << 2) + (t >> 13)
-
-
-def _exp2_m(r, tab):
-    """plan_int.exp2_m, elementwise."""
-    lo = r & 0xFF
-    return _mul28(_mul28(tab[EXP_HI + (r >> 16)], tab[EXP_MID + ((r >> 8) & 0xFF)]),
-                  (1 << 28) + ((lo * LN2_Q20 + 32768) >> 16))
+# plan_int's mul28 and exp2_m use only >>, &, *, + and table lookups: on int64
+# arrays (and a table as an int64 array) they are the same limbs, the same rounding
+_mul28 = mul28
+_exp2_m = exp2_m
 
 
 def norm_q24(x, tab):
