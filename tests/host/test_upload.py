@@ -66,9 +66,8 @@ def test_full_size_u16_upload_in_pieces_refresh_within_budget(board):
     """19,200 u16 values (the documented maximum; 9,000 overflowed the board's
     bytecode emitter as a literal): uploaded in pieces no larger than ~6 KB of
     code each, with progress, while the stepped board runs 2 ms of refreshes
-    between pieces - none of which overran its 120 us period (the budget:
-    the refresh costs ~5 us on the unix port, so the margin is ~20x) - then
-    played exactly and read back exactly."""
+    between pieces (the refreshes go on: counted; their cost is bench-refresh's
+    to measure, not a test's) - then played exactly and read back exactly."""
     u16 = _noise(N)
     seen: list[tuple[int, int]] = []
 
@@ -88,8 +87,10 @@ def test_full_size_u16_upload_in_pieces_refresh_within_budget(board):
     assert max(board.sent_code) < 8000, max(board.sent_code)
     st = board.status()
     assert st["refreshes"] >= st0["refreshes"] + 16 * len(seen)    # 2 ms x 8,333 Hz per piece
-    assert st["worst_us"] <= 1000000 // st["refresh_hz"], st["worst_us"]
-    assert st["overruns"] == 0 and st["faults"] == 0
+    # worst_us and overruns time each refresh body on the host's real clock: a preempted
+    # process reads 1.8 ms (a CI run did) however fast the body is. Tests never fail on a
+    # timing (docs/architecture.md); `texelpad bench-refresh` measures the refresh's cost
+    assert st["faults"] == 0
     src = board.scene_source()
     assert src["regions"][0]["texture"]["u16"] == u16
     # the played map is the upload, sample for sample (the virtual board's amp at a few positions)
