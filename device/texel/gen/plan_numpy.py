@@ -24,7 +24,8 @@ from .plan_int import PlanInt, exp2_q24, _round_q, LOG2_LOG2_10, LOG2_STEP0, \
     Y_LO, Y_HI, NYQ_EXP, MASK28, NORM, table, mul28, exp2_m
 from .grid import mdb
 from .rng import WARMUP, SEED_CONSTS, uniform_of, phase_fraction_u28, \
-    _A, _B, _C, _D, _E, _F, _INV_ODD, _LN2, _SQRT_HALF
+    _A, _B, _C, _D, _E, _F, _INV_ODD, _LN2, _SQRT_HALF, \
+    _ratio                          # only * + /: the same Horner steps on arrays
 from ..compat import numpy_mod as np
 
 AVAILABLE = np is not None
@@ -72,15 +73,6 @@ def outputs(seed, count):
 
 
 # --- format 1 -----------------------------------------------------------------
-
-def _ratio(num, den, r):
-    n = num[7]
-    d = den[7]
-    for i in range(6, -1, -1):
-        n = n * r + num[i]
-        d = d * r + den[i]
-    return n / d
-
 
 def _det_log(x):
     """rng.det_log of every element (x > 0)."""
