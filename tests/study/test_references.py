@@ -133,3 +133,41 @@ def test_benchmark_run_on_a_tiny_setting(feel):
     table = SC.format_table(res)
     assert "2sin" in table and "pursuit (20 answers)" in table and "search (8 answers)" in table
     json.dumps(res, allow_nan=False)          # --json writes it as it stands
+
+
+def test_benchmark_at_equal_textures_felt():
+    """Issue 20: the two read at equal effort - 15 textures (5 picks of 3; the
+    pursuit's 7 comparisons of 2) and 40 (its 20; 13 picks = 39)."""
+    res = SC.run(references=("2sin",), seeds=2, noise_db=(1.0,), max_answers=14, feel="plane")
+    cfg = res["config"]
+    assert cfg["picks"] == 5 and cfg["budgets_textures"] == [15, 40]
+    assert cfg["textures_per_answer"] == {"pursuit": 2, "search": 3}
+    runs = [r for r in res["results"] if r["method"] == "pursuit"]
+    for r in runs:
+        c, p = r["curve_db"], r["partial_db"]
+        # after a trial's 4th answer "so far" is the centre; inside a trial it has moved
+        assert len(p) == len(c) == 21 and all(p[k] == c[k] for k in range(0, 21, 4))
+        assert any(p[k] != c[k] for k in range(21) if k % 4)
+    row = res["summary"][0]
+    e15, e40 = row["effort"]
+    assert (e15["textures"], e40["textures"]) == (15, 40)
+    assert (e15["search"]["answers"], e15["search"]["textures"]) == (5, 15)
+    assert (e15["pursuit"]["answers"], e15["pursuit"]["textures"]) == (7, 14)
+    assert (e40["pursuit"]["answers"], e40["search"]["answers"], e40["search"]["textures"]) \
+        == (20, 13, 39)
+    search = [r for r in res["results"] if r["method"] == "search"]
+    assert e15["search"]["median"] == pytest.approx(np.median([r["curve_db"][5] for r in search]))
+    assert e15["pursuit"]["median"] == pytest.approx(np.median([r["curve_db"][7] for r in runs]))
+    assert e15["pursuit"]["so_far"]["median"] == pytest.approx(
+        np.median([r["partial_db"][7] for r in runs]))
+    for e in (e15["search"], e15["pursuit"], e40["pursuit"], e40["search"]):
+        assert e["q1"] <= e["median"] <= e["q3"] and 0.0 <= e["within"] <= 1.0
+    table = SC.format_effort(res)
+    for head in ("search 5 picks", "pursuit 7: centre", "pursuit 7: so far", "search 13 picks"):
+        assert head in table
+    # a search shorter than the budget is not read there: "-", no number made up
+    short = SC.run(references=("2sin",), seeds=1, noise_db=(0.0,), max_answers=8, feel="plane")
+    assert short["summary"][0]["effort"][1]["search"]["median"] is None
+    json.dumps(short, allow_nan=False)
+    with pytest.raises(ValueError, match="picks"):
+        SC.run(references=("2sin",), seeds=1, noise_db=(0.0,), max_answers=4, picks=5)
