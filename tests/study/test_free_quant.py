@@ -14,8 +14,8 @@ from texelpad.study.participant import SimulatedParticipant
 from texelpad.study.space import Point
 
 DISPLAY = {"positions": 19200, "dx_um": 5.3}
-GIVEN = {"matches": {r: {"pitch_db": 6.0, "irregularity_db": -12.0}
-                     for r in ("4sin", "pink", "sawtooth")}}
+GIVEN = {"design": "levels", "matches": {r: {"pitch_db": 6.0, "irregularity_db": -12.0}
+                                         for r in ("4sin", "pink", "sawtooth")}}
 
 
 def test_free_exploration_runs_the_nine_in_a_seeded_recorded_order():
@@ -36,7 +36,7 @@ def test_free_sliders_redraw_on_every_change_and_clamp_at_nyquist():
     t0, t1 = st.texture(3.0, -10.0, 0), st.texture(3.0, -10.0, 1)
     assert t0["seed"] != t1["seed"] and t0 == st.texture(3.0, -10.0, 0)      # replayable
     assert st.texture(20.0, -10.0, 0)["pitch_db"] == PITCH_DB_MAX
-    assert t0["texel_samples"] == 47 and t0["v"] == 2          # 0.25 mm, format 2
+    assert t0["texel_samples"] == 50 and t0["v"] == 2          # the lab's app's 50, format 2
     scene, kept = questions.slider_scene(st, {"config": {}}, DISPLAY, 3.00049, -10, 0)
     assert kept == (3.0, -10.0)
     assert scene["regions"][0]["texture"] == {"kind": "reference", "name": st.reference}
@@ -77,12 +77,15 @@ def test_quantization_test_rates_every_reference_at_every_level_once():
 
 
 @pytest.mark.parametrize("config, fragment", [
-    ({}, "matches"),
-    ({"matches": {"4sin": {"pitch_db": 6.0, "irregularity_db": -12.0}}}, "no {pitch_db"),
+    ({"design": "levels", "matches": {}}, "no match of"),
+    ({"design": "levels", "matches": {"4sin": {"pitch_db": 6.0, "irregularity_db": -12.0}}},
+     "no match of"),
+    ({"design": "levels", "matches": {r: {"pitch_db": 6.0} for r in ("4sin", "pink", "sawtooth")}},
+     "needs {pitch_db"),
     (dict(GIVEN, levels_db=[0, 0.0001]), "levels_db"),
     (dict(GIVEN, references=["4sin", "nope"]), "references"),
-    ({"matches": {r: {"pitch_db": 25.0, "irregularity_db": -12.0}
-                  for r in ("4sin", "pink", "sawtooth")}}, "pitch_db of"),
+    ({"design": "levels", "matches": {r: {"pitch_db": 25.0, "irregularity_db": -12.0}
+                                      for r in ("4sin", "pink", "sawtooth")}}, "pitch_db of"),
 ])
 def test_a_bad_quantization_config_says_why(config, fragment):
     with pytest.raises((ValueError, TypeError), match=fragment):
@@ -109,7 +112,9 @@ def test_the_participants_questions_hold_no_parameter_values():
                           ("quant", GIVEN), ("free", {})):
         st = protocols.start(proto, config, 1)
         q = questions.ask(proto, st, dict(header, config=config), DISPLAY)
-        text = json.dumps(q.public)
+        # the options' labels are fixed words (pursuit: "reference", "A", "B")
+        assert set(q.public["options"]) <= {"reference", "A", "B", "1", "2", "3", "rendering"}
+        text = json.dumps(dict(q.public, options=None))
         if proto == "free":             # the sliders' ranges only, never a value shown
             text = json.dumps(dict(q.public, sliders=None, start=None))
         for word in ("pitch_db", "irregularity", "texel_samples", "length_mm", '"odd"',

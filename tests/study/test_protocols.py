@@ -14,6 +14,7 @@ from texelpad.search.preference import PreferenceSearch, candidate_params
 from texelpad.study import protocols
 from texelpad.study.participant import SimulatedParticipant
 from texelpad.study.pursuit import STEP, Pursuit
+from texelpad.study.quant import NINE
 from texelpad.study.session import Session, SessionError, check_name
 from texelpad.study.space import Point, irregularity_db, pitch_db, texel_params, to_point
 from texelpad.study.staircase import Staircase
@@ -201,8 +202,10 @@ def _run_pursuit(sess: Session, state: Pursuit, sim: SimulatedParticipant, stop_
         k += 1
 
 
-GIVEN = {"matches": {r: {"pitch_db": 6.0, "irregularity_db": -12.0}
-                     for r in ("4sin", "pink", "sawtooth")}}
+# the paper's 27 (study/quant.py): the participant's own matches of the nine, as
+# a free exploration's felt textures give them (seed, texel length, format)
+GIVEN = {"matches": {r: {"pitch_db": 6.0, "irregularity_db": -12.0, "seed": 11 + k,
+                         "texel_samples": 50, "v": 2} for k, r in enumerate(NINE)}}
 CONFIGS = {"free": {}, "quant": GIVEN, "pursuit": {}, "staircase": {},
            "search": {"dims": ["pitch", "irregularity"]}}
 
@@ -273,7 +276,7 @@ def test_export_writes_tidy_csv_and_a_figure_per_session(tmp_path, capsys):
     data = tmp_path / "data"
     sim = SimulatedParticipant(Point(0.3, 0.7), seed=1)
     for proto, n in (("pursuit", 20), ("staircase", 12), ("search", 6), ("free", 9),
-                     ("quant", 12)):
+                     ("quant", 27)):
         config = GIVEN if proto == "quant" else {}
         s = Session.create(data, proto, "p01", config, 5)
         st = protocols.start(proto, config, 5)
@@ -285,9 +288,9 @@ def test_export_writes_tidy_csv_and_a_figure_per_session(tmp_path, capsys):
                                                          "irregularity_db": -3.0}}]}})
     out = tmp_path / "out"
     assert cli.main(["lab", "export", "--data", str(data), "--out", str(out)]) == 0
-    assert "(59 answers) and 5 figures" in capsys.readouterr().out
+    assert "(74 answers) and 5 figures" in capsys.readouterr().out
     rows = list(_csv.DictReader(open(out / "sessions.csv")))
-    assert len(rows) == 59 and {r["protocol"] for r in rows} == set(protocols.PROTOCOLS)
+    assert len(rows) == 74 and {r["protocol"] for r in rows} == set(protocols.PROTOCOLS)
     assert rows[0]["played_pitch_db"] == "1.0"
     by = {}
     for r in rows:

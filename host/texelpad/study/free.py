@@ -7,16 +7,21 @@ fresh texture seed per change, drawn from the session's seed, so a session
 replays exactly) and is pushed to the board. When satisfied the participant
 rates their confidence 1..5 and submits: that is the trial's answer.
 
-Choices the paper leaves open, recorded in Config (and so in every session
-file's header):
-- the pitch slider spans -10 .. 20 dB (SPEC §5); the display ends at Nyquist
-  (19.747 dB, texel.gen.params.PITCH_DB_MAX), so a setting above it plays at
+The sliders are the lab's app's (free_exploration_and_quantization_test_app,
+NU-Haptics-Lab/SinglePitchTexel): pitch linear in log10 P over [-1, 2]
+(-10 .. 20 dB), starting at 0.5 (5 dB); irregularity LINEAR IN SIGMA over
+0 .. 1 decade, starting at 0.5 decade (-3.010 dB). Choices recorded in Config
+(and so in every session file's header):
+- `irregularity_slider`: "sigma" (the app's, the default) or "db" (linear in
+  dB over `irregularity_db`, the design before the app was read);
+- the pitch slider's top, 20 dB, is above the display's Nyquist pitch
+  (19.747 dB, texel.gen.params.PITCH_DB_MAX): a setting above it plays at
   Nyquist; the session records both the slider's value and the texture played;
-- the irregularity slider spans sigma = 0.001 .. 1 decade, -30 .. 0 dB (SPEC
-  §5: "sigma 0 .. 1 decade"; 0.001 decade is the generator's least,
-  texel.gen.params.IRREG_DB_MIN);
-- both sliders start in the middle of their range (5 dB, -15 dB);
-- texel length 0.25 mm (seed 000) = 47 display samples of 5.3 um (0.249 mm);
+- sigma = 0 (the app's slider end) plays the generator's least irregularity,
+  0.001 decade (-30 dB, texel.gen.params.IRREG_DB_MIN): the page sends
+  10*log10(max(sigma, 0.001)) dB;
+- texel length 50 samples (0.265 mm), the app's `texelLength` (and the
+  rater's renderings', study/rater.py); the paper's text says 0.25 mm (47);
 - values are kept to 0.001 dB, the format-2 grid (texel.gen.grid), so the
   texture is the same on every board.
 
@@ -29,21 +34,38 @@ import random
 from dataclasses import dataclass, field
 from typing import Any
 
-from texel.gen.params import FORMAT_NEW, PITCH_DB_MAX
+from texel.gen.params import FORMAT_NEW, IRREG_DB_MAX, IRREG_DB_MIN, PITCH_DB_MAX
 from texel.gen.reference import STUDY_NAMES as NINE     # the nine, in the golden data's order
+
+
+SIGMA_START = round(10.0 * math.log10(0.5), 3)      # the app's 0.5 decade: -3.010 dB
 
 
 @dataclass(frozen=True)
 class Config:
     references: tuple[str, ...] = NINE
     pitch_db: tuple[float, float] = (-10.0, 20.0)
-    irregularity_db: tuple[float, float] = (-30.0, 0.0)
-    start: tuple[float, float] = (5.0, -15.0)
-    texel_samples: int = 47
+    irregularity_db: tuple[float, float] = (IRREG_DB_MIN, 0.0)   # with "sigma": from sigma
+    irregularity_slider: str = "sigma"
+    sigma: tuple[float, float] = (0.0, 1.0)     # decades, the "sigma" slider's ends
+    start: tuple[float, float] = (5.0, SIGMA_START)
+    texel_samples: int = 50
     confidence: tuple[int, int] = (1, 5)
 
     def __post_init__(self) -> None:
         check_references(self.references)
+        if self.irregularity_slider not in ("sigma", "db"):
+            raise ValueError("irregularity_slider: expected 'sigma' (linear in sigma, the lab's "
+                             "app) or 'db', got %r" % (self.irregularity_slider,))
+        lo, hi = self.sigma
+        if not 0.0 <= lo < hi <= 10.0 ** (IRREG_DB_MAX / 10.0):
+            raise ValueError("sigma: expected [low, high] decades within 0 .. %.3g, got %r"
+                             % (10.0 ** (IRREG_DB_MAX / 10.0), self.sigma))
+        if self.irregularity_slider == "sigma":     # the dB range the sigma slider spans
+            derived = (IRREG_DB_MIN, round(10.0 * math.log10(hi), 3))
+            if tuple(self.irregularity_db) != derived:
+                raise ValueError("irregularity_db: with the sigma slider it is %r (from sigma "
+                                 "%r), got %r" % (derived, self.sigma, self.irregularity_db))
         for name in ("pitch_db", "irregularity_db"):
             lo, hi = getattr(self, name)
             if not lo < hi:
@@ -51,6 +73,16 @@ class Config:
         if not (self.pitch_db[0] <= self.start[0] <= self.pitch_db[1]
                 and self.irregularity_db[0] <= self.start[1] <= self.irregularity_db[1]):
             raise ValueError("start: %r is outside the sliders' ranges" % (self.start,))
+
+    def sliders(self) -> dict[str, Any]:
+        """What the participant's page needs to draw the sliders (no texture
+        parameter: the slider's ends and how it maps)."""
+        out: dict[str, Any] = {"pitch_db": list(self.pitch_db),
+                               "irregularity_db": list(self.irregularity_db),
+                               "irregularity_scale": self.irregularity_slider}
+        if self.irregularity_slider == "sigma":
+            out["sigma"] = list(self.sigma)
+        return out
 
 
 def check_references(refs: tuple[str, ...]) -> None:

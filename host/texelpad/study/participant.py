@@ -151,13 +151,22 @@ class SimulatedParticipant:
         if self.feel == "felt":
             from ..analysis.perception import JND_DB
             t = state.texture()
-            d = _texture_point(float(t["pitch_db"]), float(t["irregularity_db"]),
-                               float(t["quant_db"]), int(t["texel_samples"])
-                               ).distance(_reference_point(ref))
+            if t.get("kind") == "samples":      # the rater's logged sequence (study/rater.py)
+                import numpy as np
+                from ..analysis import perception
+                felt = perception.felt_point(np.asarray(t["u16"], dtype=float) / 65535.0)
+            else:
+                felt = _texture_point(float(t["pitch_db"]), float(t["irregularity_db"]),
+                                      float(t["quant_db"]), int(t["texel_samples"]))
+            d = felt.distance(_reference_point(ref))
             r = hi - d / JND_DB
         else:
             from .references import position
-            m = state.config.matches[state.current_match]
+            if getattr(state, "current_source", "own") == "rater":
+                from .rater import match
+                m = match(state.current_match)
+            else:
+                m = state.config.matches[state.current_match]
             p, s = position(ref)
             r = 5.0 - math.hypot(m["pitch_db"] - p, m["irregularity_db"] - s) / 4.0 - q / 2.0
         if self.noise:

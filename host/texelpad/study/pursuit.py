@@ -14,10 +14,23 @@ the point in direction d_k, -1 for its opposite, 0 for "unsure". Then
 
 and the exploration stops when edge < 0.15: 5 trials, 20 comparisons.
 
+What plays (seed 000: the subject "is able to freely select the current
+reference texture and two comparison textures using buttons on the GUI,
+causing the TPaD to present the selected texture"; the lab's
+guided_exploration_test_app renders A and B afresh for every comparison, each
+on the whole display): `presentation` "whole" (the default) plays the
+reference, A or B, one at a time on the whole display; "split" plays the
+reference on the left half and A or B on the right (the design before the
+app was read). `fresh` (default true): each comparison draws new texture
+seeds for A and B from the session's seed (feeling A again within a
+comparison replays the same rendering, as the app's); false keeps one seed.
+
 Choices the paper leaves open, recorded in every state (Config): the
 diagonals are unit vectors (1/sqrt 2, 1/sqrt 2); the centre stays in the unit
 square (clamped after each step); the order and the A/B sides come from the
-session's seeded random generator, so a session replays exactly.
+session's seeded random generator, so a session replays exactly; a
+reference's row (9,600 samples) on the whole display continues mirrored
+(texel.gen.reference), where the app played the row twice.
 """
 from __future__ import annotations
 
@@ -43,6 +56,22 @@ class Config:
     radius_per_edge: float = 0.25
     step: float = STEP
     clamp_centre: bool = True
+    presentation: str = "whole"     # "whole": one texture at a time; "split": reference | option
+    fresh: bool = True              # new texture seeds for every comparison
+
+    def __post_init__(self) -> None:
+        if self.presentation not in ("whole", "split"):
+            raise ValueError("presentation: expected 'whole' (one texture at a time on the "
+                             "whole display, the lab's) or 'split', got %r" % (self.presentation,))
+        if not isinstance(self.fresh, bool):
+            raise ValueError("fresh: expected true or false, got %r" % (self.fresh,))
+
+    def seeds(self, session_seed: int, trial: int, index: int) -> tuple[int, int]:
+        """The texture seeds of A and B in comparison (trial, index)."""
+        if not self.fresh:
+            return 7, 7
+        rng = random.Random((session_seed * 1000003 + trial) * 1000003 + index)
+        return rng.randrange(1 << 32), rng.randrange(1 << 32)
 
 
 @dataclass(frozen=True)

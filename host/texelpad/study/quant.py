@@ -1,24 +1,44 @@
 """The quantization test (seed 000, "Quantization test"; ../shared/SPEC.md §5):
 the participant rates the similarity 1..5 of a reference texture (left half)
-and its texel rendering (right half) quantized at q = 0 (off), 1, 3 and 5 dB.
-The rendering is the participant's own free-exploration match of that
-reference, or a given match (a trained rater's): the config holds the matches
-either way, so the session file says exactly what was rendered.
+and a texel rendering (right half).
 
-Choices the paper leaves open, recorded in Config: the references are the
-three family exemplars (4sin, pink, sawtooth; seed 000 "Family Exemplars"),
-each level once per reference (`repeats`), all trials in one order drawn from
-the session's seed; the texture seed is the same for a reference's four levels
-(only the quantization differs) and is drawn from the session's seed; texel
-length 0.25 mm (47 samples) as in the free exploration.
+Design "paper" (the default): the 27 trials of seed 000 and of the lab's app
+(free_exploration_and_quantization_test_app, NU-Haptics-Lab/SinglePitchTexel):
+- each of the nine references beside the participant's OWN free-exploration
+  match (9) and beside the TRAINED RATER's match (9), unquantized;
+- the three family exemplars at 1, 3 and 5 dB of quantization (9).
+Every rendering is the very pitch sequence that was felt:
+- the participant's own match is the texture that played when they submitted
+  it in their free exploration (its parameters and seed: the session's
+  matches_from takes them from that session's answer records), with quant_db
+  added for a quantized trial (the same draws, each texel's log10 pitch
+  rounded: texel.gen.plan);
+- the rater's is the logged sequence (study/rater.py: 192 texels of 50
+  samples), quantized the same way and played as display samples.
 
-The same protocol rates seed 000's similarity matrix (after the guided
-exploration: "Then rate 3x3 similarity", SPEC §5; seed 000 Fig. 14c):
-design "matrix" pairs every reference with every reference's match (3 x 3
-trials at q = levels_db[0], normally 0), so a rendering is rated against the
-texture it was tuned to and against the others.
+Choices recorded in Config (and so in every session file's header):
+- `quantized_source`: whose match the 9 quantized trials quantize. The app's
+  compareOrder quantizes the rater's rendering in all nine ("rater", the
+  default: what ran); Fig. 15's caption speaks of the subjects' own matches
+  ("own" plays that reading).
+- `order`: "seeded" (default: the 27 in an order drawn from the session's
+  seed) or "lab" (the app's fixed compareOrder, the same for every subject,
+  LAB_ORDER). The app's order names reference rows 2, 5, 9 of its data for
+  the quantized trials: 3sin, pink and sawtooth in the published row order,
+  where the paper says the exemplars are 4sin, pink and sawtooth; "lab"
+  plays the app's rows as they are, "seeded" the paper's exemplars.
+- the rater's rendering starts at a phase drawn from the session's seed (the
+  app's buildFine5 draws rand()); own matches given without a seed (a match
+  from a guided exploration or a search) take one drawn from the session's
+  seed, the same for every trial of that match.
+- texel length of a match given without one: 50 samples (the app's).
 
-Answers: the similarity rating, an int 1..5. Pure logic.
+Designs kept from before the paper's was built: "levels" (the exemplars'
+own matches at each of levels_db, 12 trials) and "matrix" (seed 000's 3 x 3
+similarity ratings after the guided exploration: every reference against
+every reference's match, at q = levels_db[0]).
+
+Answers: the similarity rating, an int on `scale` (1..5). Pure logic.
 """
 from __future__ import annotations
 
@@ -27,49 +47,141 @@ import random
 from dataclasses import dataclass, field
 from typing import Any
 
+from texel.gen.params import FORMAT_NEW, IRREG_DB_MAX, IRREG_DB_MIN, PITCH_DB_MAX, \
+    PITCH_DB_MIN, QUANT_DB_MAX, SEED_MAX, TEXEL_MAX
+from texel.gen.reference import STUDY_NAMES as NINE
+
+from . import rater
 from .free import check_references
-from texel.gen.params import FORMAT_NEW, IRREG_DB_MAX, IRREG_DB_MIN, PITCH_DB_MAX, PITCH_DB_MIN, \
-    QUANT_DB_MAX
 
 EXEMPLARS = ("4sin", "pink", "sawtooth")
+DESIGNS = ("paper", "levels", "matrix")
+SOURCES = ("own", "rater")
+# The app's compareOrder: [source (0 own, 1 rater), reference row (1-based, the
+# published row order: texel.gen.reference.STUDY_NAMES), quantization (decades)].
+_APP_COMPARE_ORDER = (
+    (0, 3, 0), (0, 1, 0), (1, 5, .1), (1, 9, 0), (1, 2, .1), (1, 9, .5), (0, 9, 0), (1, 7, 0),
+    (1, 2, 0), (1, 4, 0), (1, 9, .1), (1, 5, .5), (1, 6, 0), (0, 6, 0), (1, 5, .3), (1, 5, 0),
+    (1, 8, 0), (0, 8, 0), (0, 7, 0), (0, 4, 0), (0, 2, 0), (1, 1, 0), (1, 2, .3), (1, 9, .3),
+    (0, 5, 0), (1, 3, 0), (1, 2, .5))
+# (reference, source, quant_db) per trial, in the app's order
+LAB_ORDER = tuple((NINE[row - 1], SOURCES[src], round(q * 10.0, 3))
+                  for src, row, q in _APP_COMPARE_ORDER)
+LAB_EXEMPLARS = ("3sin", "pink", "sawtooth")    # the app's quantized rows (docstring)
+MATCH_KEYS = {"pitch_db", "irregularity_db"}
+MATCH_OPTIONAL = {"seed", "texel_samples", "v"}
+
+
+def _check_number(what: str, v: Any, lo: float, hi: float) -> None:
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
+            or not lo <= v <= hi:
+        raise ValueError("%s must be in %g .. %g, got %r" % (what, lo, hi, v))
+
+
+def check_match(r: str, m: Any) -> None:
+    """A match: {pitch_db, irregularity_db} and, when it is the texture felt,
+    its seed, texel_samples and format v."""
+    if not isinstance(m, dict) or not MATCH_KEYS <= set(m) or set(m) - MATCH_KEYS - MATCH_OPTIONAL:
+        raise ValueError("matches: %r needs {pitch_db, irregularity_db} (and optionally seed, "
+                         "texel_samples), got %r" % (r, m))
+    _check_number("matches: pitch_db of %r" % r, m["pitch_db"], PITCH_DB_MIN, PITCH_DB_MAX)
+    _check_number("matches: irregularity_db of %r" % r, m["irregularity_db"], IRREG_DB_MIN,
+                  IRREG_DB_MAX)
+    if "v" in m and (type(m["v"]) is not int or m["v"] not in (1, 2)):
+        raise ValueError("matches: v of %r must be 1 or 2 (the texture format felt), got %r"
+                         % (r, m["v"]))
+    for k, hi in (("seed", SEED_MAX), ("texel_samples", TEXEL_MAX)):
+        if k in m and (isinstance(m[k], bool) or not isinstance(m[k], int)
+                       or not (k == "seed" or m[k] >= 1) or not 0 <= m[k] <= hi):
+            raise ValueError("matches: %s of %r must be an int in %d .. %d, got %r"
+                             % (k, r, 0 if k == "seed" else 1, hi, m[k]))
 
 
 @dataclass(frozen=True)
 class Config:
-    matches: dict[str, dict[str, float]]
-    references: tuple[str, ...] = EXEMPLARS
-    levels_db: tuple[float, ...] = (0.0, 1.0, 3.0, 5.0)
+    matches: dict[str, dict[str, Any]] | None = None   # the participant's own (matches_from)
+    design: str = "paper"
+    references: tuple[str, ...] = ()        # () = the design's: paper the nine, else EXEMPLARS
+    exemplars: tuple[str, ...] = EXEMPLARS      # paper: the quantized ones
+    levels_db: tuple[float, ...] = ()       # () = paper (1, 3, 5); levels (0, 1, 3, 5); matrix (0,)
+    quantized_source: str = "rater"
+    order: str = "seeded"
     repeats: int = 1
-    texel_samples: int = 47
+    texel_samples: int = 50
     scale: tuple[int, int] = (1, 5)
-    match_source: str = "given"         # "given" or the session id the matches came from
-    design: str = "levels"              # "levels": q per reference; "matrix": 3 x 3 pairs
+    match_source: str = "given"         # "given" or the session ids the matches came from
 
     def __post_init__(self) -> None:
+        if self.design not in DESIGNS:
+            raise ValueError("design: expected one of %s, got %r" % (", ".join(DESIGNS),
+                                                                      self.design))
+        if not self.references:
+            object.__setattr__(self, "references", NINE if self.design == "paper" else EXEMPLARS)
+        if not self.levels_db:
+            object.__setattr__(self, "levels_db", {"paper": (1.0, 3.0, 5.0),
+                                                   "levels": (0.0, 1.0, 3.0, 5.0),
+                                                   "matrix": (0.0,)}[self.design])
+        self._check_lists()
+        if self.matches is not None:
+            if not isinstance(self.matches, dict):
+                raise ValueError("matches: expected {reference: {pitch_db, irregularity_db}}")
+            for r in self.references:
+                if r not in self.matches:
+                    raise ValueError("matches: no match of %r (the participant's own: start the "
+                                     "session with matches_from)" % (r,))
+                check_match(r, self.matches[r])
+        if isinstance(self.repeats, bool) or not isinstance(self.repeats, int) \
+                or not 1 <= self.repeats <= 10:
+            raise ValueError("repeats: expected 1 .. 10, got %r" % (self.repeats,))
+        if isinstance(self.texel_samples, bool) or not isinstance(self.texel_samples, int) \
+                or not 1 <= self.texel_samples <= TEXEL_MAX:
+            raise ValueError("texel_samples: expected an int 1 .. %d, got %r"
+                             % (TEXEL_MAX, self.texel_samples))
+
+    def _check_lists(self) -> None:
         check_references(self.references)
-        if not isinstance(self.matches, dict):
-            raise ValueError("matches: expected {reference: {pitch_db, irregularity_db}}")
-        for r in self.references:
-            m = self.matches.get(r)
-            if not isinstance(m, dict) or set(m) != {"pitch_db", "irregularity_db"}:
-                raise ValueError("matches: no {pitch_db, irregularity_db} for %r" % (r,))
-            for k, lo, hi in (("pitch_db", PITCH_DB_MIN, PITCH_DB_MAX),
-                              ("irregularity_db", IRREG_DB_MIN, IRREG_DB_MAX)):
-                v = m[k]
-                if isinstance(v, bool) or not isinstance(v, (int, float)) \
-                        or not math.isfinite(v) or not lo <= v <= hi:
-                    raise ValueError("matches: %s of %r must be in %g .. %g, got %r"
-                                     % (k, r, lo, hi, v))
         for q in self.levels_db:
             if isinstance(q, bool) or not isinstance(q, (int, float)) \
                     or not (q == 0 or 0.001 <= q <= QUANT_DB_MAX):
                 raise ValueError("levels_db: each 0 (off) or 0.001 .. %g dB, got %r"
                                  % (QUANT_DB_MAX, q))
-        if self.design not in ("levels", "matrix"):
-            raise ValueError("design: expected 'levels' or 'matrix', got %r" % (self.design,))
-        if isinstance(self.repeats, bool) or not isinstance(self.repeats, int) \
-                or not 1 <= self.repeats <= 10:
-            raise ValueError("repeats: expected 1 .. 10, got %r" % (self.repeats,))
+        if self.quantized_source not in SOURCES:
+            raise ValueError("quantized_source: expected 'rater' (the app's) or 'own' (Fig. "
+                             "15's caption), got %r" % (self.quantized_source,))
+        if self.order not in ("seeded", "lab"):
+            raise ValueError("order: expected 'seeded' or 'lab' (the app's fixed order), got %r"
+                             % (self.order,))
+        if self.design == "paper":
+            check_references(self.exemplars)
+            if any(e not in self.references for e in self.exemplars):
+                raise ValueError("exemplars: each must be among the references, got %r"
+                                 % (self.exemplars,))
+            if 0 in self.levels_db:
+                raise ValueError("levels_db: the paper's design quantizes at 1, 3, 5 dB (its "
+                                 "unquantized trials are the 18); 0 is not a level here")
+        if self.order == "lab" and (self.design != "paper" or tuple(self.references) != NINE
+                                    or tuple(self.exemplars) != LAB_EXEMPLARS
+                                    or tuple(self.levels_db) != (1.0, 3.0, 5.0)):
+            raise ValueError("order 'lab' plays the app's 27 trials as they were: design "
+                             "'paper', the nine references, exemplars %s, levels 1, 3, 5 dB"
+                             % ", ".join(LAB_EXEMPLARS))
+
+    def trials(self, rng: random.Random) -> list[tuple[str, str, str, float]]:
+        """(reference, whose match, source, quant_db) per trial, in order."""
+        if self.design == "paper":
+            if self.order == "lab":
+                return [(r, r, self.quantized_source if q else s, q) for r, s, q in LAB_ORDER]
+            t = [(r, r, s, 0.0) for s in SOURCES for r in self.references]
+            t += [(e, e, self.quantized_source, float(q)) for e in self.exemplars
+                  for q in self.levels_db]
+        elif self.design == "levels":
+            t = [(r, r, "own", float(q)) for r in self.references for q in self.levels_db]
+        else:
+            t = [(r, m, "own", float(self.levels_db[0])) for r in self.references
+                 for m in self.references]
+        t = t * self.repeats
+        rng.shuffle(t)
+        return t
 
 
 @dataclass
@@ -81,19 +193,23 @@ class Quant:
     def __post_init__(self) -> None:
         rng = random.Random(self.seed)
         c = self.config
-        self.texture_seeds = {r: rng.randrange(1 << 32) for r in c.references}
-        if c.design == "levels":        # (reference, the match of, q)
-            trials = [(r, r, float(q)) for r in c.references for q in c.levels_db]
-        else:
-            trials = [(r, m, float(c.levels_db[0])) for r in c.references for m in c.references]
-        trials = trials * c.repeats
-        rng.shuffle(trials)
-        self._trials = trials
+        refs = tuple(c.references) + tuple(r for r in NINE if r not in c.references)
+        # drawn in a fixed order, so adding a trial kind never moves the others' seeds
+        self.texture_seeds = {r: rng.randrange(1 << 32) for r in refs}
+        self._trials = c.trials(rng)
+        # the rater's renderings' start phases (buildFine5's rand()), one per trial
+        self._phases = [rng.randrange(1 << 24) / float(1 << 24) for _ in self._trials]
 
     @property
     def trials(self) -> list[tuple[str, float]]:
         """(reference, q) per trial, in order."""
-        return [(r, q) for r, _, q in self._trials]
+        return [(r, q) for r, _, _, q in self._trials]
+
+    @property
+    def plan(self) -> list[dict[str, Any]]:
+        """Every trial as a dict: reference, match_of, source, quant_db."""
+        return [{"reference": r, "match_of": m, "source": s, "quant_db": q}
+                for r, m, s, q in self._trials]
 
     @property
     def trial(self) -> int:
@@ -101,7 +217,7 @@ class Quant:
 
     @property
     def done(self) -> bool:
-        return self.trial >= len(self.trials)
+        return self.trial >= len(self._trials)
 
     @property
     def current(self) -> tuple[str, float]:
@@ -114,15 +230,32 @@ class Quant:
         the matrix design another's)."""
         return self._trials[self.trial][1]
 
-    def texture(self, v: int = FORMAT_NEW) -> dict[str, Any]:
-        """The current trial's rendering: the match, quantized, in format v
-        (the config's texture_format: 2 unless it says 1)."""
-        ref, match, q = self._trials[self.trial]
-        m = self.config.matches[match]
+    @property
+    def current_source(self) -> str:
+        """"own" (the participant's match) or "rater" (the trained rater's)."""
+        return self._trials[self.trial][2]
+
+    def own_texture(self, match_of: str, q: float, v: int = FORMAT_NEW) -> dict[str, Any]:
+        """The participant's match of `match_of` as the texel texture felt,
+        quantized at q."""
+        if self.config.matches is None:
+            raise ValueError("matches: this quantization test has no matches of the "
+                             "participant's own (start it with matches_from)")
+        m = self.config.matches[match_of]
         return {"pitch_db": round(float(m["pitch_db"]), 3),
                 "irregularity_db": round(float(m["irregularity_db"]), 3),
-                "quant_db": q, "texel_samples": self.config.texel_samples,
-                "seed": self.texture_seeds[match], "v": v}
+                "quant_db": q, "texel_samples": m.get("texel_samples", self.config.texel_samples),
+                "seed": m.get("seed", self.texture_seeds[match_of]), "v": m.get("v", v)}
+
+    def texture(self, v: int = FORMAT_NEW) -> dict[str, Any]:
+        """The current trial's rendering: the participant's match as a texel
+        texture of format v, or the rater's logged sequence as display
+        samples ({"kind": "samples", "fit": "tile", "u16": ...})."""
+        ref, match, source, q = self._trials[self.trial]
+        if source == "rater":
+            return {"kind": "samples", "fit": "tile",
+                    "u16": rater.rendering(match, q, self._phases[self.trial])}
+        return self.own_texture(match, q, v)
 
     def answer(self, rating: Any) -> dict[str, Any]:
         if self.done:
@@ -130,8 +263,8 @@ class Quant:
         lo, hi = self.config.scale
         if isinstance(rating, bool) or not isinstance(rating, int) or not lo <= rating <= hi:
             raise ValueError("similarity: expected %d .. %d, got %r" % (lo, hi, rating))
-        ref, match, q = self._trials[self.trial]
-        entry = {"trial": self.trial, "reference": ref, "match_of": match, "quant_db": q,
-                 "similarity": rating}
+        ref, match, source, q = self._trials[self.trial]
+        entry = {"trial": self.trial, "reference": ref, "match_of": match, "source": source,
+                 "quant_db": q, "similarity": rating}
         self.ratings.append(entry)
         return entry

@@ -21,8 +21,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..search.preference import candidate_params
+from . import rater
 from . import scenes as S
-from .space import Point, irregularity_db, pitch_db
+from .space import Point, irregularity_db, pitch_db, texel_params
 
 
 @dataclass
@@ -72,14 +73,23 @@ def _pursuit(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Questi
                                                  "trials": len(st.history)})
     ref = reference_of(header)
     v = format_of(header)
-    options = [S.point_scene(ref, q.a, display, name="A", v=v),
-               S.point_scene(ref, q.b, display, name="B", v=v)]
+    c = st.config
+    sa, sb = c.seeds(header["seed"], q.trial, q.index)
+    ta, tb = texel_params(q.a, seed=sa, v=v), texel_params(q.b, seed=sb, v=v)
+    if c.presentation == "whole":
+        names = ["reference", "A", "B"]
+        options = [S.whole(ref, display, name="reference"), S.whole(ta, display, name="A"),
+                   S.whole(tb, display, name="B")]
+    else:
+        names = ["A", "B"]
+        options = [S.split(ref, ta, display, name="A"), S.split(ref, tb, display, name="B")]
     return Question({"done": False, "kind": "pair", "trial": q.trial, "index": q.index,
-                     "of": [5, 4], "options": ["A", "B"], "answers": ["A", "B", "unsure"]},
+                     "of": [5, 4], "options": names, "answers": ["A", "B", "unsure"],
+                     "presentation": c.presentation},
                     options,
                     {"reference": ref, "centre": _db(st.centre), "edge": st.edge,
                      "direction": q.direction, "A": _db(q.a), "B": _db(q.b),
-                     "A_is_plus": q.a_is_plus})
+                     "A_is_plus": q.a_is_plus, "seeds": [sa, sb]})
 
 
 def _staircase(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
@@ -125,7 +135,6 @@ def estimate(protocol: str, st: Any) -> dict[str, float]:
         p = Point(st.mean[0], st.mean[1])
     else:
         raise ValueError("estimate: %r has no end point" % (protocol,))
-    from .space import texel_params
     t = texel_params(p)
     return {"pitch_db": t["pitch_db"], "irregularity_db": t["irregularity_db"]}
 
@@ -141,8 +150,7 @@ def _free(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
     c = st.config
     return Question({"done": False, "kind": "sliders", "trial": st.trial,
                      "of": len(st.order),
-                     "sliders": {"pitch_db": list(c.pitch_db),
-                                 "irregularity_db": list(c.irregularity_db)},
+                     "sliders": c.sliders(),
                      "start": list(c.start), "confidence": list(c.confidence),
                      "options": [], "answers": None},
                     [], {"reference": st.reference, "trial": st.trial,
@@ -165,12 +173,15 @@ def _quant(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question
     ref, level = st.current
     lo, hi = st.config.scale
     tex = st.texture(format_of(header))
+    shown = tex if tex.get("kind") != "samples" else {   # (9,600 values: the record has them)
+        "kind": "samples", "rater": st.current_match, "quant_db": level,
+        "texel_samples": rater.texel_samples(), "values": len(tex["u16"])}
     return Question({"done": False, "kind": "rate", "trial": st.trial, "of": len(st.trials),
                      "options": ["rendering"], "answers": list(range(lo, hi + 1))},
                     [S.split({"kind": "reference", "name": ref}, tex, display,
                              name="rendering")],
-                    {"reference": ref, "match_of": st.current_match, "quant_db": level,
-                     "texture": tex, "match_source": st.config.match_source})
+                    {"reference": ref, "match_of": st.current_match, "source": st.current_source,
+                     "quant_db": level, "texture": shown, "match_source": st.config.match_source})
 
 
 def normalise(protocol: str, q: Question, state: Any, answer: Any) -> Any:

@@ -18,7 +18,7 @@ from typing import Any
 
 from texel.gen.params import FORMAT_NEW
 
-from .space import Point, texel_params
+
 
 DEFAULT_REFERENCE = {"kind": "reference", "name": "4sin"}
 STAIRCASE_TEXTURE = {"pitch_db": 10.0, "irregularity_db": -10.0}   # config: "distribution"
@@ -42,21 +42,28 @@ def _total_mm(display: dict[str, Any]) -> float:
 
 def split(reference: dict[str, Any], texel: dict[str, Any], display: dict[str, Any],
           name: str = "") -> dict[str, Any]:
-    """Reference on the left half, a texel texture on the right half."""
+    """Reference on the left half, a rendering on the right half: texel
+    parameters (kind "texel" added), or a texture that names its kind (the
+    rater's logged sequence as "samples")."""
     total = _total_mm(display)
     half = round(total / 2, 6)
     scene: dict[str, Any] = {"regions": [{"start_mm": 0, "end_mm": half,
                                           "texture": dict(reference)},
                          {"start_mm": half, "end_mm": total,
-                          "texture": dict(texel, kind="texel")}]}
+                          "texture": texel if "kind" in texel else dict(texel, kind="texel")}]}
     if name:
         scene["name"] = name
     return scene
 
 
-def point_scene(reference: dict[str, Any], p: Point, display: dict[str, Any],
-                seed: int = 7, name: str = "", v: int = FORMAT_NEW) -> dict[str, Any]:
-    return split(reference, texel_params(p, seed=seed, v=v), display, name)
+def whole(texture: dict[str, Any], display: dict[str, Any], name: str = "") -> dict[str, Any]:
+    """One texture on the whole display (texel parameters get kind "texel")."""
+    tex = texture if "kind" in texture else dict(texture, kind="texel")
+    scene: dict[str, Any] = {"regions": [{"start_mm": 0, "end_mm": _total_mm(display),
+                                          "texture": dict(tex)}]}
+    if name:
+        scene["name"] = name
+    return scene
 
 
 def staircase_scenes(length_samples: int, trial: int, seed: int, display: dict[str, Any],

@@ -67,10 +67,10 @@ from starlette.staticfiles import StaticFiles
 
 from ..link.board import host_check
 from ..study import configs as C
+from ..study import matches as M
 from ..study import protocols
 from ..study import questions as Q
 from ..study import scenes as S
-from ..study.quant import EXEMPLARS
 from ..study.session import DataLock, Session, SessionError, check_name, sessions
 from . import strip
 from . import editor
@@ -251,6 +251,9 @@ class Lab:
                 raise Refused("matches_from: only the quantization test takes matches")
             config["matches"], config["match_source"] = self._matches_from(
                 body["matches_from"], config)
+        if proto == "quant" and config.get("matches") is None:
+            raise Refused("matches: the quantization test rates the participant's own matches: "
+                          "give matches_from (their free exploration session)")
         try:
             state = protocols.start(proto, config, seed)
         except (TypeError, ValueError) as e:
@@ -279,26 +282,17 @@ class Lab:
         if not isinstance(sids, list) or not 1 <= len(sids) <= 20 or \
                 any(not isinstance(x, str) or x.count("/") != 1 for x in sids):
             raise Refused("matches_from: expected a session id P/NAME or a list of them")
-        found: dict[str, dict[str, float]] = {}
+        found: dict[str, dict[str, Any]] = {}
         for sid in sids:
             lv = self.get(*sid.split("/"))
-            if lv.protocol == "free":
-                for m in lv.state.matches:
-                    found[m["reference"]] = {"pitch_db": m["pitch_db"],
-                                             "irregularity_db": m["irregularity_db"]}
-                continue
-            if lv.protocol not in ("pursuit", "search"):
-                raise Refused("matches_from: %s is a %s session: matches come from a free "
-                              "exploration, a guided exploration or a search" % (sid, lv.protocol))
-            if not lv.state.done:
-                raise Refused("matches_from: %s is not finished" % sid)
-            ref = lv.session.header["config"].get("reference") or {}
-            if ref.get("kind") != "reference":
-                raise Refused("matches_from: %s did not run on a reference texture" % sid)
-            point = Q.estimate(lv.protocol, lv.state)
-            found[ref["name"]] = {"pitch_db": point["pitch_db"],
-                                  "irregularity_db": point["irregularity_db"]}
-        refs = config.get("references") or EXEMPLARS
+            try:
+                if lv.protocol == "free":
+                    found.update(M.from_free(lv.session, lv.state))
+                else:
+                    found.update(M.from_end_point(lv.protocol, lv.session, lv.state))
+            except ValueError as e:
+                raise Refused(str(e)) from None
+        refs = M.references_of(config)
         missing = [r for r in refs if r not in found]
         if missing:
             raise Refused("matches_from: no match of %s in %s" % (", ".join(missing),

@@ -80,10 +80,29 @@ async function feel(k) {
 
 // free exploration: slider changes go to the board one at a time, the latest wins
 let sliderBusy = false, sliderNext = null, sliderRange = null;
+// the irregularity slider: linear in dB, or (the lab's app) linear in sigma
+// (decades), sent as 10 log10(max(sigma, 0.001)) dB (study/free.py)
+function irregOf(x) {
+  const r = sliderRange;
+  if (r.irregularity_scale !== "sigma") {
+    const [s0, s1] = r.irregularity_db;
+    return Math.round((s0 + (s1 - s0) * x / 1000) * 1000) / 1000;
+  }
+  const sigma = r.sigma[0] + (r.sigma[1] - r.sigma[0]) * x / 1000;
+  return Math.round(10000 * Math.log10(Math.max(sigma, 0.001))) / 1000;
+}
+function positionOf(db) {
+  const r = sliderRange;
+  if (r.irregularity_scale !== "sigma") {
+    const [s0, s1] = r.irregularity_db;
+    return Math.round(1000 * (db - s0) / (s1 - s0));
+  }
+  return Math.round(1000 * (Math.pow(10, db / 10) - r.sigma[0]) / (r.sigma[1] - r.sigma[0]));
+}
 function sliderValues() {
-  const [p0, p1] = sliderRange.pitch_db, [s0, s1] = sliderRange.irregularity_db;
+  const [p0, p1] = sliderRange.pitch_db;
   return {pitch_db: Math.round((p0 + (p1 - p0) * $("pitch").value / 1000) * 1000) / 1000,
-          irregularity_db: Math.round((s0 + (s1 - s0) * $("irregularity").value / 1000) * 1000) / 1000};
+          irregularity_db: irregOf(Number($("irregularity").value))};
 }
 async function slide() {
   sliderNext = sliderValues();
@@ -110,7 +129,10 @@ function show(res) {
     return;
   }
   $("question").hidden = false; $("done").hidden = true;
-  $("prompt").textContent = PROMPTS[q.kind] || "";
+  $("prompt").textContent = (q.kind === "pair" && q.presentation === "whole")
+    ? "Feel the reference, A and B (one at a time, on the whole display). Which of A and B is " +
+      "closer to the reference?"
+    : PROMPTS[q.kind] || "";
   $("feel").innerHTML = ""; $("answers").innerHTML = "";
   $("sliders").hidden = q.kind !== "sliders";
   q.options.forEach((name, k) => {
@@ -121,9 +143,9 @@ function show(res) {
   if (q.kind === "sliders") {
     sliderRange = q.sliders;
     const [p, s] = res.sliders || q.start;
-    const [p0, p1] = q.sliders.pitch_db, [s0, s1] = q.sliders.irregularity_db;
+    const [p0, p1] = q.sliders.pitch_db;
     $("pitch").value = Math.round(1000 * (p - p0) / (p1 - p0));
-    $("irregularity").value = Math.round(1000 * (s - s0) / (s1 - s0));
+    $("irregularity").value = positionOf(s);
     $("pitch").oninput = slide; $("irregularity").oninput = slide;
     const box = $("confidence");
     box.querySelectorAll("label").forEach((l) => l.remove());
