@@ -56,7 +56,10 @@ def test_a_pursuit_session_end_to_end_with_the_simulated_participant(lab, port):
                                         "seed": 4})
     assert r.status_code == 200, r.text
     sid, q = r.json()["id"], r.json()["question"]
-    assert q["options"] == ["A", "B"] and "pitch_db" not in json.dumps(q)    # blind
+    # seed 000 / the lab's app: the reference, A or B, one at a time on the whole display
+    assert q["options"] == ["reference", "A", "B"] and "pitch_db" not in json.dumps(q)  # blind
+    assert _playing(lab)["regions"] == [{"start_mm": 0.0, "end_mm": 101.76, "texture": {
+        "kind": "reference", "name": "4sin"}}]         # a question starts on the reference
     mon = lab.get("/api/sessions/%s/monitor" % sid).json()           # the experimenter's view
     assert mon["detail"]["centre"] == {"pitch_db": 5.0, "irregularity_db": -10.0}
     assert mon["config"]["config_file"] == "pursuit-4sin"
@@ -65,7 +68,7 @@ def test_a_pursuit_session_end_to_end_with_the_simulated_participant(lab, port):
     n = 0
     while not q["done"]:
         # feel B, then answer as the participant would
-        assert lab.post("/api/sessions/%s/feel" % sid, json={"option": 1}).json() == {"playing": 1}
+        assert lab.post("/api/sessions/%s/feel" % sid, json={"option": 2}).json() == {"playing": 2}
         comp = live.state.next_comparison()
         r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": sim.compare(comp.a, comp.b),
                                                                "question": n})
@@ -75,13 +78,16 @@ def test_a_pursuit_session_end_to_end_with_the_simulated_participant(lab, port):
     assert n == 20 and live.state.centre.v > 0.5
     s = Session.open(live.session.path)
     answers = list(s.answers())
-    assert len(answers) == 20 and all(rec["playing"] == 1 for rec in answers)
+    assert len(answers) == 20 and all(rec["playing"] == 2 for rec in answers)
     assert s.finished and s.records[-1]["result"]["trials"] == 5
     assert answers[0]["state"]["edge"] == 1.0 and answers[-1]["state"]["edge"] == pytest.approx(0.2)
-    # the scene recorded is the one that played: B's right half, the reference on the left
+    # the scene recorded is the one that played: B alone on the whole display, a fresh
+    # rendering for every comparison (seeds drawn from the session's seed)
     last = answers[-1]["scene"]
-    assert last["regions"][0]["texture"] == {"kind": "reference", "name": "4sin"}
-    assert last["regions"][1]["texture"]["v"] == 2
+    assert len(last["regions"]) == 1 and last["regions"][0]["texture"]["kind"] == "texel"
+    assert last["regions"][0]["texture"]["v"] == 2
+    seeds = [rec["scene"]["regions"][0]["texture"]["seed"] for rec in answers]
+    assert len(set(seeds)) == 20
     assert _playing(lab) == last            # the board still plays the last scene felt
     # replay: what answer 0 heard plays again
     assert lab.post("/api/sessions/%s/replay" % sid, json={"record": 0}).status_code == 200
@@ -94,8 +100,9 @@ def test_free_exploration_then_the_quantization_test_with_its_matches(lab, port)
     sid = r.json()["id"]
     live = lab.lab.live[sid]
     first = live.state.reference
-    # the sliders start in the middle; every change re-draws and plays
-    assert r.json()["sliders"] == [5.0, -15.0]
+    # the sliders start where the lab's app's did (5 dB, sigma 0.5 decade); every change
+    # re-draws and plays
+    assert r.json()["sliders"] == [5.0, -3.01]
     seeds = set()
     for p, s in ((0.0, -20.0), (4.5, -12.25), (20.0, -3.0)):
         r = lab.post("/api/sessions/%s/feel" % sid, json={"pitch_db": p, "irregularity_db": s})
@@ -116,21 +123,39 @@ def test_free_exploration_then_the_quantization_test_with_its_matches(lab, port)
     _answer_all(lab, sid, sim, "free")
     st = lab.lab.live[sid].state
     assert st.done and [m["reference"] for m in st.matches] == st.order
-    # the quantization test on this participant's own matches
-    r = lab.post("/api/sessions", json={"config": "quant-exemplars", "participant": "p05",
+    # the quantization test without the participant's own matches is refused
+    r = lab.post("/api/sessions", json={"config": "quant-paper", "participant": "p05"})
+    assert r.status_code == 400 and "matches_from" in r.json()["error"]
+    # seed 000's 27 trials on this participant's own matches: the texture felt at submission
+    felt = {m["reference"]: rec["scene"]["regions"][1]["texture"]
+            for rec, m in zip(Session.open(live.session.path).answers(), st.matches)}
+    r = lab.post("/api/sessions", json={"config": "quant-paper", "participant": "p05",
                                         "seed": 3, "matches_from": sid})
     assert r.status_code == 200, r.text
     qid = r.json()["id"]
     qs = lab.lab.live[qid]
     assert qs.session.header["config"]["match_source"] == sid
-    tex = _playing(lab)["regions"][1]["texture"]
-    ref, level = qs.state.current
-    assert tex["pitch_db"] == 5.0 and tex["irregularity_db"] == -13.0
-    assert tex.get("quant_db", 0.0) == level
     assert "quant" not in json.dumps(r.json()["question"])                 # blind
-    _answer_all(lab, qid, sim, "quant")
+    kinds = []
+    while not qs.state.done:
+        tex = _playing(lab)["regions"][1]["texture"]
+        trial = qs.state.plan[qs.state.trial]
+        if trial["source"] == "own":        # the very texture felt, quantized or not
+            want = {k: felt[trial["reference"]][k] for k in
+                    ("pitch_db", "irregularity_db", "seed", "texel_samples", "v")}
+            assert {k: tex[k] for k in want} == want
+            assert tex["quant_db"] == trial["quant_db"]
+        else:                               # the rater's logged sequence, as samples
+            assert tex["kind"] == "samples" and len(tex["u16"]) == 9600
+            assert list(tex["u16"]) == list(qs.state.texture()["u16"])
+        kinds.append((trial["source"], trial["quant_db"]))
+        a = sim.answer("quant", qs.state)
+        assert lab.post("/api/sessions/%s/answer" % qid,
+                        json={"answer": a, "question": _n(lab, qid)}).status_code == 200
+    assert sorted(kinds) == sorted([("own", 0.0)] * 9 + [("rater", 0.0)] * 9
+                                   + [("rater", q) for q in (1.0, 3.0, 5.0)] * 3)
     file = [x["answer"] for x in Session.open(qs.session.path).answers()]
-    assert [x["similarity"] for x in qs.state.ratings] == file and len(file) == 12
+    assert [x["similarity"] for x in qs.state.ratings] == file and len(file) == 27
     assert all(x in range(1, 6) for x in file)
 
 
@@ -210,7 +235,7 @@ def test_search_and_staircase_sessions_and_resume_from_the_file(lab, port):
                        "reference": {"kind": "reference", "name": "4sin"}}, "only the pursuit"),
     ("/api/sessions", {"config": "quant-exemplars", "participant": "p",
                        "matches_from": "p/free-7"}, "no session p/free-7"),
-    ("/api/sessions", {"protocol": "quant", "participant": "p"}, "config: "),
+    ("/api/sessions", {"protocol": "quant", "participant": "p"}, "give matches_from"),
 ])
 def test_refused_requests_say_why_and_change_nothing(lab, port, path, body, fragment):
     before = _playing(lab)
@@ -229,7 +254,7 @@ def test_a_refused_answer_changes_nothing(lab, port):
                  {"answer": "A", "question": "0"}, {"answer": "A", "question": True}):
         r = lab.post("/api/sessions/%s/answer" % sid, json=body)
         assert r.status_code == 400, (body, r.text)
-    assert lab.post("/api/sessions/%s/feel" % sid, json={"option": 2}).status_code == 400
+    assert lab.post("/api/sessions/%s/feel" % sid, json={"option": 3}).status_code == 400
     r = lab.post("/api/sessions/%s/feel" % sid, content="x" * 20000,
                  headers={"content-type": "application/json"})
     assert r.status_code == 413 and "over 16384 bytes" in r.json()["error"], r.text
