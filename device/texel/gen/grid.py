@@ -1,11 +1,11 @@
 # Format 2's parameter grid (gen/plan_int.py): pitch_db, irregularity_db and
-# quant_db on 0.001 dB, band_limit_cpmm on 0.001 c/mm. params.validate puts a
+# quant_db on 0.001 dB, band_limit_cpmm and min_cpmm on 0.001 c/mm. params.validate puts a
 # format-2 parameter set on it, so host and board hold the same values and the
 # plan's integer millidecibels (mdb) are the same on every
 # runtime. A value within GRID_TIE of a half-way point is refused: a board's
 # float32 (error of x*1000 for |x| <= 95 below 0.006) could round it the other
 # way. Kept out of params.py: format 1 never loads it.
-GRID_KEYS = ("pitch_db", "irregularity_db", "quant_db", "band_limit_cpmm")
+GRID_KEYS = ("pitch_db", "irregularity_db", "quant_db", "band_limit_cpmm", "min_cpmm")
 GRID_TIE = 0.01
 
 
@@ -34,7 +34,8 @@ def on_grid(key, value):
 def to_grid(p):
     """Put a validated format-2 parameter dict on the grid, in place."""
     for key in GRID_KEYS:
-        if p[key] is not None:
+        # (min_cpmm is in a canonical dict only when set: params.SPARSE)
+        if p.get(key) is not None:
             # (quant_db is 0 or >= 0.001: params refuses finer, so a
             # quantization that is on stays on)
             p[key] = on_grid(key, p[key])

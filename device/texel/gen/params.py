@@ -47,11 +47,34 @@ SPEC = {
     "band_limit_cpmm": ("f", None, 0.01, NYQUIST_CPMM),
 }
 
+# Texture options: keys in the canonical dict ONLY when set to something else
+# than their default, so every texture, scene file, session record and golden
+# made before they existed stays byte for byte what it was (and plays the
+# same). Kept apart from SPEC/KEYS, which hold the keys every canonical dict
+# has (and which the command line, scenes and tests enumerate as such).
+# Seed 001's stimulus (../shared/seeds/001_*.txt; docs/generator.md, "Seed
+# 001's stimulus"): a lower pitch bound in cycles/mm (None = none; a texel
+# drawn below it is redrawn from a second stream: gen/plan.py,
+# gen/plan_int.py), and the phase at texel borders. Kind "w": a word, the
+# third field holds the allowed words.
+PHASES = ("continuous", "reset")
+OPTION_SPEC = {
+    "min_cpmm": ("f", None, 0.01, NYQUIST_CPMM),
+    "phase": ("w", "continuous", PHASES, None),
+}
+
 # Spelled out, not tuple(SPEC): MicroPython dicts do not keep insertion order,
 # and this order is both the order validate() checks keys in (which bad key is
 # named first) and the list in the unknown-key message.
 KEYS = ("pitch_db", "irregularity_db", "texel_samples", "length_samples", "quant_db",
         "seed", "gain", "v", "band_limit_cpmm")
+OPTION_KEYS = ("min_cpmm", "phase")         # checked after KEYS, in this order
+ALL_KEYS = KEYS + OPTION_KEYS               # the unknown-key message's list
+_ALL_SPEC = dict(SPEC)
+_ALL_SPEC.update(OPTION_SPEC)
+# Keys whose None means "off" (a bound not set).
+NONE_OK = ("band_limit_cpmm", "min_cpmm")
+_WORD_SHOW = 40         # characters of a refused word shown in a message
 
 
 def _words():
@@ -62,15 +85,18 @@ def _words():
 
 
 def check_value(key, value):
-    """Return value converted to its canonical type, or raise ValueError."""
-    kind, default, lo, hi = SPEC[key]
+    """Return value converted to its canonical type, or raise ValueError.
+    key: one of KEYS or OPTION_KEYS."""
+    kind, default, lo, hi = _ALL_SPEC[key]
     # the common case first (a float in range; NaN fails the comparison):
     # a push validates every texel key, at ~0.25 ms each on a Pico
     if type(value) is float and kind == "f" and lo <= value <= hi and (
             value == 0.0 or key != "quant_db" or value >= QUANT_DB_MIN):
         return value
+    if kind == "w":
+        return _word(key, value, lo)
     if value is None:
-        if key == "band_limit_cpmm":
+        if key in NONE_OK:
             return None
         c = _words()
         c.fail(key, "None is not allowed (expected a number in %s)" % c.rng(lo, hi))
@@ -105,6 +131,20 @@ def check_value(key, value):
     return value
 
 
+def _word(key, value, words):
+    """value if it is one of words (str), else ValueError listing them. What
+    it shows of a refused value is bounded (a scene passes values through)."""
+    if type(value) is str and value in words:
+        return value
+    if type(value) is str:
+        got = repr(value) if len(value) <= _WORD_SHOW else "a str of %d characters" % len(value)
+    elif value is None or type(value) in (bool, int, float):
+        got = "%s %s" % (type(value).__name__, _words().show(value))
+    else:
+        got = type(value).__name__
+    _words().fail(key, "expected one of %s, got %s" % (", ".join([repr(w) for w in words]), got))
+
+
 def validate(params):
     """Check a parameter dict completely; return a new dict with defaults.
 
@@ -116,11 +156,11 @@ def validate(params):
     # iteration order (which differs between CPython and MicroPython).
     unknown = None
     for key in params:
-        if key not in SPEC:
-            unknown = [repr(k) for k in params if k not in SPEC]
+        if key not in _ALL_SPEC:
+            unknown = [repr(k) for k in params if k not in _ALL_SPEC]
             break
     if unknown:
-        raise ValueError("unknown key %s (allowed: %s)" % (min(unknown), ", ".join(KEYS)))
+        raise ValueError("unknown key %s (allowed: %s)" % (min(unknown), ", ".join(ALL_KEYS)))
     out = {}
     for key in KEYS:
         kind, default, lo, hi = SPEC[key]
@@ -131,11 +171,21 @@ def validate(params):
                              % (key, _words().rng(lo, hi)))
         else:
             out[key] = default
+    for key in OPTION_KEYS:
+        if key in params:
+            v = check_value(key, params[key])
+            if v != OPTION_SPEC[key][1]:        # the default: left out
+                out[key] = v
     if out["v"] == 2:
         # format 2's grid (gen/grid.py: imported only here, so format 1 on a
         # Pico-sized heap carries none of it)
         from .grid import to_grid
         to_grid(out)
+    lo_b = out.get("min_cpmm")
+    if lo_b is not None and out["band_limit_cpmm"] is not None and lo_b >= out["band_limit_cpmm"]:
+        # (compared on format 2's grid where the plan will use them)
+        _words().fail("min_cpmm", "%r must be below band_limit_cpmm %r (cycles/mm)"
+                      % (lo_b, out["band_limit_cpmm"]))
     return out
 
 

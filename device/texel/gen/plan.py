@@ -42,6 +42,11 @@ def _frac_u28(x):
 class Plan:
     """Per-texel pitches and phases of one parameter set."""
 
+    # seed 001's lower bound (gen/options.py sets them when it applies):
+    # texels redrawn, texels left at the bound
+    redrawn = 0
+    at_min = 0
+
     def __init__(self, p, draws=None, ftype=float):
         # ftype: the float type of the plan arithmetic. Python float is the
         # interpreter's own (float32 on boards); tests pass numpy.float32 on
@@ -102,6 +107,10 @@ class Plan:
             ta[i] = t28
             t28 = (t28 + _frac_u28(step * Lf)) & PHASE_MASK
         self.above_nyquist = above
+        if p.get("min_cpmm") is not None or p.get("phase", "continuous") != "continuous":
+            # seed 001's options (gen/options.py: loaded only for them)
+            from .options import apply_float
+            apply_float(self, F)
 
     def fraction_above_nyquist(self):
         return self.above_nyquist / self.count

@@ -265,12 +265,23 @@ _texels = native("texel.gen.plan_int_viper", "texels") or texels_py
 VIPER = _texels is not texels_py
 
 
+def has_options(p):
+    """p (validated) sets seed 001's lower bound or phase reset
+    (params.OPTION_KEYS; gen/options.py)."""
+    return p.get("min_cpmm") is not None or p.get("phase", "continuous") != "continuous"
+
+
 class PlanInt:
     """The format-2 plan of a validated parameter set (v == 2): t28, d28 (the
     int engine's phases), y (log2 pitch, Q24 octaves), and, for the float
     engines and analysis, f and phi computed from them on demand."""
 
     FORMAT = FORMAT
+    # seed 001's lower bound (gen/options.py sets them when it applies):
+    # milli-c/mm (0: none), texels redrawn, texels left at the bound
+    min_mc = 0
+    redrawn = 0
+    at_min = 0
 
     def __init__(self, p, keep_z=False, engine=None, keep_y=True):
         # p: a validated format-2 parameter set. keep_y=False leaves out the
@@ -299,12 +310,19 @@ class PlanInt:
         self.d28 = both[count:]
         self.y = _ints(count) if keep_y else None      # log2 pitch, Q24 octaves
         self.z = _ints(count) if keep_z else None      # the draws, Q24
+        # the lower bound needs the log pitches (then dropped if not kept)
+        bound = p.get("min_cpmm") is not None
+        ys = _ints(count) if bound and not keep_y else self.y
         fill = texels_py if engine == "py" else _texels
         self.above_nyquist = fill(st, count, L, self.mu, self.sigma, self.q, self.dcap,
-                                  tab, self.t28, self.d28, self.y if keep_y else _ONE,
+                                  tab, self.t28, self.d28, _ONE if ys is None else ys,
                                   self.z if keep_z else _ONE,
-                                  (1 if keep_z else 0) | (2 if keep_y else 0))
+                                  (1 if keep_z else 0) | (0 if ys is None else 2))
         self.x0 = (st[8], st[9])        # the start phase's draw
+        if has_options(p):
+            # seed 001's options (gen/options.py: loaded only for them)
+            from .options import apply_int
+            apply_int(self, ys, tab)
         self._f = None
         self._phi = None
 
@@ -324,9 +342,14 @@ class PlanInt:
             from ..compat import float_buffer
             f = float_buffer(self.count)
             cap = self.cap_mc / 1000.0 if self.params["band_limit_cpmm"] is not None else None
+            mn = self.min_mc / 1000.0           # 0: no lower bound
             for i in range(self.count):
                 v = 2.0 ** (self.y[i] / 16777216.0)
-                f[i] = cap if cap is not None and v > cap else v
+                if cap is not None and v > cap:
+                    v = cap
+                elif v < mn:
+                    v = mn                      # a texel at the bound
+                f[i] = v
             self._f = f
         return self._f
 
@@ -342,9 +365,11 @@ class PlanInt:
             phi = float_buffer(self.count)
             step = 2 * math.pi * _params.DX_MM * self.L
             ph = 2 * math.pi * self.u
+            run = self.params.get("phase", "continuous") != "reset"
             for i in range(self.count):
                 phi[i] = ph
-                ph = ph + step * f[i]
+                if run:                         # "reset": every texel at the start phase
+                    ph = ph + step * f[i]
             self._phi = phi
         return self._phi
 

@@ -14,6 +14,11 @@
 #   format 2      the integer steps of plan_int.texels_py on int64 arrays
 #                 (every intermediate < 2^58); the phase advance's carries as
 #                 cumulative sums
+#   options       seed 001's lower bound and phase reset (params "min_cpmm",
+#                 "phase") are the scalar plans' own post-pass
+#                 (gen/options.py: apply_float, apply_int) run on the arrays
+#                 made here: the same plan bit for bit (a redraw is a
+#                 sequential second stream, tried texel by texel)
 # Board code never imports this module (nothing on a board has numpy); it
 # stays importable there (numpy comes through compat) as engine_numpy does.
 import math
@@ -21,7 +26,8 @@ from array import array
 from . import params as _params
 from .plan import Plan, UNITS_PER_TURN, PHASE_MASK, _TWO_PI, _DX, _check_draws, _frac_u28
 from .plan_int import PlanInt, exp2_q24, _round_q, LOG2_LOG2_10, LOG2_STEP0, \
-    Y_LO, Y_HI, NYQ_EXP, MASK28, NORM, table, mul28, exp2_m
+    Y_LO, Y_HI, NYQ_EXP, MASK28, NORM, table, mul28, exp2_m, has_options
+from .options import apply_float, apply_int
 from .grid import mdb
 from .rng import WARMUP, SEED_CONSTS, uniform_of, phase_fraction_u28, \
     _A, _B, _C, _D, _E, _F, _INV_ODD, _LN2, _SQRT_HALF, \
@@ -193,6 +199,8 @@ class PlanNumpy(Plan):
         self.phi = _floats(phi)
         self.t28 = _int32s(t28)
         self.d28 = _int32s(d28)
+        if has_options(p):
+            apply_float(self)
 
 
 # --- format 2 -----------------------------------------------------------------
@@ -315,10 +323,13 @@ class PlanIntNumpy(PlanInt):
         both = memoryview(_int32s(np.concatenate((t, d))))
         self.t28 = both[:count]
         self.d28 = both[count:]
-        self.y = _int32s(y) if keep_y else None
+        ys = _int32s(y) if keep_y or p.get("min_cpmm") is not None else None
+        self.y = ys if keep_y else None
         self.z = _int32s(z) if keep_z else None
         self._f = None
         self._phi = None
+        if has_options(p):
+            apply_int(self, ys, table())
 
     @property
     def f(self):
@@ -342,12 +353,18 @@ def int_pitches(plan):
     if plan.params["band_limit_cpmm"] is not None:
         cap = plan.cap_mc / 1000.0
         f = np.where(f > cap, cap, f)
+    if plan.min_mc:
+        mn = plan.min_mc / 1000.0                   # a texel at the lower bound
+        f = np.where(f < mn, mn, f)
     return f
 
 
 def int_phases(plan, f):
     """PlanInt.phi from its pitches f (float64 array): ph[0] = 2*pi*u,
-    ph[i+1] = ph[i] + (2*pi*DX*L) * f[i], the same left fold."""
+    ph[i+1] = ph[i] + (2*pi*DX*L) * f[i], the same left fold (every texel
+    at ph[0] with "phase": "reset")."""
+    if plan.params.get("phase", "continuous") == "reset":
+        return np.full(plan.count, 2 * math.pi * plan.u, dtype=np.float64)
     step = 2 * math.pi * _params.DX_MM * plan.L
     inc = np.empty(plan.count, dtype=np.float64)
     inc[0] = 2 * math.pi * plan.u

@@ -29,18 +29,20 @@ _TWO32 = 4294967296.0
 
 
 class Rng:
-    def __init__(self, seed, ftype=float):
+    def __init__(self, seed, ftype=float, consts=SEED_CONSTS):
         # ftype: float type of u and z (tests pass numpy.float32 to evaluate
         # them as a float32 board does; Python float is the interpreter's).
+        # consts: SEED_CONSTS (the texture stream) or gen/options.py's
+        # REDRAW_CONSTS (the lower bound's redraw stream).
         self.F = ftype
         if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0 or seed > 0xFFFFFFFF:
             raise ValueError("seed: expected an int in [0, 4294967295], got %r" % (seed,))
         # seed >> 16 is safe even when seed is a bigint on MicroPython.
         self.a_hi = (seed >> 16) & _M16
         self.a_lo = seed & _M16
-        self.b_hi, self.b_lo = SEED_CONSTS[0]
-        self.c_hi, self.c_lo = SEED_CONSTS[1]
-        self.d_hi, self.d_lo = SEED_CONSTS[2]
+        self.b_hi, self.b_lo = consts[0]
+        self.c_hi, self.c_lo = consts[1]
+        self.d_hi, self.d_lo = consts[2]
         for _ in range(WARMUP):
             self.next_hi_lo()
 

@@ -13,8 +13,10 @@
 #
 # Texture kinds (every other key is refused):
 #   texel      the texel parameter keys (params.KEYS) except length_samples,
-#              which the region sets to its own length; checked by
-#              texel.validate, so its messages are the generator's own.
+#              which the region sets to its own length, and the texture
+#              options (params.OPTION_KEYS: min_cpmm, phase; in the canonical
+#              texture only when set); checked by texel.validate, so its
+#              messages are the generator's own.
 #   reference  "name": one of texel.reference_names(); rendered region-long.
 #   constant   "level": friction reduction 0..1 (no buffer: one table entry).
 #   samples    an upload: exactly one of "values" (numbers 0..1) or "u16"
@@ -69,6 +71,7 @@ from array import array
 from ..gen.params import validate as texel_validate
 from ..gen.params import SPEC as TEXEL_SPEC
 from ..gen.params import KEYS as _TEXEL_ALL_KEYS
+from ..gen.params import OPTION_KEYS as TEXEL_OPTIONS
 from ..gen.params import LENGTH_MAX
 # the checks every device validator shares (their words: gen/check.py)
 from ..gen.check import BIG, is_int, is_num, finite, show, out_of_range, \
@@ -87,6 +90,7 @@ NAME_MAX = 64
 NOTES_MAX = 2000
 REGION_KEYS = ("start_mm", "end_mm", "texture")
 TEXEL_KEYS = tuple(k for k in _TEXEL_ALL_KEYS if k != "length_samples")
+_TEXEL_ANY = TEXEL_KEYS + TEXEL_OPTIONS     # the options: only when set
 TEXTURE_KEYS = {
     "texel": ("kind",) + TEXEL_KEYS,
     "reference": ("kind", "name"),
@@ -183,12 +187,13 @@ def _key(k):
     return _qstr(k) if isinstance(k, str) else _got(k)
 
 
-def _check_keys(path, d, allowed):
-    """Refuse keys not in `allowed`; with several, name the smallest shown
-    form (dict order differs between CPython and MicroPython)."""
+def _check_keys(path, d, allowed, options=()):
+    """Refuse keys not in `allowed` or `options`; with several, name the
+    smallest shown form (dict order differs between CPython and MicroPython).
+    The message lists `allowed` (the texel options: docs/generator.md)."""
     bad = None
     for k in d:
-        if not (isinstance(k, str) and k in allowed):
+        if not (isinstance(k, str) and (k in allowed or k in options)):
             s = _key(k)
             if bad is None or s < bad:
                 bad = s
@@ -278,6 +283,9 @@ def _texel(path, tex, n):
                 expected(path + "." + k, "an int" if kind == "i" else "a number", lo, hi,
                          _got(v))
             p[k] = v
+    for k in TEXEL_OPTIONS:     # texel.validate bounds what it shows of these
+        if k in tex:
+            p[k] = tex[k]
     p["length_samples"] = n
     try:
         c = texel_validate(p)
@@ -287,12 +295,13 @@ def _texel(path, tex, n):
     if err is not None:
         # "pitch_db: nan is not finite ..." -> "<path>.pitch_db: ..."
         cut = err.find(":")
-        if cut > 0 and err[:cut] in TEXEL_SPEC:
+        if cut > 0 and (err[:cut] in TEXEL_SPEC or err[:cut] in TEXEL_OPTIONS):
             raise ValueError(path + "." + err)
         fail(path, err)
     out = {"kind": "texel"}
-    for k in TEXEL_KEYS:
-        out[k] = c[k]
+    for k in _TEXEL_ANY:
+        if k in c:
+            out[k] = c[k]
     return out
 
 
@@ -368,7 +377,9 @@ def _texture(path, tex, n):
              % (_qstr(kind) if isinstance(kind, str) else _got(kind), ", ".join(KINDS)))
     if kind == "texel" and "length_samples" in tex:
         fail(path + ".length_samples", "set by the region (here %d samples); remove it" % n)
-    _check_keys(path, tex, TEXTURE_KEYS[kind])
+    # (the unknown-key message lists TEXTURE_KEYS: tests/runtime/test_scene.py
+    # pins it as TEXEL_ALLOWED)
+    _check_keys(path, tex, TEXTURE_KEYS[kind], TEXEL_OPTIONS if kind == "texel" else ())
     if kind == "texel":
         return _texel(path, tex, n)
     if kind == "reference":
@@ -706,8 +717,9 @@ def _plan_of(tex, n):
 def _render_texel(tex, n, engine, buf):
     from .. import render_u16
     p = {}
-    for k in TEXEL_KEYS:
-        p[k] = tex[k]
+    for k in _TEXEL_ANY:
+        if k in tex:
+            p[k] = tex[k]
     p["length_samples"] = n
     # A scene plays what a board plays: the integer engine unless the caller
     # asks for another (so a scene is the same texture on every runtime).
