@@ -8,7 +8,8 @@ rebuilds it exactly - after a crash at any point, or to replay it.
 
 Answers: free {"pitch_db", "irregularity_db", "confidence"}; quant a
 similarity 1..5; pursuit "A" | "B" | "unsure"; staircase true | false (the odd
-one was found); search {"choose": k} | {"save": k} | {"stop": true}.
+one was found); search {"choose": k} | {"save": k} | {"stop": true}; mapping
+{"pitch", "irregularity"} (sliders 0..100), then a similarity 0..10.
 Every state has `done`.
 """
 from __future__ import annotations
@@ -17,18 +18,20 @@ from typing import Any
 
 from ..search.preference import PreferenceSearch
 from . import free as _free
+from . import mapping as _mapping
 from . import pursuit as _pursuit
 from . import quant as _quant
 from . import scenes as _scenes
 from . import staircase as _staircase
 from .session import Session, SessionError
 
-PROTOCOLS = ("free", "quant", "pursuit", "staircase", "search")
+PROTOCOLS = ("free", "quant", "pursuit", "staircase", "search", "mapping")
 TITLES = {"free": "free exploration (seed 000)",
           "quant": "quantization test (seed 000)",
           "pursuit": "guided exploration: pursuit vector (seed 000)",
           "staircase": "texel-length oddity staircase (seed 001)",
-          "search": "preference-driven search: CMA-ES (seed 003)"}
+          "search": "preference-driven search: CMA-ES (seed 003)",
+          "mapping": "texel parameter mapping (seed 001, second experiment)"}
 # config keys that are not the state's: the scenes' business (the texture
 # compared against, the staircase's texel texture, the texel textures' format)
 # and the config file's name
@@ -52,6 +55,8 @@ def start(protocol: str, config: dict[str, Any], seed: int) -> Any:
         return _staircase.Staircase(_staircase.Config(**config))
     if protocol == "search":
         return PreferenceSearch(seed, texture_format=fmt, **_tuples(config))
+    if protocol == "mapping":
+        return _mapping.Mapping(seed, _mapping.Config(**_tuples(config)))
     raise SessionError("protocol: unknown %r (known: %s)" % (protocol, ", ".join(PROTOCOLS)))
 
 
@@ -61,7 +66,7 @@ def _tuples(config: dict[str, Any]) -> dict[str, Any]:
 
 
 def apply(protocol: str, state: Any, answer: Any) -> dict:
-    if protocol in ("free", "quant", "pursuit", "staircase"):
+    if protocol in ("free", "quant", "pursuit", "staircase", "mapping"):
         return state.answer(answer)
     if protocol == "search":
         if not isinstance(answer, dict) or len(answer) != 1:

@@ -11,8 +11,11 @@ pure logic (scenes are plain dicts for Board.push; the web layer pushes them).
                      participant page)
     normalise(protocol, q, state, answer)  -> the answer the protocol takes,
                      or ValueError (checked before anything is written)
-    slider_scene(state, header, display, pitch_db, irregularity_db, move)
-                  -> the free exploration's scene for a slider setting
+    slider_scene(state, header, display, a, b, move, protocol="free")
+                  -> the scene for a slider setting (the free exploration;
+                     the mapping's first phase): sliding(protocol, state)
+                     says when a protocol asks with sliders, SLIDER_KEYS
+                     names its two values
 """
 from __future__ import annotations
 
@@ -22,6 +25,7 @@ from typing import Any
 
 from ..search.preference import candidate_params
 from . import rater
+from .mapping import SLIDER
 from . import scenes as S
 from .space import Point, irregularity_db, pitch_db, texel_params
 
@@ -36,6 +40,15 @@ class Question:
     @property
     def done(self) -> bool:
         return bool(self.public["done"])
+
+
+# the two slider values a sliding protocol takes (feel and answer bodies, move records)
+SLIDER_KEYS = {"free": ("pitch_db", "irregularity_db"), "mapping": ("pitch", "irregularity")}
+
+
+def sliding(protocol: str, state: Any) -> bool:
+    """Whether the protocol's current question is answered with sliders."""
+    return protocol == "free" or (protocol == "mapping" and state.phase == "match")
 
 
 def reference_of(header: dict[str, Any]) -> dict[str, Any]:
@@ -63,6 +76,8 @@ def ask(protocol: str, state: Any, header: dict[str, Any], display: dict[str, An
         return _free(state, header, display)
     if protocol == "quant":
         return _quant(state, header, display)
+    if protocol == "mapping":
+        return _mapping(state, header, display)
     raise ValueError("protocol: unknown %r" % (protocol,))
 
 
@@ -97,8 +112,9 @@ def _staircase(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Ques
         return Question({"done": True}, detail={"threshold_mm": st.threshold_mm(),
                                                  "reversals": st.reversals})
     options, odd = S.staircase_scenes(st.texel_samples(), len(st.track), header["seed"],
-                                      display, header["config"].get("distribution"),
-                                      format_of(header))
+                                      display, header["config"].get("distribution")
+                                      or st.config.texture(), format_of(header),
+                                      st.config.remainder_level)
     return Question({"done": False, "kind": "three", "trial": len(st.track),
                      "options": ["1", "2", "3"], "answers": [0, 1, 2],
                      "seconds": st.config.trial_seconds},
@@ -157,14 +173,42 @@ def _free(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
                          "matches": len(st.matches)})
 
 
-def slider_scene(st: Any, header: dict[str, Any], display: dict[str, Any], pitch: Any,
-                 irregularity: Any, move: int) -> tuple[dict[str, Any], tuple[float, float]]:
-    """The free exploration's scene for a slider setting (checked: ValueError
-    for a value off the sliders) and the setting as kept (0.001 dB)."""
-    p, s = st.check(pitch, irregularity)
+def slider_scene(st: Any, header: dict[str, Any], display: dict[str, Any], a: Any, b: Any,
+                 move: int, protocol: str = "free"
+                 ) -> tuple[dict[str, Any], tuple[float, float]]:
+    """The scene for a slider setting (checked: ValueError for a value off
+    the sliders) and the setting as kept (free: 0.001 dB; mapping: the
+    slider's step): the reference left, the rendering right."""
+    if protocol == "mapping":
+        p, s = st.check(a, b)
+        return S.split(st.reference_texture(), st.texture(p, s, move, format_of(header)),
+                       display, name="rendering"), (p, s)
+    p, s = st.check(a, b)
     ref = {"kind": "reference", "name": st.reference}
     return S.split(ref, st.texture(p, s, move, format_of(header)), display,
                    name="rendering"), (p, s)
+
+
+def _mapping(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
+    if st.done:
+        return Question({"done": True}, detail={"matches": st.matches, "ratings": st.ratings})
+    c = st.config
+    if st.phase == "match":
+        lo, hi = SLIDER
+        return Question({"done": False, "kind": "sliders", "trial": st.trial,
+                         "of": len(st.order),
+                         "sliders": {"pitch": [lo, hi], "irregularity": [lo, hi],
+                                     "step": c.step},
+                         "start": list(c.start), "confidence": None,
+                         "options": [], "answers": None},
+                        [], {"reference": st.reference, "phase": "match", "trial": st.trial})
+    ref, of = st.current
+    lo, hi = c.scale
+    tex = st.rating_texture(format_of(header))
+    return Question({"done": False, "kind": "rate", "trial": st.trial, "of": len(st.pairs),
+                     "options": ["rendering"], "answers": list(range(lo, hi + 1))},
+                    [S.split(st.reference_texture(), tex, display, name="rendering")],
+                    {"reference": ref, "match_of": of, "phase": "rate", "texture": tex})
 
 
 def _quant(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
@@ -190,7 +234,7 @@ def normalise(protocol: str, q: Question, state: Any, answer: Any) -> Any:
     so true is not 1 and {"choose": true} is not {"choose": 1}."""
     if q.done:
         raise ValueError("the session is finished")
-    if protocol == "free":
+    if protocol in ("free", "mapping"):
         return state.checked_answer(answer)
     allowed = q.public["answers"]
     if _js(answer) not in [_js(a) for a in allowed]:

@@ -21,7 +21,6 @@ from texel.gen.params import FORMAT_NEW
 
 
 DEFAULT_REFERENCE = {"kind": "reference", "name": "4sin"}
-STAIRCASE_TEXTURE = {"pitch_db": 10.0, "irregularity_db": -10.0}   # config: "distribution"
 
 
 def texture_format(config: dict[str, Any] | None) -> int:
@@ -67,18 +66,25 @@ def whole(texture: dict[str, Any], display: dict[str, Any], name: str = "") -> d
 
 
 def staircase_scenes(length_samples: int, trial: int, seed: int, display: dict[str, Any],
-                     distribution: dict[str, float] | None = None, v: int = FORMAT_NEW
-                     ) -> tuple[list[dict[str, Any]], int]:
+                     distribution: dict[str, Any], v: int = FORMAT_NEW,
+                     remainder_level: float = 0.0) -> tuple[list[dict[str, Any]], int]:
     """The three textures of a trial and the index of the odd one: two seeds,
-    one shown twice, in an order drawn from (seed, trial)."""
+    one shown twice, in an order drawn from (seed, trial). Each fills the
+    display with as many whole texels as fit (seed 001); the rest plays the
+    constant remainder_level."""
     rng = random.Random(seed * 100003 + trial)
-    dist = dict(distribution or STAIRCASE_TEXTURE)
     same, odd = rng.randrange(1 << 31), rng.randrange(1 << 31)
     seeds = [same, same, odd]
     rng.shuffle(seeds)
     total = _total_mm(display)
-    scenes = [{"regions": [{"start_mm": 0, "end_mm": total,
-                            "texture": dict(dist, kind="texel", texel_samples=length_samples,
-                                            seed=s, v=v)}],
-               "name": "texture %d" % (k + 1)} for k, s in enumerate(seeds)]
+    whole = min(display["positions"], (display["positions"] // length_samples) * length_samples)
+    end = round(whole * display["dx_um"] / 1000.0, 6) if whole else total
+    scenes = []
+    for k, s in enumerate(seeds):
+        regions: list[dict[str, Any]] = [{"start_mm": 0, "end_mm": end, "texture": dict(
+            distribution, kind="texel", texel_samples=length_samples, seed=s, v=v)}]
+        if end < total:
+            regions.append({"start_mm": end, "end_mm": total,
+                            "texture": {"kind": "constant", "level": float(remainder_level)}})
+        scenes.append({"regions": regions, "name": "texture %d" % (k + 1)})
     return scenes, seeds.index(odd)

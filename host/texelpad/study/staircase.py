@@ -13,14 +13,32 @@ reversal is a change of direction; the paper reports a "convergent texel
 length" without its formula, so the threshold here is the mean length at the
 reversals after the step size changed (8..10), a choice recorded in Config.
 
+The stimulus is seed 001's ("The underlying frequency distribution used was
+a lognormal distribution ... mean 4 cycles/mm ... standard deviation 1.2 or
+4.3 cycles/mm, depending on whether the subject was given the narrow or wide
+Irregularity condition"; "distribution frequencies are constrained to exceed
+1 cycle/mm"; its generator has no phase continuity at texel borders - the
+borders are the cue under test): `condition` "narrow" (SD 1.2) or "wide"
+(4.3), mean `mean_cpmm` 4, both in LINEAR units (texel.gen.lognormal.to_db
+gives the generator's pitch_db/irregularity_db of that lognormal),
+`min_cpmm` 1 (the generator redraws pitches below it: docs/generator.md) and
+`phase` "reset". A config's "distribution" (a texel texture's keys) still
+replaces the whole stimulus, as before.
+
 Choices recorded in Config: the floor (one step: a length never goes below
-it), the threshold rule. Pure logic.
+it), the threshold rule; `remainder_level`: the display after the last whole
+texel (seed 001: "the maximum number of texels for the trial's texel length
+that fit in the 100-mm display length") plays this constant friction level,
+0 (the lab's apps clear the display with zeros). Pure logic.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from texel.gen.lognormal import to_db
 from texel.gen.params import DX_MM
+
+CONDITIONS = {"narrow": 1.2, "wide": 4.3}     # seed 001: the lognormal's SD, c/mm
 
 
 @dataclass(frozen=True)
@@ -34,8 +52,42 @@ class Config:
     floor_mm: float = 1.25          # never shorter than this
     trial_seconds: float = 30.0
     threshold_from_reversal: int = 8  # mean of the lengths at reversals >= this (1-based)
+    condition: str = "narrow"
+    mean_cpmm: float = 4.0
+    min_cpmm: float | None = 1.0
+    phase: str = "reset"
+    remainder_level: float = 0.0
+
+    def texture(self) -> dict:
+        """The texel texture's keys of the staircase's distribution (no
+        texel length, no seed: each trial sets them)."""
+        p, s = to_db(self.mean_cpmm, CONDITIONS[self.condition])
+        out: dict = {"pitch_db": p, "irregularity_db": s}
+        if self.min_cpmm is not None:
+            out["min_cpmm"] = float(self.min_cpmm)
+        if self.phase != "continuous":
+            out["phase"] = self.phase
+        return out
 
     def __post_init__(self) -> None:
+        if self.condition not in CONDITIONS:
+            raise ValueError("condition: expected 'narrow' (SD 1.2 c/mm) or 'wide' (SD 4.3 "
+                             "c/mm), got %r" % (self.condition,))
+        if self.phase not in ("continuous", "reset"):
+            raise ValueError("phase: expected 'reset' (seed 001) or 'continuous', got %r"
+                             % (self.phase,))
+        if isinstance(self.remainder_level, bool) or \
+                not isinstance(self.remainder_level, (int, float)) \
+                or not 0.0 <= self.remainder_level <= 1.0:
+            raise ValueError("remainder_level: expected a friction level 0 .. 1, got %r"
+                             % (self.remainder_level,))
+        if self.min_cpmm is not None and (isinstance(self.min_cpmm, bool) or not isinstance(
+                self.min_cpmm, (int, float)) or not 0.01 <= self.min_cpmm <= 94.0):
+            raise ValueError("min_cpmm: expected null or 0.01 .. 94 c/mm, got %r"
+                             % (self.min_cpmm,))
+        if isinstance(self.mean_cpmm, bool) or not isinstance(self.mean_cpmm, (int, float)):
+            raise ValueError("mean_cpmm: expected a number, got %r" % (self.mean_cpmm,))
+        self.texture()                  # to_db refuses a mean the generator cannot play
         for name in ("start_mm", "step_mm", "fine_step_mm", "floor_mm", "trial_seconds"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v < 1000:

@@ -188,7 +188,7 @@ class Lab:
         q = self._question(lv)
         if q.done:
             return
-        if lv.protocol == "free":
+        if Q.sliding(lv.protocol, lv.state):
             p, s = lv.sliders or lv.state.config.start
             self._slide(lv, p, s, record=lv.sliders is None)
         else:
@@ -196,13 +196,14 @@ class Lab:
 
     def _slide(self, lv: Live, pitch: Any, irregularity: Any, record: bool = True) -> dict:
         scene, (p, s) = Q.slider_scene(lv.state, lv.session.header, self.owner.display(),
-                                       pitch, irregularity, lv.moves)
+                                       pitch, irregularity, lv.moves, lv.protocol)
         _, canonical = self.owner.push(scene)
         lv.playing, lv.playing_scene, lv.sliders = 0, canonical, (p, s)
         self._took_board(lv)
         if record:          # the path the participant took, for analysis (not an answer)
+            ka, kb = Q.SLIDER_KEYS[lv.protocol]
             lv.session.append({"kind": "move", "trial": lv.state.trial, "move": lv.moves,
-                               "pitch_db": p, "irregularity_db": s, "scene": canonical})
+                               ka: p, kb: s, "scene": canonical})
         lv.moves += 1
         return {"playing": 0}
 
@@ -308,12 +309,13 @@ class Lab:
                 raise Refused("no session %s" % key)
             sess = Session.open(path)
             lv = Live(key, sess, protocols.replay(sess))
-            if lv.protocol == "free":                   # the sliders where they were
+            if Q.sliding(lv.protocol, lv.state):       # the sliders where they were
+                ka, kb = Q.SLIDER_KEYS[lv.protocol]
                 moves = [r for r in sess.records if r.get("kind") == "move"
-                         and r.get("trial") == lv.state.trial]
+                         and r.get("trial") == lv.state.trial and ka in r]
                 if moves:
                     lv.moves = moves[-1]["move"] + 1
-                    lv.sliders = (moves[-1]["pitch_db"], moves[-1]["irregularity_db"])
+                    lv.sliders = (moves[-1][ka], moves[-1][kb])
             self.live[key] = lv
         return lv
 
@@ -326,7 +328,8 @@ class Lab:
         q = self._question(lv)
         n = self._number(lv)
         return {"id": key, "protocol": lv.protocol, "question": dict(q.public, number=n),
-                "playing": lv.playing, "sliders": lv.sliders if lv.protocol == "free" else None,
+                "playing": lv.playing,
+                "sliders": lv.sliders if Q.sliding(lv.protocol, lv.state) else None,
                 "answers_so_far": n}
 
     def _asked(self, lv: Live, n: Any, what: str) -> None:
@@ -373,9 +376,10 @@ class Lab:
             raise Refused("the session is finished")
         if isinstance(body, dict) and "question" in body:   # (a page's late click: 409)
             self._asked(lv, body["question"], "felt")
-        if lv.protocol == "free":
-            keys(body, {"pitch_db", "irregularity_db", "question"})
-            return self._slide(lv, body.get("pitch_db"), body.get("irregularity_db"))
+        if Q.sliding(lv.protocol, lv.state):
+            ka, kb = Q.SLIDER_KEYS[lv.protocol]
+            keys(body, {ka, kb, "question"})
+            return self._slide(lv, body.get(ka), body.get(kb))
         keys(body, {"option", "question"})
         k = body.get("option")
         if isinstance(k, bool) or not isinstance(k, int) or not 0 <= k < len(q.options):

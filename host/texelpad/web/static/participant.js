@@ -33,7 +33,7 @@ const PROMPTS = {
   three: "Feel the three textures. Which one is different from the other two?",
   pick: "Feel the three candidates. Which one is closest to the reference on the left half?",
   sliders: "Move the sliders until the right half feels like the left half.",
-  rate: "How similar do the left and right halves feel? (1 = not at all, 5 = the same)"};
+  rate: "How similar do the left and right halves feel?"};
 
 function label(kind, a, q) {
   if (kind === "pair") return a === "unsure" ? "unsure" : a + " is closer";
@@ -99,7 +99,15 @@ function positionOf(db) {
   }
   return Math.round(1000 * (Math.pow(10, db / 10) - r.sigma[0]) / (r.sigma[1] - r.sigma[0]));
 }
+// seed 001's mapping: two plain sliders (0 .. 100 in `step`s; study/mapping.py)
+function plainOf(x) {
+  const [lo, hi] = sliderRange.pitch, step = sliderRange.step;
+  return Math.min(hi, Math.round((lo + (hi - lo) * x / 1000) / step) * step);
+}
 function sliderValues() {
+  if (sliderRange.pitch)
+    return {pitch: plainOf(Number($("pitch").value)),
+            irregularity: plainOf(Number($("irregularity").value))};
   const [p0, p1] = sliderRange.pitch_db;
   return {pitch_db: Math.round((p0 + (p1 - p0) * $("pitch").value / 1000) * 1000) / 1000,
           irregularity_db: irregOf(Number($("irregularity").value))};
@@ -132,6 +140,9 @@ function show(res) {
   $("prompt").textContent = (q.kind === "pair" && q.presentation === "whole")
     ? "Feel the reference, A and B (one at a time, on the whole display). Which of A and B is " +
       "closer to the reference?"
+    : q.kind === "rate"
+    ? PROMPTS.rate + " (" + q.answers[0] + " = completely different, " +
+      q.answers[q.answers.length - 1] + " = identical)"
     : PROMPTS[q.kind] || "";
   $("feel").innerHTML = ""; $("answers").innerHTML = "";
   $("sliders").hidden = q.kind !== "sliders";
@@ -143,13 +154,20 @@ function show(res) {
   if (q.kind === "sliders") {
     sliderRange = q.sliders;
     const [p, s] = res.sliders || q.start;
-    const [p0, p1] = q.sliders.pitch_db;
-    $("pitch").value = Math.round(1000 * (p - p0) / (p1 - p0));
-    $("irregularity").value = positionOf(s);
+    if (q.sliders.pitch) {              // plain sliders (the mapping)
+      const [lo, hi] = q.sliders.pitch;
+      $("pitch").value = Math.round(1000 * (p - lo) / (hi - lo));
+      $("irregularity").value = Math.round(1000 * (s - lo) / (hi - lo));
+    } else {
+      const [p0, p1] = q.sliders.pitch_db;
+      $("pitch").value = Math.round(1000 * (p - p0) / (p1 - p0));
+      $("irregularity").value = positionOf(s);
+    }
     $("pitch").oninput = slide; $("irregularity").oninput = slide;
     const box = $("confidence");
+    box.hidden = !q.confidence;
     box.querySelectorAll("label").forEach((l) => l.remove());
-    for (let c = q.confidence[0]; c <= q.confidence[1]; c++) {
+    for (let c = q.confidence ? q.confidence[0] : 1; q.confidence && c <= q.confidence[1]; c++) {
       const l = el("label", {});
       l.appendChild(el("input", {type: "radio", name: "confidence", id: "confidence-" + c,
                                  value: String(c)}));
@@ -159,10 +177,11 @@ function show(res) {
     $("answers").appendChild(el("button", {id: "submit", onclick: async () => {
       if (busy) return;
       const c = document.querySelector("input[name=confidence]:checked");
-      if (!c) { showError("choose your confidence (1-5) first"); return; }
+      if (q.confidence && !c) { showError("choose your confidence (1-5) first"); return; }
       setBusy(true);            // at once: a second click of a double-click finds it disabled
       while (sliderBusy) await new Promise((r) => setTimeout(r, 20));
-      await answer(Object.assign(sliderValues(), {confidence: Number(c.value)}));
+      await answer(Object.assign(sliderValues(), q.confidence ? {confidence: Number(c.value)}
+                                                              : {}));
     }}, "this is my match"));
   } else {
     q.answers.forEach((a, i) => {
