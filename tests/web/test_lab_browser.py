@@ -103,14 +103,23 @@ def test_pursuit_clicked_through(browser, lab):
     exp, p, sid, detail = _start(browser, url, "pursuit-4sin", "web01", 4)
     assert "centre\t5 dB pitch, -10 dB irregularity" in detail and "edge" in detail
     _blind(p)
+    # seed 000: the reference, A and B, one at a time on the whole display
+    assert [p.inner_text("#feel-%d" % k) for k in range(3)] == [
+        "feel reference", "feel A", "feel B"]
+    assert "one at a time" in p.inner_text("#prompt")
     for i in range(20):
-        p.click("#feel-1")
-        p.wait_for_selector("#feel-1.playing")
+        p.click("#feel-0")
+        p.wait_for_selector("#feel-0.playing")
+        p.click("#feel-2")
+        p.wait_for_selector("#feel-2.playing")
         p.click("#answer-%d" % (i % 3))                     # A, B, unsure in turn
         _wait_answers(p, i + 1, done=i == 19)
     s = _finish(url, data, sid, 20)
     assert [r["answer"] for r in s.answers()] == [["A", "B", "unsure"][i % 3] for i in range(20)]
-    assert all(r["playing"] == 1 for r in s.answers())
+    assert all(r["playing"] == 2 for r in s.answers())
+    # B alone on the whole display, a fresh rendering for every comparison
+    assert all(len(r["scene"]["regions"]) == 1 for r in s.answers())
+    assert len({r["scene"]["regions"][0]["texture"]["seed"] for r in s.answers()}) == 20
 
 
 def test_staircase_clicked_through(browser, lab):
@@ -170,26 +179,64 @@ def test_free_exploration_then_quantization_clicked_through(browser, lab):
         _wait_answers(p, i + 1, done=i == 8)
     s = _finish(url, data, sid, 9)
     answers = list(s.answers())
-    # slider 0..1000 over -10..20 dB and -30..0 dB: the values the board played
-    assert answers[0]["answer"] == {"pitch_db": 3.5, "irregularity_db": -21.0, "confidence": 1}
+    # the lab's app's sliders: pitch 0..1000 over -10..20 dB, irregularity linear in sigma
+    # over 0..1 decade (position 300: sigma 0.3 decade = 10 log10 0.3 = -5.229 dB)
+    assert answers[0]["answer"] == {"pitch_db": 3.5, "irregularity_db": -5.229, "confidence": 1}
     assert answers[0]["scene"]["regions"][1]["texture"]["pitch_db"] == 3.5
+    assert answers[0]["scene"]["regions"][1]["texture"]["texel_samples"] == 50
     moves = [r for r in s.records if r["kind"] == "move" and r["trial"] == 0]
     assert len(moves) >= 3 and moves[-1]["pitch_db"] == 3.5
-    # the quantization test on web04's own matches
-    exp2, q, qid, detail = _start(browser, url, "quant-exemplars", "web04", 5, matches=sid)
-    assert "quant_db" in detail
+    # seed 000's quantization test on web04's own matches: 27 trials
+    exp2, q, qid, detail = _start(browser, url, "quant-paper", "web04", 5, matches=sid)
+    assert "quant_db" in detail and "source" in detail
     _blind(q)
-    for i in range(12):
+    for i in range(27):
         q.click("#answer-%d" % (i % 5))
-        _wait_answers(q, i + 1, done=i == 11)
-    qs = _finish(url, data, qid, 12)
-    free = {a["state"]["reference"]: a["answer"] for a in answers}
+        _wait_answers(q, i + 1, done=i == 26)
+    qs = _finish(url, data, qid, 27)
+    felt = {a["state"]["reference"]: a["scene"]["regions"][1]["texture"] for a in answers}
+    sources = []
     for r in qs.answers():
         tex = r["scene"]["regions"][1]["texture"]
         ref = r["scene"]["regions"][0]["texture"]["name"]
-        assert tex["pitch_db"] == free[ref]["pitch_db"]
-        assert tex.get("quant_db", 0.0) == r["state"]["quant_db"]
-    assert [r["answer"] for r in qs.answers()] == [1 + i % 5 for i in range(12)]
+        sources.append((r["state"]["source"], r["state"]["quant_db"]))
+        if r["state"]["source"] == "own":       # the texture felt at submission, exactly
+            assert (tex["pitch_db"], tex["seed"]) == (felt[ref]["pitch_db"], felt[ref]["seed"])
+            assert tex.get("quant_db", 0.0) == r["state"]["quant_db"]
+        else:                                   # the rater's logged sequence
+            assert tex["kind"] == "samples" and len(tex["u16"]) == 9600
+    assert sorted(sources) == sorted([("own", 0.0)] * 9 + [("rater", 0.0)] * 9 +
+                                     [("rater", q) for q in (1.0, 3.0, 5.0)] * 3)
+    assert [r["answer"] for r in qs.answers()] == [1 + i % 5 for i in range(27)]
+
+
+def test_mapping_clicked_through(browser, lab):
+    """Seed 001's second experiment: its own screen - two plain sliders 0..100
+    and no confidence, then the 0..10 ratings."""
+    url, data = lab
+    exp, p, sid, detail = _start(browser, url, "mapping", "web05", 6)
+    _blind(p)
+    for word in ("bp-", "zeta", "lognormal"):
+        assert word not in p.inner_text("body")
+    assert p.is_hidden("#confidence")
+    for i in range(9):
+        p.fill("#pitch", str(100 * i))                  # 0 .. 800 of 1000: P = 0 .. 80
+        p.fill("#irregularity", str(1000 - 100 * i))    # I = 100 .. 20
+        p.click("#submit")
+        _wait_answers(p, i + 1)
+    p.wait_for_selector("#answer-10")                   # the ratings: 0 .. 10
+    assert "0 = completely different, 10 = identical" in p.inner_text("#prompt")
+    for i in range(25):
+        p.click("#answer-%d" % (i % 11))
+        _wait_answers(p, 10 + i, done=i == 24)
+    s = _finish(url, data, sid, 34)
+    answers = [r["answer"] for r in s.answers()]
+    assert answers[:9] == [{"pitch": 10.0 * i, "irregularity": 100.0 - 10 * i}
+                           for i in range(9)]
+    assert answers[9:] == [i % 11 for i in range(25)]
+    right = s.records[1]["scene"]["regions"][1]["texture"]        # seed 001's stimulus
+    assert right["texel_samples"] == 189 and right["phase"] == "reset"
+    assert right["min_cpmm"] == 1.0
 
 
 # --- issue 24: one click, one answer; the experimenter sees every refusal -------------------
