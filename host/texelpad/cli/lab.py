@@ -1,6 +1,8 @@
 """`texelpad lab`: the study protocols in the browser (web/server.py), on a board
-(--port) or the virtual board. Binds 127.0.0.1 only; the URL is the first
-line it prints. Runs until Ctrl-C, SIGTERM or SIGHUP.
+(--port) or the virtual board; `lab export` (study/export.py) and `lab describe
+CONFIG` (study/describe.py: a study's trial list, no board). Binds
+127.0.0.1 only; the URL is the first line it prints. Runs until Ctrl-C,
+SIGTERM or SIGHUP.
 
 One server per data folder (texelpad.study.session.DataLock): a second one
 is refused, naming the process that holds it. Without --http-port the lab
@@ -14,13 +16,27 @@ import socket
 import sys
 import webbrowser
 
-from .errors import EXIT_FAIL, EXIT_OK, CliError, to_stderr
+from .errors import EXIT_FAIL, EXIT_OK, CliError, cut_repr, to_stderr
 
 
 def add_lab(p: argparse.ArgumentParser) -> None:
-    p.add_argument("action", nargs="?", choices=("serve", "export"), default="serve",
-                   help="serve (default) or export: every session under --data as tidy CSV "
-                        "and one summary figure per session into --out")
+    p.add_argument("action", nargs="?", choices=("serve", "export", "describe"),
+                   default="serve",
+                   help="serve (default); export: every session under --data as tidy CSV, "
+                        "one summary figure per session and the papers' study figures into "
+                        "--out; describe CONFIG: the study's full trial list (what plays "
+                        "where, the order, the seeds) before anyone runs it")
+    p.add_argument("target", nargs="?", metavar="CONFIG",
+                   help="describe: a shipped or --configs config's name, or a config .json "
+                        "file")
+    p.add_argument("--seed", type=int, default=None, metavar="N",
+                   help="describe: the session seed to describe (default: the config's; a "
+                        "config without one has its seed drawn when a session starts, and "
+                        "seed 0 is described)")
+    p.add_argument("--json", action="store_true",
+                   help="describe: print the description as JSON (default: a table)")
+    p.add_argument("--display", default=None, metavar="POSITIONS[,DX_UM]",
+                   help="describe: the board's display (default: the TPaD's 19200,5.3)")
     p.add_argument("--out", default="lab-export", metavar="DIR",
                    help="export: the folder for sessions.csv and the figures (default: "
                         "./lab-export)")
@@ -28,7 +44,9 @@ def add_lab(p: argparse.ArgumentParser) -> None:
                     "papers' protocols (free exploration, quantization test, "
                     "pursuit vector, texel-length staircase, preference search) driving one board, every answer written to the "
                     "session's file as it is given. Without --port it runs on the virtual "
-                    "board. The URL is the first line printed.")
+                    "board. The URL is the first line printed. `texelpad lab describe "
+                    "CONFIG` prints a study's full trial list without a board; `texelpad lab "
+                    "export` writes the data folder's CSV and figures.")
     p.add_argument("--port", help="the board's serial port (default: the virtual board)")
     p.add_argument("--board", help="board file to start when texelpad is not running there")
     p.add_argument("--data", default="lab-data", metavar="DIR",
@@ -45,6 +63,14 @@ def add_lab(p: argparse.ArgumentParser) -> None:
 
 
 def cmd_lab(args: argparse.Namespace) -> int:
+    if args.action == "describe":
+        return _describe(args)
+    if args.target is not None:
+        raise CliError("CONFIG", "only describe takes a config (got %s)" % cut_repr(args.target))
+    for flag, given in (("--seed", args.seed is not None), ("--json", args.json),
+                        ("--display", args.display is not None)):
+        if given:
+            raise CliError(flag, "only lab describe takes it")
     if args.action == "export":
         return _export(args)
     if args.http_port is not None and not 0 <= args.http_port <= 65535:
@@ -189,4 +215,32 @@ def _export(args: argparse.Namespace) -> int:
         to_stderr("lab export: %d of %d sessions left out (the rest are exported)"
                   % (len(res["broken"]), res["sessions"]))
         return EXIT_FAIL
+    return EXIT_OK
+
+
+def _describe(args: argparse.Namespace) -> int:
+    """The study's trial list (texelpad.study.describe): a table, or JSON."""
+    import json
+
+    from ..study.describe import describe, parse_display, render_text
+    if not args.target:
+        raise CliError("CONFIG", "lab describe needs a config: a shipped or --configs config's "
+                                 "name, or a config .json file")
+    if args.seed is not None and not 0 <= args.seed < 1 << 31:
+        raise CliError("--seed", "expected an int in [0, 2^31), got %d" % args.seed)
+    display = None
+    if args.display is not None:
+        try:
+            display = parse_display(args.display)
+        except ValueError as e:
+            raise CliError("--display", str(e)) from None
+    try:
+        d = describe(args.target, args.seed, display, args.configs)
+    except ValueError as e:             # SessionError: an unknown config, a bad file
+        raise CliError("CONFIG", str(e)) from None
+    if args.json:
+        print(json.dumps(d, indent=1))
+    else:
+        sys.stdout.write(render_text(d))
+    sys.stdout.flush()
     return EXIT_OK
