@@ -5,7 +5,7 @@ lab carries them when it is installed without ../shared beside it.
 
 The pitch rows are assigned to textures by texelpad.analysis.calibration.rater_pitches
 (by their statistics: the CSV's row labels are in another order than the
-matches'; tests/analysis pin the assignment). tests/study/test_quant_paper.py
+matches'; tests/analysis pin the assignment). tests/study/test_paper_designs.py
 checks that the shipped file equals what this script makes from ../shared.
 
     .venv/bin/python tools/gen_rater_data.py

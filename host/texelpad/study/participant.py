@@ -141,7 +141,29 @@ class SimulatedParticipant:
             return {"pitch_db": round(p, 3), "irregularity_db": round(s, 3), "confidence": 4}
         if protocol == "quant":
             return self.rate(state)
+        if protocol == "mapping":
+            return self.map_answer(state)
         raise ValueError("protocol: unknown %r" % (protocol,))
+
+    def map_answer(self, state) -> object:
+        """Seed 001's mapping, scripted (not a model of people: the target is
+        not used): phase "match" sets the lognormal's mean to the reference's
+        central frequency and its SD to the band's width 2 zeta fc (each on the
+        slider's grid, clipped to it, plus noise in slider steps); phase "rate"
+        rates 10 for a reference against its own match and 4 otherwise (plus
+        noise), on the config's scale."""
+        from . import bandpass
+        from .mapping import MEAN_BASE_CPMM, MEAN_RATIO, SD_PER_STEP_CPMM, SLIDER
+        n = (lambda: self._rng.gauss(0.0, self.noise * 100)) if self.noise else (lambda: 0.0)
+        if state.phase == "match":
+            fc, zeta = bandpass.params_of(state.reference)
+            p = math.log(fc / MEAN_BASE_CPMM) / math.log(MEAN_RATIO) + n()
+            i = 2.0 * zeta * fc / SD_PER_STEP_CPMM + n()
+            lo, hi = SLIDER
+            return {"pitch": round(min(hi, max(lo, p))), "irregularity": round(min(hi, max(lo, i)))}
+        ref, of = state.current
+        lo, hi = state.config.scale
+        return int(min(hi, max(lo, round((10 if ref == of else 4) + n()))))
 
     def rate(self, state) -> int:
         """The similarity rating of the quantization test's current trial
