@@ -275,22 +275,26 @@ def test_export_writes_tidy_csv_and_a_figure_per_session(tmp_path, capsys):
     from texelpad import cli
     data = tmp_path / "data"
     sim = SimulatedParticipant(Point(0.3, 0.7), seed=1)
+    # the mapping (seed 001): nine slider matches, then 25 ratings 0..10
+    mapping = [{"pitch": 10.0 * k, "irregularity": 50.0} for k in range(9)] + \
+        [k % 11 for k in range(25)]
     for proto, n in (("pursuit", 20), ("staircase", 12), ("search", 6), ("free", 9),
-                     ("quant", 27)):
+                     ("quant", 27), ("mapping", 34)):
         config = GIVEN if proto == "quant" else {}
         s = Session.create(data, proto, "p01", config, 5)
         st = protocols.start(proto, config, 5)
-        for _ in range(n):
-            a = sim.answer(proto, st)
+        for k in range(n):
+            a = mapping[k] if proto == "mapping" else sim.answer(proto, st)
             protocols.apply(proto, st, a)
             s.append({"answer": a, "scene": {"regions": [
                 {"start_mm": 0, "end_mm": 1, "texture": {"kind": "texel", "pitch_db": 1.0,
                                                          "irregularity_db": -3.0}}]}})
     out = tmp_path / "out"
     assert cli.main(["lab", "export", "--data", str(data), "--out", str(out)]) == 0
-    assert "(74 answers) and 5 figures" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "(108 answers) and 6 figures" in printed
     rows = list(_csv.DictReader(open(out / "sessions.csv")))
-    assert len(rows) == 74 and {r["protocol"] for r in rows} == set(protocols.PROTOCOLS)
+    assert len(rows) == 108 and {r["protocol"] for r in rows} == set(protocols.PROTOCOLS)
     assert rows[0]["played_pitch_db"] == "1.0"
     by = {}
     for r in rows:
@@ -300,5 +304,14 @@ def test_export_writes_tidy_csv_and_a_figure_per_session(tmp_path, capsys):
     assert [r["quant_db"] for r in by["quant"]][:1] and all(r["similarity"] for r in by["quant"])
     assert {r["correct"] for r in by["staircase"]} <= {"True", "False"}
     assert by["search"][0]["chosen"] in ("0", "1", "2")
+    assert {r["source"] for r in by["quant"]} == {"own", "rater"}
+    assert [r["pitch_slider"] for r in by["mapping"][:9]] == ["%.1f" % (10.0 * k)
+                                                             for k in range(9)]
+    assert [r["similarity"] for r in by["mapping"][9:]] == [str(k % 11) for k in range(25)]
     pngs = sorted(p.name for p in out.glob("*.png"))
-    assert len(pngs) == 5 and all((out / p).stat().st_size > 5000 for p in pngs)
+    # one per session, and the papers' figures these sessions make (no matrix design: no 14c)
+    paper = ["seed000_fig10_matches.png", "seed000_fig15_quantization.png",
+             "seed001_fig2_staircase.png", "seed001_fig4_mapping.png",
+             "seed001_fig5_ratings.png"]
+    assert len(pngs) == 11 and set(paper) < set(pngs) and ", ".join(sorted(paper)) in printed
+    assert all((out / p).stat().st_size > 5000 for p in pngs)

@@ -209,6 +209,8 @@ def _export(args: argparse.Namespace) -> int:
         raise CliError("--data", str(e), EXIT_FAIL) from None
     print("wrote %s (%d answers) and %d figures to %s"
           % (res["csv"], res["rows"], len(res["figures"]), args.out))
+    if res["study_figures"]:
+        print("the papers' figures: %s" % ", ".join(res["study_figures"]))
     for _, why in res["broken"]:
         to_stderr("lab export: left out %s" % why)
     if res["broken"]:

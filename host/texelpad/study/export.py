@@ -1,7 +1,11 @@
-"""`texelpad lab export`: session files -> tidy CSV (one row per answer) and one
+"""`texelpad lab export`: session files -> tidy CSV (one row per answer), one
 summary figure per session (pursuit: the centre's path on the pitch -
 irregularity plane; staircase: the track with its reversals and threshold;
-search: the mean's path and step size). Reads the files only (never a board).
+search: the mean's path and step size; mapping: the matches against the
+references' central frequencies) and the papers' figures over all sessions
+(PAPER_FIGURES: seed 000 Fig. 10, 15, 14c; seed 001 Fig. 2, 4, 5), each
+written only when the data has sessions of its kind. Reads the files only
+(never a board).
 
 A session that cannot be read or replayed (a damaged line, an answer its
 protocol refuses) is reported by name with the reason and left out; the
@@ -16,7 +20,7 @@ import json
 import math
 import os
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 from . import protocols
 from .session import Session, SessionError, sessions
@@ -26,7 +30,10 @@ COLUMNS = ("participant", "protocol", "session", "config_file", "seed", "n", "ti
            "trial", "answer", "reference", "played_pitch_db", "played_irregularity_db",
            "played_texel_samples", "played_quant_db", "option_played",
            "match_pitch_db", "match_irregularity_db", "confidence", "similarity",
-           "quant_db", "match_of", "correct", "length_mm", "chosen")
+           "quant_db", "match_of", "correct", "length_mm", "chosen",
+           # (added with the paper's quantization test and seed 001's mapping: after the
+           # columns above, so a reader by position still finds those)
+           "source", "pitch_slider", "irregularity_slider")
 
 
 def _texel(scene: dict[str, Any] | None) -> dict[str, Any]:
@@ -67,20 +74,39 @@ def rows(s: Session) -> list[dict[str, Any]]:
                    played_texel_samples=tex.get("texel_samples", ""),
                    played_quant_db=tex.get("quant_db", "") if tex else "",
                    option_played="" if rec.get("playing") is None else rec["playing"])
-        if proto == "free":
-            row.update(match_pitch_db=a["pitch_db"], match_irregularity_db=a["irregularity_db"],
-                       confidence=a["confidence"], reference=state.reference, trial=state.trial)
-        elif proto == "quant":
-            ref, level = state.current
-            row.update(similarity=a, quant_db=level, reference=ref, trial=state.trial,
-                       match_of=state.current_match)
-        elif proto == "staircase":
-            row.update(correct=a, length_mm=state.length_mm, trial=len(state.track))
-        elif proto == "search" and "choose" in a:
-            row.update(chosen=a["choose"], trial=state.iteration)
-        protocols.apply(proto, state, a)
+        row.update(_answer_columns(proto, state, a))
+        result = protocols.apply(proto, state, a)
+        if proto == "mapping" and "similarity" not in result:     # a match: its dB as played
+            row.update(match_pitch_db=result["pitch_db"],
+                       match_irregularity_db=result["irregularity_db"])
         out.append(row)
     return out
+
+
+def _answer_columns(proto: str, state: Any, a: Any) -> dict[str, Any]:
+    """The columns of an answer's kind, from the state before it."""
+    if proto == "free":
+        return dict(match_pitch_db=a["pitch_db"], match_irregularity_db=a["irregularity_db"],
+                    confidence=a["confidence"], reference=state.reference, trial=state.trial)
+    if proto == "quant":
+        ref, level = state.current
+        return dict(similarity=a, quant_db=level, reference=ref, trial=state.trial,
+                    match_of=state.current_match, source=state.current_source)
+    if proto == "staircase":
+        return dict(correct=a, length_mm=state.length_mm, trial=len(state.track))
+    if proto == "search" and "choose" in a:
+        return dict(chosen=a["choose"], trial=state.iteration)
+    if proto == "mapping" and state.phase == "match":
+        return dict(reference=state.reference, trial=state.trial, pitch_slider=a["pitch"],
+                    irregularity_slider=a["irregularity"])
+    if proto == "mapping":              # a rating: the match of match_of played
+        ref, of = state.current
+        m = state.match_of(of) or {}
+        return dict(reference=ref, match_of=of, similarity=a, trial=state.trial,
+                    pitch_slider=m.get("pitch", ""), irregularity_slider=m.get("irregularity", ""),
+                    match_pitch_db=m.get("pitch_db", ""),
+                    match_irregularity_db=m.get("irregularity_db", ""))
+    return {}
 
 
 def session_files(data: str | os.PathLike) -> list[Path]:
@@ -138,13 +164,20 @@ def write_csv(data: str | os.PathLike, out: str | os.PathLike,
     return out, n
 
 
-def figure(s: Session, out: str | os.PathLike) -> Path:
-    """The session's summary figure (PNG): one plot per protocol (_PLOTS)."""
+def _pyplot() -> Any:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    return plt
+
+
+def figure(s: Session, out: str | os.PathLike, state: Any = None) -> Path:
+    """The session's summary figure (PNG): one plot per protocol (_PLOTS).
+    state: the session replayed (replayed here when not given)."""
+    plt = _pyplot()
     h = s.header
-    state = protocols.replay(s)
+    if state is None:
+        state = protocols.replay(s)
     fig, ax = plt.subplots(figsize=(6, 4.2))
     title = "%s, %s (%s): %d answers" % (h["protocol"], h["participant"], s.path.stem,
                                           sum(1 for _ in s.answers()))
@@ -264,8 +297,31 @@ def _plot_search(fig: Any, ax: Any, state: Any) -> None:
         inset.tick_params(labelsize=6)
 
 
+def _plot_mapping(fig: Any, ax: Any, state: Any) -> None:
+    """The mapping's matches: the chosen mean pitch (c/mm) against the
+    reference's central frequency, per zeta, with the diagonal (Fig. 4a)."""
+    from .mapping import summary
+    sm = summary(state)
+    for k, row in enumerate(sm["fig4a"]):
+        pts = [(f, m) for f, m in zip(row["fc_cpmm"], row["mean_cpmm"]) if m is not None]
+        if pts:
+            ax.plot([f * 1.06 ** (k - 1) for f, _ in pts], [m for _, m in pts], "o",
+                    color="C%d" % k, label="zeta %g" % row["zeta"])
+    ax.plot([0.5, 40], [0.5, 40], ":", color="0.5")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("reference central frequency (c/mm)")
+    ax.set_ylabel("chosen pitch: the lognormal's mean (c/mm)")
+    rated = len(state.ratings)
+    ax.text(0.01, 0.99, "%d matches, %d ratings%s" % (
+        len(state.matches), rated, "; self-match mean %.2f" % sm["self"]["mean"]
+        if sm["self"]["n"] else ""), transform=ax.transAxes, va="top", fontsize=7)
+    if state.matches:
+        ax.legend(fontsize=8)
+
+
 _PLOTS = {"free": _plot_free, "quant": _plot_quant, "pursuit": _plot_pursuit,
-          "staircase": _plot_staircase, "search": _plot_search}
+          "staircase": _plot_staircase, "search": _plot_search, "mapping": _plot_mapping}
 
 
 def _references_on(ax: Any, header: dict[str, Any]) -> None:
@@ -291,15 +347,384 @@ def export(data: str | os.PathLike, out_dir: str | os.PathLike) -> dict[str, Any
     csv_path, n = write_csv(data, out_dir / "sessions.csv", broken)
     figs = []
     left_out = {p for p, _ in broken}
+    loaded: list[tuple[Session, Any]] = []
     for path in files:
         if path in left_out:
             continue
         try:
             s = Session.open(path)
+            state = protocols.replay(s)
             figs.append(figure(s, out_dir / ("%s-%s.png" % (s.header["participant"],
-                                                            path.stem))))
+                                                            path.stem)), state))
+            loaded.append((s, state))
         except (OSError, ValueError, KeyError, TypeError, IndexError, AttributeError) as e:
             broken.append((path, "%s: no figure (%s: %s)" % (path, type(e).__name__,
                                                               str(e)[:200])))
     return {"csv": csv_path, "rows": n, "figures": figs, "broken": broken,
-            "sessions": len(files)}
+            "sessions": len(files), "study_figures": study_figures(loaded, out_dir)}
+
+
+# --- the papers' figures, over every session of the data folder ---------------------------
+# Each is written only when the data has sessions of its kind (with answers), named
+# after the paper's figure it follows (../shared/seeds/000_*.txt, 001_*.txt). Each
+# *_data function gives exactly what its plot draws (JSON-friendly), so a test can
+# check the numbers by hand.
+
+Loaded = list[tuple[Session, Any]]      # (session, its protocol state replayed)
+
+
+def _of(loaded: Loaded, proto: str) -> Loaded:
+    return [(s, st) for s, st in loaded if s.header["protocol"] == proto]
+
+
+def _mean(xs: Sequence[float]) -> float:
+    return sum(xs) / len(xs)
+
+
+def fig10_data(loaded: Loaded) -> dict[str, Any] | None:
+    """Seed 000 Fig. 10: the free explorations' matches per reference (every
+    session's, pitch and irregularity in dB as submitted) and the trained
+    rater's choices (study/rater.py)."""
+    from .rater import match
+    from .references import FAMILIES, REFERENCES
+    pitch: dict[str, list[float]] = {}
+    irr: dict[str, list[float]] = {}
+    for _, st in _of(loaded, "free"):
+        for m in st.matches:
+            pitch.setdefault(m["reference"], []).append(m["pitch_db"])
+            irr.setdefault(m["reference"], []).append(m["irregularity_db"])
+    if not pitch:
+        return None
+    refs = [r for r in REFERENCES if r in pitch]
+    return {"references": refs, "families": [FAMILIES[r] for r in refs],
+            "pitch_db": [pitch[r] for r in refs], "irregularity_db": [irr[r] for r in refs],
+            "rater": [match(r) for r in refs]}
+
+
+def fig15_data(loaded: Loaded) -> dict[str, Any] | None:
+    """Seed 000 Fig. 15: per exemplar and q > 0, the change in similarity -
+    the quantized trial's rating minus the unquantized one's, same session
+    (participant), same reference, same source (own / rater); a session's
+    repeats averaged first. Quant sessions of designs paper and levels."""
+    changes: dict[str, dict[float, list[float]]] = {}
+    for _, st in _of(loaded, "quant"):
+        if st.config.design == "matrix":
+            continue
+        cells: dict[tuple[str, str, float], list[int]] = {}
+        for r in st.ratings:
+            cells.setdefault((r["reference"], r["source"], float(r["quant_db"])),
+                             []).append(r["similarity"])
+        for (ref, src, q), v in sorted(cells.items()):
+            base = cells.get((ref, src, 0.0))
+            if q and base:
+                changes.setdefault(ref, {}).setdefault(q, []).append(
+                    round(_mean(v) - _mean(base), 6))
+    if not changes:
+        return None
+    from .references import REFERENCES
+    refs = [r for r in REFERENCES if r in changes]
+    levels = sorted({q for r in refs for q in changes[r]})
+    return {"exemplars": refs, "levels_db": levels,
+            "changes": [[changes[r].get(q, []) for q in levels] for r in refs]}
+
+
+def fig14c_data(loaded: Loaded) -> dict[str, Any] | None:
+    """Seed 000 Fig. 14c: the similarity matrix - the mean rating of each
+    reference (rows) against each reference's match (columns) over every
+    matrix-design quant session (None where nobody rated)."""
+    refs: list[str] = []
+    cells: dict[tuple[str, str], list[int]] = {}
+    for _, st in _of(loaded, "quant"):
+        if st.config.design != "matrix":
+            continue
+        refs += [r for r in st.config.references if r not in refs]
+        for r in st.ratings:
+            cells.setdefault((r["reference"], r["match_of"]), []).append(r["similarity"])
+    if not cells:
+        return None
+    return {"references": refs,
+            "mean": [[round(_mean(cells[(a, b)]), 6) if (a, b) in cells else None
+                      for b in refs] for a in refs],
+            "n": [[len(cells.get((a, b), [])) for b in refs] for a in refs]}
+
+
+def fig2_data(loaded: Loaded) -> dict[str, Any] | None:
+    """Seed 001 Fig. 2: every staircase's track (texel length per trial, the
+    reversals' trials) and the convergent lengths (threshold_mm: the mean of
+    the reversals from threshold_from_reversal on) per condition."""
+    tracks = []
+    by_cond: dict[str, list[float]] = {}
+    for s, st in _of(loaded, "staircase"):
+        if not st.track:
+            continue
+        cond = "distribution given" if s.header["config"].get("distribution") \
+            else st.config.condition
+        thr = st.threshold_mm()
+        tracks.append({"participant": s.header["participant"], "session": s.path.stem,
+                       "condition": cond, "length_mm": [t["length_mm"] for t in st.track],
+                       "reversals": [i for i, t in enumerate(st.track) if t["reversal"]],
+                       "threshold_mm": thr})
+        if thr is not None:
+            by_cond.setdefault(cond, []).append(thr)
+    if not tracks:
+        return None
+    order = [c for c in ("narrow", "wide") if c in by_cond] + sorted(
+        c for c in by_cond if c not in ("narrow", "wide"))
+    return {"tracks": tracks, "conditions": order,
+            "convergent_mm": [by_cond[c] for c in order]}
+
+
+def fig4_data(loaded: Loaded) -> dict[str, Any] | None:
+    """Seed 001 Fig. 4 from the mapping sessions (mapping.summary): a) the
+    chosen pitch (the lognormal's mean, c/mm) per reference central
+    frequency, one list per zeta (a value per session); b) the chosen
+    irregularity, normalised over each session's matches, per zeta, one list
+    per central frequency."""
+    from .bandpass import FC_CPMM, ZETAS
+    from .mapping import summary
+    # [zeta][fc] -> the mean c/mm chosen, one per session; [fc][zeta] -> normalised I
+    a: list[list[list[float]]] = [[[] for _ in FC_CPMM] for _ in ZETAS]
+    b: list[list[list[float]]] = [[[] for _ in ZETAS] for _ in FC_CPMM]
+    any_match = False
+    for _, st in _of(loaded, "mapping"):
+        if not st.matches:
+            continue
+        any_match = True
+        sm = summary(st)
+        for i, row in enumerate(sm["fig4a"]):
+            for j, m in enumerate(row["mean_cpmm"]):
+                if m is not None:
+                    a[i][j].append(m)
+        for i, row in enumerate(sm["fig4b"]):
+            for j, x in enumerate(row["irregularity_normalised"]):
+                if x is not None:
+                    b[i][j].append(x)
+    if not any_match:
+        return None
+    return {"fc_cpmm": list(FC_CPMM), "zetas": list(ZETAS), "fig4a_mean_cpmm": a,
+            "fig4b_irregularity_normalised": b}
+
+
+def fig5_data(loaded: Loaded) -> dict[str, Any] | None:
+    """Seed 001 Fig. 5 from the mapping sessions' ratings (mapping.summary,
+    pooled over sessions): a) lowest- vs highest-frequency pairs per zeta,
+    b) lowest- vs highest-zeta pairs per central frequency; the self-match
+    ratings beside the paper's 8.11 (SD 2.76)."""
+    from .bandpass import FC_CPMM, ZETAS
+    from .mapping import PAPER, summary
+    a: list[list[int]] = [[] for _ in ZETAS]
+    b: list[list[int]] = [[] for _ in FC_CPMM]
+    own: list[int] = []
+    for _, st in _of(loaded, "mapping"):
+        if not st.ratings:
+            continue
+        sm = summary(st)
+        for i, row in enumerate(sm["fig5a"]):
+            a[i] += row["ratings"]
+        for i, row in enumerate(sm["fig5b"]):
+            b[i] += row["ratings"]
+        own += sm["self"]["ratings"]
+    if not (any(a) or any(b) or own):
+        return None
+    paper = {p["what"]: p["value"] for p in PAPER}
+    return {"zetas": list(ZETAS), "fc_cpmm": list(FC_CPMM), "fig5a": a, "fig5b": b,
+            "self": own, "paper_self_mean": paper["self_similarity_mean"],
+            "paper_self_sd": paper["self_similarity_sd"]}
+
+
+def _boxes(ax: Any, groups: Sequence[Sequence[float]], positions: Sequence[float], width: float,
+           color: str) -> None:
+    """Box plots of the groups with data, and every value as a point."""
+    have = [(g, x) for g, x in zip(groups, positions) if g]
+    if not have:
+        return
+    ax.boxplot([g for g, _ in have], positions=[x for _, x in have], widths=width,
+               patch_artist=True, manage_ticks=False,
+               boxprops={"facecolor": color, "alpha": 0.35}, medianprops={"color": "k"})
+    for g, x in have:
+        ax.plot([x] * len(g), g, ".", color=color, ms=4)
+
+
+def plot_fig10(d: dict[str, Any], out: Path) -> Path:
+    plt = _pyplot()
+    fams = sorted(set(d["families"]), key=d["families"].index)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    xs = list(range(1, len(d["references"]) + 1))
+    for ax, key, label in ((axes[0], "pitch_db", "central pitch (dB re 1 c/mm)"),
+                           (axes[1], "irregularity_db", "irregularity (dB re 1 decade)")):
+        for k, fam in enumerate(fams):
+            idx = [i for i, f in enumerate(d["families"]) if f == fam]
+            _boxes(ax, [d[key][i] for i in idx], [xs[i] for i in idx], 0.6, "C%d" % k)
+            ax.plot([], [], "s", color="C%d" % k, alpha=0.5, label=fam)
+        ax.plot(xs, [r[key] for r in d["rater"]], "D", color="C3", mfc="w", ms=7,
+                label="trained rater")
+        ax.set_xticks(xs, d["references"], rotation=30, fontsize=8)
+        ax.set_ylabel(label)
+    axes[0].legend(fontsize=7)
+    axes[0].set_title("a) central pitch", fontsize=8)
+    axes[1].set_title("b) irregularity", fontsize=8)
+    fig.suptitle("Free exploration matches per reference (seed 000, Fig. 10); "
+                 "n = %d matches" % sum(len(v) for v in d["pitch_db"]), fontsize=9)
+    return _save(fig, out)
+
+
+def _save(fig: Any, out: Path) -> Path:
+    plt = _pyplot()
+    fig.tight_layout()
+    fig.savefig(out, dpi=100)
+    plt.close(fig)
+    return out
+
+
+def plot_fig15(d: dict[str, Any], out: Path) -> Path:
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.5, 4.2))
+    n = len(d["exemplars"])
+    for k, ref in enumerate(d["exemplars"]):
+        off = 0.45 * (k - (n - 1) / 2)
+        _boxes(ax, d["changes"][k], [q + off for q in d["levels_db"]], 0.35, "C%d" % k)
+        ax.plot([], [], "s", color="C%d" % k, alpha=0.5, label=ref)
+    ax.axhline(0.0, ls=":", color="k")
+    ax.set_xticks(d["levels_db"], ["%g" % q for q in d["levels_db"]])
+    ax.set_xlabel("quantization q (dB)")
+    ax.set_ylabel("change in similarity (quantized - unquantized)")
+    ax.legend(fontsize=8)
+    ax.set_title("Change in similarity with quantization (seed 000, Fig. 15)", fontsize=9)
+    return _save(fig, out)
+
+
+def plot_fig14c(d: dict[str, Any], out: Path) -> Path:
+    import numpy as np
+    plt = _pyplot()
+    refs = d["references"]
+    grid = np.array([[np.nan if v is None else v for v in row] for row in d["mean"]])
+    fig, ax = plt.subplots(figsize=(5.5, 4.5))
+    im = ax.imshow(grid, vmin=1, vmax=5, cmap="viridis")
+    for i, row in enumerate(d["mean"]):
+        for j, v in enumerate(row):
+            if v is not None:
+                ax.text(j, i, "%.2f\nn=%d" % (v, d["n"][i][j]), ha="center", va="center",
+                        color="w", fontsize=8)
+    ax.set_xticks(range(len(refs)), ["%s's match" % r for r in refs], fontsize=8)
+    ax.set_yticks(range(len(refs)), refs, fontsize=8)
+    ax.set_ylabel("reference")
+    fig.colorbar(im, ax=ax, label="mean similarity (1..5)")
+    ax.set_title("Similarity matrix (seed 000, Fig. 14c)", fontsize=9)
+    return _save(fig, out)
+
+
+def plot_fig2(d: dict[str, Any], out: Path) -> Path:
+    plt = _pyplot()
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.2),
+                                 gridspec_kw={"width_ratios": [2.2, 1]})
+    conds = sorted({t["condition"] for t in d["tracks"]})
+    for t in d["tracks"]:
+        color = "C%d" % conds.index(t["condition"])
+        ax.plot(range(1, len(t["length_mm"]) + 1), t["length_mm"], "-", color=color,
+                lw=1, alpha=0.8)
+        ax.plot([i + 1 for i in t["reversals"]], [t["length_mm"][i] for i in t["reversals"]],
+                "o", mfc="none", color=color, ms=5)
+    for k, c in enumerate(conds):
+        ax.plot([], [], "-", color="C%d" % k, label=c)
+    ax.plot([], [], "o", mfc="none", color="k", label="reversal")
+    ax.set_xlabel("trial")
+    ax.set_ylabel("texel length (mm)")
+    ax.legend(fontsize=8)
+    ax.set_title("a) staircases (%d sessions)" % len(d["tracks"]), fontsize=8)
+    xs = list(range(1, len(d["conditions"]) + 1))
+    for k, c in enumerate(d["conditions"]):
+        _boxes(bx, [d["convergent_mm"][k]], [xs[k]], 0.5, "C%d" % conds.index(c))
+    if xs:
+        bx.set_xticks(xs, d["conditions"])
+    else:
+        bx.text(0.5, 0.5, "no staircase has reached\nits threshold reversals", ha="center",
+                transform=bx.transAxes, fontsize=8)
+    bx.set_ylabel("convergent texel length (mm)")
+    bx.set_title("b) convergent length per condition", fontsize=8)
+    fig.suptitle("Texel-length oddity staircase (seed 001, Fig. 2)", fontsize=9)
+    return _save(fig, out)
+
+
+def plot_fig4(d: dict[str, Any], out: Path) -> Path:
+    plt = _pyplot()
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.2))
+    fcs, zetas = d["fc_cpmm"], d["zetas"]
+    for k, z in enumerate(zetas):
+        rows = d["fig4a_mean_cpmm"][k]
+        off = 1.08 ** (k - 1)
+        for f, vals in zip(fcs, rows):
+            ax.plot([f * off] * len(vals), vals, "o", color="C%d" % k, ms=4, alpha=0.7)
+        avg = [(f * off, _mean(v)) for f, v in zip(fcs, rows) if v]
+        ax.plot([x for x, _ in avg], [y for _, y in avg], "-", color="C%d" % k,
+                label="zeta %g" % z)
+    ax.plot([0.5, 40], [0.5, 40], ":", color="0.4", label="equal")
+    for f in fcs:
+        ax.axvline(f, ls="--", color="0.85", lw=0.8)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("reference central frequency (c/mm)")
+    ax.set_ylabel("chosen pitch: lognormal mean (c/mm)")
+    ax.legend(fontsize=8)
+    ax.set_title("a) pitch", fontsize=8)
+    for k, f in enumerate(fcs):
+        rows = d["fig4b_irregularity_normalised"][k]
+        off = 1.08 ** (k - 1)
+        for z, vals in zip(zetas, rows):
+            bx.plot([z * off] * len(vals), vals, "o", color="C%d" % k, ms=4, alpha=0.7)
+        avg = [(z * off, _mean(v)) for z, v in zip(zetas, rows) if v]
+        bx.plot([x for x, _ in avg], [y for _, y in avg], "-", color="C%d" % k,
+                label="%g c/mm" % f)
+    for z in zetas:
+        bx.axvline(z, ls="--", color="0.85", lw=0.8)
+    bx.set_xscale("log")
+    bx.set_xlabel("reference zeta")
+    bx.set_ylabel("chosen irregularity (normalised per participant)")
+    bx.legend(fontsize=8)
+    bx.set_title("b) irregularity", fontsize=8)
+    fig.suptitle("Texel parameter mapping (seed 001, Fig. 4); lines: means over sessions",
+                 fontsize=9)
+    return _save(fig, out)
+
+
+def plot_fig5(d: dict[str, Any], out: Path) -> Path:
+    plt = _pyplot()
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(10, 4.2), sharey=True)
+    for axis, key, ticks, what in ((ax, "fig5a", d["zetas"], "zeta"),
+                                   (bx, "fig5b", d["fc_cpmm"], "central frequency (c/mm)")):
+        xs = list(range(1, len(ticks) + 1))
+        _boxes(axis, d[key], xs, 0.5, "C0")
+        axis.set_xticks(xs, ["%g" % t for t in ticks])
+        axis.set_xlabel(what)
+        axis.axhline(d["paper_self_mean"], ls="--", color="C3", lw=0.8,
+                     label="paper: self-match mean %.2f (SD %.2f)" % (d["paper_self_mean"],
+                                                                      d["paper_self_sd"]))
+        if d["self"]:
+            axis.axhline(_mean(d["self"]), ls=":", color="k", lw=0.8,
+                         label="here: self-match mean %.2f (n = %d)" % (_mean(d["self"]),
+                                                                      len(d["self"])))
+    ax.set_ylabel("similarity (0..10)")
+    ax.set_ylim(-0.5, 10.5)
+    ax.set_title("a) lowest vs highest frequency, zeta equal", fontsize=8)
+    bx.set_title("b) lowest vs highest zeta, frequency equal", fontsize=8)
+    ax.legend(fontsize=7, loc="lower left")
+    fig.suptitle("Similarity ratings (seed 001, Fig. 5)", fontsize=9)
+    return _save(fig, out)
+
+
+PAPER_FIGURES = (("seed000_fig10_matches.png", fig10_data, plot_fig10),
+                 ("seed000_fig15_quantization.png", fig15_data, plot_fig15),
+                 ("seed000_fig14c_similarity.png", fig14c_data, plot_fig14c),
+                 ("seed001_fig2_staircase.png", fig2_data, plot_fig2),
+                 ("seed001_fig4_mapping.png", fig4_data, plot_fig4),
+                 ("seed001_fig5_ratings.png", fig5_data, plot_fig5))
+
+
+def study_figures(loaded: Loaded, out_dir: str | os.PathLike) -> dict[str, Any]:
+    """The papers' figures the sessions make: {file name: (path, the data
+    plotted)}, only for the figures whose sessions the data has."""
+    out: dict[str, Any] = {}
+    for name, data_of, plot in PAPER_FIGURES:
+        d = data_of(loaded)
+        if d is not None:
+            out[name] = (plot(d, Path(out_dir) / name), d)
+    return out

@@ -1,0 +1,205 @@
+"""`texelpad lab export`'s figures that follow the papers (study/export.py
+PAPER_FIGURES): seed 000 Fig. 10, 15, 14c and seed 001 Fig. 2, 4, 5 over
+every session of a data folder. A synthetic folder of sessions (made as the
+lab makes them: Session.create, protocols.start/apply, each answer with the
+scene its question played); each figure is written when its sessions exist
+and not otherwise, and the numbers it plots are the ones worked out here by
+hand (issue 20 item 4)."""
+from __future__ import annotations
+
+import csv
+
+import pytest
+
+from texelpad import cli
+from texelpad.study import configs as C
+from texelpad.study import protocols
+from texelpad.study import questions as Q
+from texelpad.study.describe import TPAD_DISPLAY
+from texelpad.study.export import export
+from texelpad.study.mapping import MEAN_BASE_CPMM, MEAN_RATIO
+from texelpad.study.quant import NINE
+from texelpad.study.rater import match
+from texelpad.study.session import Session
+
+EXEMPLARS = ("4sin", "pink", "sawtooth")
+GIVEN = {"matches": {r: {"pitch_db": 6.0, "irregularity_db": -12.0, "seed": 11 + k,
+                         "texel_samples": 50, "v": 2} for k, r in enumerate(NINE)}}
+BP = ("bp-1-0.05", "bp-1-0.5", "bp-1-5", "bp-4-0.05", "bp-4-0.5", "bp-4-5", "bp-20-0.05",
+      "bp-20-0.5", "bp-20-5")
+
+
+def _run(data, proto, participant, config, seed, answer, n=None):
+    """A session answered by answer(state) until done (or n answers); each
+    record holds the scene its question played."""
+    s = Session.create(data, proto, participant, dict(config), seed)
+    st = protocols.start(proto, config, seed)
+    k = 0
+    while not st.done and (n is None or k < n):
+        if Q.sliding(proto, st):
+            sc, _ = Q.slider_scene(st, s.header, TPAD_DISPLAY, *st.config.start, 0, proto)
+        else:
+            sc = Q.ask(proto, st, s.header, TPAD_DISPLAY).options[0]
+        a = answer(st)
+        s.append({"answer": a, "scene": sc, "playing": 0})
+        protocols.apply(proto, st, a)
+        k += 1
+    return s, st
+
+
+def _free(shift):
+    # the match of the reference in row i: pitch i + shift dB, irregularity -i - 1 dB
+    def answer(st):
+        i = NINE.index(st.reference)
+        return {"pitch_db": i + shift, "irregularity_db": -i - 1.0, "confidence": 3}
+    return answer
+
+
+def _quant(base, quantized):
+    # unquantized trials rate `base`, quantized ones quantized[q]
+    def answer(st):
+        return quantized[st.current[1]] if st.current[1] else base
+    return answer
+
+
+def _staircase_pattern():
+    pattern = [True, True, True, False]
+    return lambda st: pattern[len(st.track) % 4]
+
+
+def _mapping_answer(st):
+    if st.phase == "match":
+        i = BP.index(st.reference)
+        return {"pitch": 10.0 * i, "irregularity": 5.0 * i + 10.0}
+    ref, of = st.current
+    return 10 if ref == of else (len(ref) + len(of)) % 11
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory):
+    root = tmp_path_factory.mktemp("lab")
+    data, out = root / "data", root / "out"
+    _run(data, "free", "p1", {}, 1, _free(0.0))
+    _run(data, "free", "p2", {}, 2, _free(0.5))
+    _run(data, "quant", "p1", GIVEN, 3, _quant(5, {1.0: 4, 3.0: 3, 5.0: 1}))
+    _run(data, "quant", "p2", GIVEN, 4, _quant(4, {1.0: 4, 3.0: 4, 5.0: 4}))
+    matrix = C.load("similarity-matrix")["config"]
+    _run(data, "quant", "p1", matrix, 5, lambda st: 5 if st.current_match == st.current[0]
+         else 2)
+    _run(data, "quant", "p2", matrix, 6, lambda st: 4 if st.current_match == st.current[0]
+         else 1)
+    _run(data, "staircase", "p1", {}, 7, _staircase_pattern())
+    _run(data, "staircase", "p2", {"condition": "wide"}, 8, lambda st: True, n=5)
+    _, mapping_state = _run(data, "mapping", "p1", {}, 9, _mapping_answer)
+    res = export(data, out)
+    return res, out, mapping_state
+
+
+def test_every_paper_figure_is_written_from_its_sessions(exported):
+    res, out, _ = exported
+    assert res["broken"] == [] and len(res["figures"]) == 9
+    assert sorted(res["study_figures"]) == sorted([
+        "seed000_fig10_matches.png", "seed000_fig15_quantization.png",
+        "seed000_fig14c_similarity.png", "seed001_fig2_staircase.png",
+        "seed001_fig4_mapping.png", "seed001_fig5_ratings.png"])
+    for name, (path, _) in res["study_figures"].items():
+        assert path == out / name and path.stat().st_size > 5000
+
+
+def test_fig10_plots_every_match_per_reference_and_the_raters_choice(exported):
+    d = exported[0]["study_figures"]["seed000_fig10_matches.png"][1]
+    assert d["references"] == list(NINE)
+    assert d["pitch_db"] == [[float(i), i + 0.5] for i in range(9)]   # p1, then p2
+    assert d["irregularity_db"] == [[-i - 1.0, -i - 1.0] for i in range(9)]
+    assert d["rater"] == [match(r) for r in NINE]
+    assert d["families"][:3] == ["sums of sinusoids"] * 3
+
+
+def test_fig15_plots_the_change_from_the_unquantized_rating(exported):
+    """p1 rates unquantized 5 and quantized 4, 3, 1 at q = 1, 3, 5: changes
+    -1, -2, -4; p2 rates everything 4: changes 0 (same exemplar, same
+    source: the rater's, whose renderings the paper's design quantizes)."""
+    d = exported[0]["study_figures"]["seed000_fig15_quantization.png"][1]
+    assert d["exemplars"] == list(EXEMPLARS) and d["levels_db"] == [1.0, 3.0, 5.0]
+    assert d["changes"] == [[[-1.0, 0.0], [-2.0, 0.0], [-4.0, 0.0]]] * 3
+
+
+def test_fig14c_is_the_mean_matrix_of_the_matrix_sessions(exported):
+    d = exported[0]["study_figures"]["seed000_fig14c_similarity.png"][1]
+    assert d["references"] == list(EXEMPLARS)
+    assert d["mean"] == [[4.5 if i == j else 1.5 for j in range(3)] for i in range(3)]
+    assert d["n"] == [[2] * 3] * 3
+
+
+def test_fig2_plots_the_tracks_and_the_convergent_lengths(exported):
+    """p1: C C C W repeated (tests/study/test_protocols.py works it out):
+    reversals at 23.5, 26, ..., 24.75, 23.5, 24.75, threshold their mean from
+    the 8th; p2 (wide) answered 5 right: 26 mm three times, then 23.5 - no
+    reversal, no convergent length."""
+    d = exported[0]["study_figures"]["seed001_fig2_staircase.png"][1]
+    p1, p2 = d["tracks"]
+    assert (p1["condition"], p2["condition"]) == ("narrow", "wide")
+    assert [p1["length_mm"][i] for i in p1["reversals"]] == \
+        [23.5, 26.0, 23.5, 26.0, 23.5, 26.0, 23.5, 24.75, 23.5, 24.75]
+    assert p1["threshold_mm"] == pytest.approx((24.75 + 23.5 + 24.75) / 3)
+    assert p2["length_mm"] == [26.0, 26.0, 26.0, 23.5, 23.5] and p2["reversals"] == []
+    assert d["conditions"] == ["narrow"] and d["convergent_mm"] == [[p1["threshold_mm"]]]
+
+
+def test_fig4_plots_the_chosen_pitch_and_irregularity(exported):
+    """Reference i of Table I (fc outer, zeta inner) matched at P = 10 i:
+    mean 0.75 * 1.04^(10 i) c/mm; I = 5 i + 10, normalised over the nine
+    (10 .. 50): i / 8."""
+    d = exported[0]["study_figures"]["seed001_fig4_mapping.png"][1]
+    fcs, zetas = d["fc_cpmm"], d["zetas"]
+    assert (fcs, zetas) == ([1.0, 4.0, 20.0], [0.05, 0.5, 5.0])
+    for iz in range(3):
+        for jf in range(3):
+            i = 3 * jf + iz
+            want = MEAN_BASE_CPMM * MEAN_RATIO ** (10 * i)
+            assert d["fig4a_mean_cpmm"][iz][jf] == [pytest.approx(want, abs=1e-6)]
+            assert d["fig4b_irregularity_normalised"][jf][iz] == [pytest.approx(i / 8)]
+
+
+def test_fig5_plots_the_ratings_of_the_papers_pairs(exported):
+    d = exported[0]["study_figures"]["seed001_fig5_ratings.png"][1]
+
+    def r(a, b):                        # the rating _mapping_answer gave the pair
+        return 10 if a == b else (len(a) + len(b)) % 11
+    assert d["fig5a"] == [[r("bp-1-%s" % z, "bp-20-%s" % z)] * 2 for z in ("0.05", "0.5", "5")]
+    assert d["fig5b"] == [[r("bp-%s-0.05" % f, "bp-%s-5" % f)] * 2 for f in ("1", "4", "20")]
+    assert d["self"] == [10] * 9 and d["paper_self_mean"] == 8.11
+
+
+def test_the_csv_has_the_mapping_and_the_sources(exported):
+    _, out, st = exported
+    rows = list(csv.DictReader(open(out / "sessions.csv")))
+    mapping = [r for r in rows if r["protocol"] == "mapping"]
+    assert len(mapping) == 34
+    first = mapping[0]
+    m = st.matches[0]
+    assert (first["reference"], float(first["pitch_slider"]),
+            float(first["irregularity_slider"]), float(first["match_pitch_db"])) == \
+        (m["reference"], m["pitch"], m["irregularity"], m["pitch_db"])
+    rated = mapping[9]
+    assert (rated["reference"], rated["match_of"]) == tuple(st.pairs[0])
+    assert rated["similarity"] == str(st.ratings[0]["similarity"])
+    quant = [r for r in rows if r["protocol"] == "quant" and r["config_file"] == ""]
+    assert {r["source"] for r in quant} == {"own", "rater"}
+
+
+def test_a_figure_is_written_only_when_its_sessions_exist(tmp_path, capsys):
+    data, out = tmp_path / "data", tmp_path / "out"
+    _run(data, "staircase", "p1", {}, 1, lambda st: True, n=3)
+    _run(data, "free", "p1", {}, 1, _free(0.0), n=0)          # started, no match yet
+    _run(data, "mapping", "p1", {}, 1, _mapping_answer, n=3)  # matches, no rating yet
+    res = export(data, out)
+    assert sorted(res["study_figures"]) == ["seed001_fig2_staircase.png",
+                                            "seed001_fig4_mapping.png"]
+    assert sorted(p.name for p in out.glob("seed*.png")) == sorted(res["study_figures"])
+    only = tmp_path / "pursuit"
+    _run(only, "pursuit", "p1", {}, 1, lambda st: "A", n=4)
+    assert cli.main(["lab", "export", "--data", str(only), "--out", str(tmp_path / "o2")]) == 0
+    printed = capsys.readouterr().out
+    assert "and 1 figures" in printed and "papers' figures" not in printed
+    assert list((tmp_path / "o2").glob("seed*.png")) == []
