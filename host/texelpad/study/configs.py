@@ -28,7 +28,9 @@ KEYS = {"protocol", "title", "note", "reference", "seed", "config"}
 FILE_MAX = 1 << 20          # bytes: a config is a few hundred; a larger file is a mistake
 
 
-def _check(name: str, c: Any) -> dict[str, Any]:
+def check(name: str, c: Any) -> dict[str, Any]:
+    """A config object checked as a file is (SessionError says why): its keys,
+    protocol, seed, and that the protocol starts from it."""
     if not isinstance(c, dict):
         raise SessionError("config %s: expected a JSON object" % name)
     bad = sorted(set(c) - KEYS)
@@ -70,7 +72,7 @@ def available(extra: str | Path | None = None) -> dict[str, dict[str, Any]]:
                 check_name("config", name)
                 if path.stat().st_size > FILE_MAX:
                     raise SessionError("config %s: over %d bytes" % (name, FILE_MAX))
-                out[name] = _check(name, json.loads(path.read_text(encoding="utf-8")))
+                out[name] = check(name, json.loads(path.read_text(encoding="utf-8")))
                 out[name]["file"] = str(path)
             except (OSError, ValueError) as e:
                 out[name] = {"error": str(e), "file": str(path)}

@@ -47,7 +47,7 @@ def load(name_or_config: Any, configs_dir: str | Path | None = None
     path to a config .json file, or the object itself. SessionError says why
     not (an unknown name, a file that is missing, not JSON or not a config)."""
     if isinstance(name_or_config, dict):
-        return "(given)", C._check("(given)", dict(name_or_config))
+        return "(given)", C.check("(given)", dict(name_or_config))
     if not isinstance(name_or_config, str) or not name_or_config:
         raise SessionError("config: expected a config's name or a .json file, got %r"
                            % (name_or_config,))
@@ -62,7 +62,7 @@ def load(name_or_config: Any, configs_dir: str | Path | None = None
         except (UnicodeDecodeError, ValueError, RecursionError) as e:
             raise SessionError("config %s: not a JSON config (%s)" % (path, str(e)[:120])) \
                 from None
-        cf = C._check(path.stem, obj)
+        cf = C.check(path.stem, obj)
         return path.stem, dict(cf, file=str(path))
     return name_or_config, C.load(name_or_config, configs_dir)
 
@@ -183,7 +183,7 @@ def _free(st: Any, header: dict[str, Any], display: dict[str, Any]) -> dict[str,
 def _quant(st: Any, header: dict[str, Any], display: dict[str, Any]) -> dict[str, Any]:
     c = st.config
     v = Q.format_of(header)
-    phases = getattr(st, "_phases", None)      # the rater renderings' start phases (quant.py)
+    phases = st.phases                      # the rater renderings' start phases (quant.py)
     trials = []
     for k, p in enumerate(st.plan):
         ref, of, src, q = p["reference"], p["match_of"], p["source"], p["quant_db"]

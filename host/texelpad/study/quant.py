@@ -212,6 +212,11 @@ class Quant:
                 for r, m, s, q in self._trials]
 
     @property
+    def phases(self) -> list[float]:
+        """Each trial's start phase (cycles) of the rater's rendering."""
+        return list(self._phases)
+
+    @property
     def trial(self) -> int:
         return len(self.ratings)
 
