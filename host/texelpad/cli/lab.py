@@ -42,7 +42,8 @@ def add_lab(p: argparse.ArgumentParser) -> None:
                         "./lab-export)")
     p.description = ("Serve texelpad lab on http://127.0.0.1:PORT (this machine only): the "
                     "papers' protocols (free exploration, quantization test, "
-                    "pursuit vector, texel-length staircase, preference search) driving one board, every answer written to the "
+                    "pursuit vector, texel-length staircase, texel parameter mapping, preference "
+                    "search) driving one board, every answer written to the "
                     "session's file as it is given. Without --port it runs on the virtual "
                     "board. The URL is the first line printed. `texelpad lab describe "
                     "CONFIG` prints a study's full trial list without a board; `texelpad lab "
