@@ -7,8 +7,9 @@ simulated participant (texelpad.study.participant) answered.
 
     .venv/bin/python tools/lab_screenshots.py
 
-Writes docs/img/lab-experimenter.png, lab-screen-PROTOCOL.png and
-lab-summary-NAME.png.
+Writes docs/img/lab-experimenter.png, lab-screen-PROTOCOL.png,
+lab-summary-NAME.png and the papers' study figures (texelpad.study.export
+study_figures) over simulated participants as lab-paper-NAME.png.
 """
 import shutil
 import signal
@@ -24,7 +25,7 @@ OUT = ROOT / "docs" / "img"
 ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
 SCREENS = (("free-nine", "free"), ("quant-exemplars", "quant"), ("pursuit-4sin", "pursuit"),
-           ("staircase", "staircase"), ("search-4sin", "search"))
+           ("staircase", "staircase"), ("search-4sin", "search"), ("mapping", "mapping"))
 
 
 def screens(data: Path) -> None:
@@ -60,9 +61,12 @@ def screens(data: Path) -> None:
                     page.fill("#pitch", "620")
                     page.fill("#irregularity", "380")
                     page.check("#confidence-4")
+                elif proto == "mapping":
+                    page.fill("#pitch", "450")
+                    page.fill("#irregularity", "200")
                 elif proto in ("pursuit", "staircase", "search"):
-                    page.click("#feel-1")
-                    page.wait_for_selector("#feel-1.playing")
+                    page.click("#feel-2")
+                    page.wait_for_selector("#feel-2.playing")
                 page.wait_for_timeout(600)
                 page.screenshot(path=str(OUT / ("lab-screen-%s.png" % proto)))
                 if proto == "pursuit":
@@ -75,34 +79,74 @@ def screens(data: Path) -> None:
         p.wait(timeout=30)
 
 
-def summaries(data: Path) -> None:
+def _run(data: Path, name: str, participant: str, seed: int, n: int, sim, config=None):
+    """A session of config `name` answered by the simulated participant."""
     from texelpad.study import configs, protocols
+    from texelpad.study.references import target_point
+    from texelpad.study.session import Session
+    c = configs.load(name)
+    config = dict(c.get("config", {}), **(config or {}))
+    if "reference" in c:
+        config["reference"] = c["reference"]
+    proto = c["protocol"]
+    s = Session.create(data, proto, participant, dict(config, config_file=name), seed)
+    st = protocols.start(proto, config, seed)
+    for _ in range(n):
+        if st.done:
+            break
+        if proto == "free":             # the simulated participant aims at each reference
+            sim.target = target_point(st.reference)
+        a = sim.answer(proto, st)
+        protocols.apply(proto, st, a)
+        scene = {"regions": [{"start_mm": 0, "end_mm": 1, "texture": dict(
+            st.texture(a["pitch_db"], a["irregularity_db"], 0), kind="texel")}]} \
+            if proto == "free" else None
+        s.append({"answer": a, "scene": scene} if scene else {"answer": a})
+    return Session.open(s.path), st
+
+
+def summaries(data: Path) -> None:
+    from texelpad.study import matches
     from texelpad.study.export import figure
     from texelpad.study.participant import SimulatedParticipant
     from texelpad.study.references import target_point
-    from texelpad.study.session import Session
-    runs = (("free-nine", 9), ("quant-exemplars", 12), ("similarity-matrix", 9),
-            ("pursuit-4sin", 20), ("staircase", 400), ("search-4sin", 30))
+    runs = (("free-nine", 9), ("quant-paper", 27), ("similarity-matrix", 9),
+            ("pursuit-4sin", 20), ("staircase", 400), ("search-4sin", 30), ("mapping", 34))
+    own = None
     for name, n in runs:
-        c = configs.load(name)
-        config = dict(c.get("config", {}))
-        if "reference" in c:
-            config["reference"] = c["reference"]
-        proto = c["protocol"]
-        target = target_point(config.get("reference", {}).get("name", "pink"))
-        sim = SimulatedParticipant(target, noise=0.02, seed=2, threshold_mm=6.0)
-        s = Session.create(data, proto, "sim", dict(config, config_file=name), 5)
-        st = protocols.start(proto, config, 5)
-        for _ in range(n):
-            if st.done:
-                break
-            if proto == "free":         # the simulated participant aims at each reference
-                sim.target = target_point(st.reference)
-            a = sim.answer(proto, st)
-            protocols.apply(proto, st, a)
-            s.append({"answer": a})
-        short = name.split("-")[0] if name != "similarity-matrix" else "matrix"
-        figure(Session.open(s.path), OUT / ("lab-summary-%s.png" % short))
+        sim = SimulatedParticipant(target_point("4sin" if "4sin" in name else "pink"),
+                                   noise=0.02, seed=2, threshold_mm=6.0)
+        extra = {"matches": own} if name == "quant-paper" else None
+        s, st = _run(data, name, "sim", 5, n, sim, extra)
+        if name == "free-nine":
+            own = matches.from_free(s, st)
+        short = {"similarity-matrix": "matrix", "quant-paper": "quant"}.get(
+            name, name.split("-")[0])
+        figure(s, OUT / ("lab-summary-%s.png" % short))
+
+
+def paper_figures(data: Path) -> None:
+    """The papers' figures over eight simulated participants (noise and
+    staircase thresholds differ per participant): what `texelpad lab export`
+    draws for a study's data folder."""
+    from texelpad.study import matches
+    from texelpad.study.export import export
+    from texelpad.study.participant import SimulatedParticipant
+    from texelpad.study.references import target_point
+    for k in range(8):
+        who = "sim%02d" % k
+        sim = SimulatedParticipant(target_point("pink"), noise=0.01 + 0.005 * k, seed=k,
+                                   threshold_mm=3.0 + k)
+        s, st = _run(data, "free-nine", who, k, 9, sim)
+        _run(data, "quant-paper", who, k, 27, sim, {"matches": matches.from_free(s, st)})
+        _run(data, "similarity-matrix", who, k, 9, sim)
+        _run(data, "staircase" if k % 2 else "staircase-wide", who, k, 400, sim)
+        _run(data, "mapping", who, k, 34, sim)
+    with tempfile.TemporaryDirectory() as td:
+        made = export(data, td)["study_figures"]
+        for path in sorted(Path(td).glob("seed*.png")):
+            shutil.copy(path, OUT / ("lab-paper-%s" % path.name))
+    print("paper figures:", ", ".join(sorted(made)))
 
 
 def main():
@@ -110,6 +154,7 @@ def main():
     with tempfile.TemporaryDirectory() as td:
         screens(Path(td) / "screen")
         summaries(Path(td) / "sim")
+        paper_figures(Path(td) / "paper")
     print("wrote", ", ".join(sorted(p.name for p in OUT.glob("lab-*.png"))))
 
 
