@@ -10,6 +10,7 @@
 #   "pitch_db: 19.75 is out of range [-20.0, 19.747]"       out_of_range
 #   "regions[0].texture.level: nan is not finite (allowed [0.0, 1.0])"   not_finite
 #   "display.positions: expected an int in [1, 1048576], got str 'x'"  expected
+#   "phase: expected one of 'continuous', 'reset', got 'x'"            not_a_word
 
 _INFS = (float("inf"), float("-inf"))
 # Ints beyond this are shown by name in a message, not by their digits:
@@ -62,3 +63,15 @@ def not_finite(path, v, lo, hi):
 def expected(path, what, lo, hi, got):
     """what: "an int" or "a number"; got: the value as the caller shows it."""
     fail(path, "expected %s in %s, got %s" % (what, rng(lo, hi), got))
+
+
+def not_a_word(path, v, words):
+    """A refused word (params' kind "w"). What it shows of v is bounded: a
+    scene passes any value through (runtime/scene.py)."""
+    if isinstance(v, str):
+        got = repr(v) if len(v) <= 40 else "a str of %d characters" % len(v)
+    elif v is None or isinstance(v, (bool, int, float)):
+        got = "%s %s" % (type(v).__name__, show(v))
+    else:
+        got = type(v).__name__
+    fail(path, "expected one of %s, got %s" % (", ".join([repr(w) for w in words]), got))

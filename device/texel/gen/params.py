@@ -69,12 +69,8 @@ OPTION_SPEC = {
 KEYS = ("pitch_db", "irregularity_db", "texel_samples", "length_samples", "quant_db",
         "seed", "gain", "v", "band_limit_cpmm")
 OPTION_KEYS = ("min_cpmm", "phase")         # checked after KEYS, in this order
-ALL_KEYS = KEYS + OPTION_KEYS               # the unknown-key message's list
-_ALL_SPEC = dict(SPEC)
-_ALL_SPEC.update(OPTION_SPEC)
 # Keys whose None means "off" (a bound not set).
 NONE_OK = ("band_limit_cpmm", "min_cpmm")
-_WORD_SHOW = 40         # characters of a refused word shown in a message
 
 
 def _words():
@@ -87,14 +83,16 @@ def _words():
 def check_value(key, value):
     """Return value converted to its canonical type, or raise ValueError.
     key: one of KEYS or OPTION_KEYS."""
-    kind, default, lo, hi = _ALL_SPEC[key]
+    kind, default, lo, hi = SPEC[key] if key in SPEC else OPTION_SPEC[key]
     # the common case first (a float in range; NaN fails the comparison):
     # a push validates every texel key, at ~0.25 ms each on a Pico
     if type(value) is float and kind == "f" and lo <= value <= hi and (
             value == 0.0 or key != "quant_db" or value >= QUANT_DB_MIN):
         return value
-    if kind == "w":
-        return _word(key, value, lo)
+    if kind == "w":                 # a word: lo holds the allowed ones
+        if type(value) is str and value in lo:
+            return value
+        _words().not_a_word(key, value, lo)
     if value is None:
         if key in NONE_OK:
             return None
@@ -131,20 +129,6 @@ def check_value(key, value):
     return value
 
 
-def _word(key, value, words):
-    """value if it is one of words (str), else ValueError listing them. What
-    it shows of a refused value is bounded (a scene passes values through)."""
-    if type(value) is str and value in words:
-        return value
-    if type(value) is str:
-        got = repr(value) if len(value) <= _WORD_SHOW else "a str of %d characters" % len(value)
-    elif value is None or type(value) in (bool, int, float):
-        got = "%s %s" % (type(value).__name__, _words().show(value))
-    else:
-        got = type(value).__name__
-    _words().fail(key, "expected one of %s, got %s" % (", ".join([repr(w) for w in words]), got))
-
-
 def validate(params):
     """Check a parameter dict completely; return a new dict with defaults.
 
@@ -156,11 +140,11 @@ def validate(params):
     # iteration order (which differs between CPython and MicroPython).
     unknown = None
     for key in params:
-        if key not in _ALL_SPEC:
-            unknown = [repr(k) for k in params if k not in _ALL_SPEC]
+        if key not in SPEC and key not in OPTION_SPEC:
+            unknown = [repr(k) for k in params if k not in SPEC and k not in OPTION_SPEC]
             break
     if unknown:
-        raise ValueError("unknown key %s (allowed: %s)" % (min(unknown), ", ".join(ALL_KEYS)))
+        raise ValueError("unknown key %s (allowed: %s)" % (min(unknown), ", ".join(KEYS + OPTION_KEYS)))
     out = {}
     for key in KEYS:
         kind, default, lo, hi = SPEC[key]
@@ -187,6 +171,11 @@ def validate(params):
         _words().fail("min_cpmm", "%r must be below band_limit_cpmm %r (cycles/mm)"
                       % (lo_b, out["band_limit_cpmm"]))
     return out
+
+
+def has_options(p):
+    """A validated set p sets a texture option (gen/options.py applies it)."""
+    return p.get("min_cpmm") is not None or p.get("phase", "continuous") != "continuous"
 
 
 def texel_count(p):

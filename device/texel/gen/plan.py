@@ -107,7 +107,7 @@ class Plan:
             ta[i] = t28
             t28 = (t28 + _frac_u28(step * Lf)) & PHASE_MASK
         self.above_nyquist = above
-        if p.get("min_cpmm") is not None or p.get("phase", "continuous") != "continuous":
+        if _params.has_options(p):
             # seed 001's options (gen/options.py: loaded only for them)
             from .options import apply_float
             apply_float(self, F)

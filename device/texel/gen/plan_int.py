@@ -265,12 +265,6 @@ _texels = native("texel.gen.plan_int_viper", "texels") or texels_py
 VIPER = _texels is not texels_py
 
 
-def has_options(p):
-    """p (validated) sets seed 001's lower bound or phase reset
-    (params.OPTION_KEYS; gen/options.py)."""
-    return p.get("min_cpmm") is not None or p.get("phase", "continuous") != "continuous"
-
-
 class PlanInt:
     """The format-2 plan of a validated parameter set (v == 2): t28, d28 (the
     int engine's phases), y (log2 pitch, Q24 octaves), and, for the float
@@ -319,7 +313,7 @@ class PlanInt:
                                   self.z if keep_z else _ONE,
                                   (1 if keep_z else 0) | (0 if ys is None else 2))
         self.x0 = (st[8], st[9])        # the start phase's draw
-        if has_options(p):
+        if _params.has_options(p):
             # seed 001's options (gen/options.py: loaded only for them)
             from .options import apply_int
             apply_int(self, ys, tab)

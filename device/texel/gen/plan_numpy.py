@@ -26,7 +26,7 @@ from array import array
 from . import params as _params
 from .plan import Plan, UNITS_PER_TURN, PHASE_MASK, _TWO_PI, _DX, _check_draws, _frac_u28
 from .plan_int import PlanInt, exp2_q24, _round_q, LOG2_LOG2_10, LOG2_STEP0, \
-    Y_LO, Y_HI, NYQ_EXP, MASK28, NORM, table, mul28, exp2_m, has_options
+    Y_LO, Y_HI, NYQ_EXP, MASK28, NORM, table, mul28, exp2_m
 from .options import apply_float, apply_int
 from .grid import mdb
 from .rng import WARMUP, SEED_CONSTS, uniform_of, phase_fraction_u28, \
@@ -199,7 +199,7 @@ class PlanNumpy(Plan):
         self.phi = _floats(phi)
         self.t28 = _int32s(t28)
         self.d28 = _int32s(d28)
-        if has_options(p):
+        if _params.has_options(p):
             apply_float(self)
 
 
@@ -328,7 +328,7 @@ class PlanIntNumpy(PlanInt):
         self.z = _int32s(z) if keep_z else None
         self._f = None
         self._phi = None
-        if has_options(p):
+        if _params.has_options(p):
             apply_int(self, ys, table())
 
     @property
