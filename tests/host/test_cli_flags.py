@@ -92,3 +92,30 @@ def test_format_flag_makes_a_format2_texture(tmp_path, capsys):
     assert np.array_equal(np.load(out), np.asarray(want))
     rc = cli.main(["render", "--pitch-db", "13.0005", "--irregularity-db", "-10", "--format", "2"])
     assert rc == 2 and "--pitch-db: 13.0005 is half-way" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["render", "push"])
+def test_texture_option_flags(command):
+    """The texture options (texel.gen.params.OPTION_SPEC, seed 001's
+    stimulus): --min-cpmm F and --phase {continuous,reset}, unset by default
+    (then the texture leaves them out)."""
+    flags = {a.dest: a for a in _parser_for(command)._actions}
+    assert flags["min_cpmm"].option_strings == ["--min-cpmm"] and flags["min_cpmm"].type is float
+    assert flags["phase"].option_strings == ["--phase"] and flags["phase"].choices == ("continuous", "reset")
+    assert flags["min_cpmm"].default is None and flags["phase"].default is None
+    assert "94.3396" in flags["min_cpmm"].help
+
+
+def test_option_flags_render_the_option_texture(tmp_path, capsys):
+    import numpy as np
+    import texel
+    out = tmp_path / "m.npy"
+    assert cli.main(["render", "--pitch-db", "4.353", "--irregularity-db", "-4.195", "--seed", "5",
+                     "--min-cpmm", "1", "--phase", "reset", "--engine", "int", "--out", str(out)]) == 0
+    want = texel.render({"pitch_db": 4.353, "irregularity_db": -4.195, "seed": 5, "v": 2,
+                         "min_cpmm": 1.0, "phase": "reset"}, engine="int")
+    assert np.array_equal(np.load(out), np.asarray(want))
+    capsys.readouterr()
+    rc = cli.main(["render", "--pitch-db", "4", "--irregularity-db", "-4", "--min-cpmm", "20",
+                   "--band-limit-cpmm", "10"])
+    assert rc == 2 and "--min-cpmm: 20.0 must be below band_limit_cpmm 10.0" in capsys.readouterr().err

@@ -8,6 +8,7 @@ import argparse
 from typing import Any
 
 from texel.gen.params import FORMAT_NEW, KEYS as TEXEL_SPEC_KEYS, QUANT_DB_MIN, SPEC as TEXEL_SPEC
+from texel.gen.params import OPTION_KEYS, OPTION_SPEC, PHASES
 
 from .errors import CliError
 
@@ -26,8 +27,17 @@ TEXEL_MEANING = {
 }
 # in the spec's own order (texel.gen.params.KEYS); a new spec key needs a meaning here
 TEXEL_KEYS = tuple(k for k in TEXEL_SPEC_KEYS if k != "v")
+# The texture options (texel.gen.params.OPTION_SPEC: in a texture only when
+# set; seed 001's stimulus, docs/generator.md), one flag each.
+OPTION_MEANING = {
+    "min_cpmm": ("F", "lower pitch bound, cycles/mm: a texel drawn below it is redrawn from a "
+                      "second stream (seed 001's 1 c/mm; %g .. %g, below --band-limit-cpmm; "
+                      "default: none)" % OPTION_SPEC["min_cpmm"][2:]),
+    "phase": (None, "phase at texel borders: continuous (default, the original) or reset "
+                    "(every texel starts at the first texel's phase, as in seed 001)"),
+}
 # texel parameter key -> its flag (error messages name the flag, not the key)
-PARAM_FLAGS = {k: "--" + k.replace("_", "-") for k in TEXEL_KEYS}
+PARAM_FLAGS = {k: "--" + k.replace("_", "-") for k in TEXEL_KEYS + OPTION_KEYS}
 PARAM_FLAGS["engine"] = "--engine"
 PARAM_FLAGS["v"] = "--format"
 FORMAT_HELP = ("texture format: 2 = the integer plan (default), the same texture bit for bit "
@@ -57,12 +67,16 @@ def add_texel_flags(group: Any, keys: tuple[str, ...] = TEXEL_KEYS,
                            metavar=metavar, required=key in required,
                            help="%s; %s" % (meaning, _range_text(key)))
     group.add_argument("--format", dest="v", type=int, choices=(1, 2), help=FORMAT_HELP)
+    group.add_argument(PARAM_FLAGS["min_cpmm"], dest="min_cpmm", type=float,
+                       metavar=OPTION_MEANING["min_cpmm"][0], help=OPTION_MEANING["min_cpmm"][1])
+    group.add_argument(PARAM_FLAGS["phase"], dest="phase", choices=PHASES,
+                       help=OPTION_MEANING["phase"][1])
 
 
 def render_params(args: argparse.Namespace) -> dict[str, Any]:
     """The texel parameter dict from the flags that were given."""
     params: dict[str, Any] = {}
-    for key in TEXEL_KEYS + ("v",):
+    for key in TEXEL_KEYS + ("v",) + OPTION_KEYS:
         v = getattr(args, key, None)
         if v is not None:
             params[key] = v
