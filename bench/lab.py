@@ -3,10 +3,16 @@ virtual board, through the lab's own board owner (texelpad.web.owner: the
 host-side check, the push, the board's validation, build and swap, its status
 back). Each step is what a pitch or irregularity slider of the free
 exploration sends (study/questions.slider_scene): the reference on the left
-half, the texel rendering (format 2, 0.25 mm texels, a fresh seed per change)
+half, the texel rendering (format 2, 50-sample texels, a fresh seed per change)
 on the right.
 
     .venv/bin/python -m bench.lab [--steps N] [--json PATH]
+
+A third path, "mapping": seed 001's texel parameter mapping
+(study/mapping.py) through the owner - its slider scenes carry the band-pass
+reference as 9,600 uploaded samples (the left half) and seed 001's texel
+options (1 mm texels, min_cpmm, phase reset) on the right, so every change
+uploads the reference again.
 
 Two paths, both measured: "owner" pushes through the lab's BoardOwner in
 this process (the board's part); "http" is what a participant's slider does -
@@ -25,6 +31,7 @@ import time
 
 from texelpad.sim.virtual import open_virtual, stop_on_signals
 from texelpad.study.free import Free
+from texelpad.study.mapping import Mapping
 from texelpad.study.questions import slider_scene
 from texelpad.web.owner import BoardOwner
 
@@ -56,6 +63,32 @@ def run(steps: int = 200) -> dict:
     return dict(_figures(times, refs), overruns=last["overruns"],
                 refreshes=last["refreshes"], board="virtual (MicroPython unix port, real time)",
                 path="BoardOwner.push in this process")
+
+
+def run_mapping(steps: int = 200) -> dict:
+    """Seed 001's mapping: slider changes through the owner (module docstring)."""
+    with stop_on_signals():
+        vb = open_virtual(source=True)
+        try:
+            owner = BoardOwner(vb.port, "virtual", realtime=True)
+            display = owner.display()
+            times, refs = [], []
+            st = Mapping(1)
+            for k in range(steps):
+                pitch = float(abs((k % 40) - 20) * 5)       # 0 .. 100 and back
+                irr = float(k % 101)
+                scene, _ = slider_scene(st, {}, display, pitch, irr, k, "mapping")
+                refs.append(st.reference)
+                t0 = time.perf_counter()
+                owner.push(scene)
+                times.append((time.perf_counter() - t0) * 1e3)
+            last = owner.status()
+            owner.close()
+        finally:
+            vb.stop()
+    return dict(_figures(times, refs), overruns=last["overruns"],
+                refreshes=last["refreshes"], board="virtual (MicroPython unix port, real time)",
+                path="BoardOwner.push in this process, seed 001's mapping")
 
 
 def _figures(times: list[float], refs: list[str]) -> dict:
@@ -96,7 +129,7 @@ def run_http(steps: int = 200) -> dict:
             sid = call(url + "api/sessions", {"config": "free-nine", "participant": "bench",
                                               "seed": 1})["id"]
             times, refs = [], []
-            pitch, irr = 5.0, -15.0              # the sliders start mid-range
+            pitch, irr = 5.0, -3.01              # where the sliders start (the lab's app)
             per = max(1, steps // 9)
             for k in range(steps):
                 if k and k % per == 0 and k // per < 9:      # the next trial: submit a match
@@ -127,12 +160,13 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--json", metavar="PATH")
     a = p.parse_args(argv)
     out = {}
-    for name, fn in (("owner", run), ("http", run_http)):
+    for name, fn in (("owner", run), ("http", run_http), ("mapping", run_mapping)):
         res = out[name] = fn(a.steps)
         print("slider change -> new scene playing on the %s, %s: median %.1f ms, p95 %.1f ms, "
               "max %.1f ms over %d changes; %d overruns in %d refreshes"
-              % (res["board"], "through the lab's owner" if name == "owner" else
-                 "over HTTP from a page", res["median_ms"], res["p95_ms"], res["max_ms"],
+              % (res["board"], {"owner": "through the lab's owner", "http": "over HTTP from a "
+                                 "page", "mapping": "seed 001's mapping through the owner (the "
+                                 "reference uploaded as samples)"}[name], res["median_ms"], res["p95_ms"], res["max_ms"],
                  res["steps"], res["overruns"], res["refreshes"]), flush=True)
         print("  median by reference (ms): " + ", ".join(
             "%s %.1f" % kv for kv in res["median_ms_by_reference"].items()), flush=True)
