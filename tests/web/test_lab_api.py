@@ -46,6 +46,10 @@ def _answer_all(lab, sid, sim, protocol, limit=100):
         a = sim.answer(protocol, live.state)
         if protocol == "staircase":                 # the page sends the texture picked
             a = live.question.odd if a else (live.question.odd + 1) % 3
+        if protocol == "free":                      # the sliders go there first: the match
+            assert lab.post("/api/sessions/%s/feel" % sid,       # is what plays
+                            json={k: a[k] for k in ("pitch_db", "irregularity_db")}
+                            ).status_code == 200
         r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": a, "question": _n(lab, sid)})
         assert r.status_code == 200, r.text
     return r

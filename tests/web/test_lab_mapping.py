@@ -52,6 +52,7 @@ def test_a_mapping_session_end_to_end(lab, port):
     for k in range(9):
         a = {"pitch": 10 * k, "irregularity": 5 * k}
         answers.append(a)
+        assert lab.post("/api/sessions/%s/feel" % sid, json=a).status_code == 200
         assert lab.post("/api/sessions/%s/answer" % sid,
                         json={"answer": a, "question": _n(lab, sid)}).status_code == 200
     q = lab.get("/api/sessions/%s" % sid).json()["question"]
@@ -69,3 +70,34 @@ def test_a_mapping_session_end_to_end(lab, port):
     assert file == answers + [7] * 25 and s.finished
     st = protocols.replay(s)
     assert st.matches == live.state.matches and st.ratings == live.state.ratings
+
+
+def test_a_slider_answer_must_be_what_plays_and_a_restart_plays_the_recorded_scene(lab, port):
+    """The match recorded is the texture that played: an answer naming other
+    slider values is refused (409) and changes nothing; a server restart
+    mid-trial plays again the scene the file's last move recorded (the same
+    seed), not a new rendering of the same sliders."""
+    for config, body, other in (("mapping", {"pitch": 33, "irregularity": 44},
+                                 {"pitch": 30, "irregularity": 44}),
+                                ("free-nine", {"pitch_db": 2.5, "irregularity_db": -7.0},
+                                 {"pitch_db": 2.5, "irregularity_db": -7.5})):
+        sid = lab.post("/api/sessions", json={"config": config, "participant": "p12",
+                                              "seed": 4}).json()["id"]
+        assert lab.post("/api/sessions/%s/feel" % sid,
+                        json=dict(body, question=0)).status_code == 200
+        playing = _playing(lab)
+        ans = dict(other, confidence=3) if config == "free-nine" else other
+        r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": ans, "question": 0})
+        assert r.status_code == 409 and "not what plays" in r.json()["error"]
+        live = lab.lab.live[sid]
+        assert not list(live.session.answers()) and _playing(lab) == playing
+        # a restart mid-trial: the recorded scene plays again, the same texture
+        lab.lab.live.clear()
+        r = lab.get("/api/sessions/%s" % sid).json()
+        assert r["sliders"] == list(body.values())
+        assert _playing(lab) == playing
+        ok = dict(body, confidence=3) if config == "free-nine" else body
+        assert lab.post("/api/sessions/%s/answer" % sid,
+                        json={"answer": ok, "question": 0}).status_code == 200
+        rec = list(Session.open(lab.lab.live[sid].session.path).answers())[0]
+        assert rec["scene"] == playing

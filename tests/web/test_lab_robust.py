@@ -66,6 +66,9 @@ def test_two_answers_to_one_question_at_once_make_one_answer(tmp_path):
                                               "seed": 5})
         assert code == 200, res
         sid = res["id"]
+        code, res = lab.post("api/sessions/%s/feel" % sid, {"pitch_db": 1.0,
+                                                            "irregularity_db": -9.0})
+        assert code == 200, res                 # (the match answered is what plays)
         body = {"answer": {"pitch_db": 1.0, "irregularity_db": -9.0, "confidence": 4},
                 "question": 0}
         got = []

@@ -14,6 +14,8 @@ Every state has `done`.
 """
 from __future__ import annotations
 
+import dataclasses
+import json
 from typing import Any
 
 from ..search.preference import PreferenceSearch
@@ -58,6 +60,19 @@ def start(protocol: str, config: dict[str, Any], seed: int) -> Any:
     if protocol == "mapping":
         return _mapping.Mapping(seed, _mapping.Config(**_tuples(config)))
     raise SessionError("protocol: unknown %r (known: %s)" % (protocol, ", ".join(PROTOCOLS)))
+
+
+def resolved(protocol: str, state: Any, config: dict[str, Any]) -> dict[str, Any]:
+    """The config a session's header records: every field of the protocol's
+    Config as it runs (the defaults it filled in included, so the header
+    names every choice the paper leaves open), plus the scenes' keys the
+    config gave (SCENE_KEYS). The search keeps what it was given."""
+    cfg = getattr(state, "config", None)
+    if protocol == "search" or not dataclasses.is_dataclass(cfg) or isinstance(cfg, type):
+        return dict(config)
+    out = json.loads(json.dumps(dataclasses.asdict(cfg)))
+    out.update({k: config[k] for k in SCENE_KEYS if k in config})
+    return out
 
 
 def _tuples(config: dict[str, Any]) -> dict[str, Any]:

@@ -159,6 +159,9 @@ class Config:
             if 0 in self.levels_db:
                 raise ValueError("levels_db: the paper's design quantizes at 1, 3, 5 dB (its "
                                  "unquantized trials are the 18); 0 is not a level here")
+        if self.order == "lab" and self.repeats != 1:
+            raise ValueError("repeats: order 'lab' plays the app's 27 trials once, got %r"
+                             % (self.repeats,))
         if self.order == "lab" and (self.design != "paper" or tuple(self.references) != NINE
                                     or tuple(self.exemplars) != LAB_EXEMPLARS
                                     or tuple(self.levels_db) != (1.0, 3.0, 5.0)):
@@ -193,9 +196,9 @@ class Quant:
     def __post_init__(self) -> None:
         rng = random.Random(self.seed)
         c = self.config
-        refs = tuple(c.references) + tuple(r for r in NINE if r not in c.references)
-        # drawn in a fixed order, so adding a trial kind never moves the others' seeds
-        self.texture_seeds = {r: rng.randrange(1 << 32) for r in refs}
+        # (drawn first, then the order, then the phases: the draws of the sessions
+        # before the paper's design, which replay as they ran - study/legacy.py)
+        self.texture_seeds = {r: rng.randrange(1 << 32) for r in c.references}
         self._trials = c.trials(rng)
         # the rater's renderings' start phases (buildFine5's rand()), one per trial
         self._phases = [rng.randrange(1 << 24) / float(1 << 24) for _ in self._trials]

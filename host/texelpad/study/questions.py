@@ -114,7 +114,8 @@ def _staircase(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Ques
     options, odd = S.staircase_scenes(st.texel_samples(), len(st.track), header["seed"],
                                       display, header["config"].get("distribution")
                                       or st.config.texture(), format_of(header),
-                                      st.config.remainder_level)
+                                      st.config.remainder_level,
+                                      st.config.fit_mm if st.config.whole_texels else None)
     return Question({"done": False, "kind": "three", "trial": len(st.track),
                      "options": ["1", "2", "3"], "answers": [0, 1, 2],
                      "seconds": st.config.trial_seconds},

@@ -67,18 +67,24 @@ def whole(texture: dict[str, Any], display: dict[str, Any], name: str = "") -> d
 
 def staircase_scenes(length_samples: int, trial: int, seed: int, display: dict[str, Any],
                      distribution: dict[str, Any], v: int = FORMAT_NEW,
-                     remainder_level: float = 0.0) -> tuple[list[dict[str, Any]], int]:
+                     remainder_level: float = 0.0, fit_mm: float | None = None
+                     ) -> tuple[list[dict[str, Any]], int]:
     """The three textures of a trial and the index of the odd one: two seeds,
-    one shown twice, in an order drawn from (seed, trial). Each fills the
-    display with as many whole texels as fit (seed 001); the rest plays the
-    constant remainder_level."""
+    one shown twice, in an order drawn from (seed, trial). With fit_mm each
+    holds as many whole texels as fit in fit_mm and in the display (seed 001)
+    and the rest plays the constant remainder_level; without, one texel
+    region fills the display."""
     rng = random.Random(seed * 100003 + trial)
     same, odd = rng.randrange(1 << 31), rng.randrange(1 << 31)
     seeds = [same, same, odd]
     rng.shuffle(seeds)
     total = _total_mm(display)
-    whole = min(display["positions"], (display["positions"] // length_samples) * length_samples)
-    end = round(whole * display["dx_um"] / 1000.0, 6) if whole else total
+    end = total
+    if fit_mm is not None:
+        room = min(display["positions"], int(fit_mm * 1000.0 / display["dx_um"] + 1e-9))
+        whole = (room // length_samples) * length_samples
+        if whole:
+            end = round(whole * display["dx_um"] / 1000.0, 6)
     scenes = []
     for k, s in enumerate(seeds):
         regions: list[dict[str, Any]] = [{"start_mm": 0, "end_mm": end, "texture": dict(

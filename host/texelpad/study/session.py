@@ -35,9 +35,10 @@ from pathlib import Path
 from typing import Any, Iterator
 
 from .. import __version__
+from .legacy import OLD_FORMAT, effective_header
 
 NAME = re.compile(r"^[A-Za-z0-9_-]{1,40}$")
-FORMAT = "texelpad-session/1"
+FORMAT = "texelpad-session/2"          # /1: before issue 20 (study/legacy.py reads it)
 
 
 class SessionError(ValueError):
@@ -112,9 +113,10 @@ class Session:
                     break
                 raise SessionError("%s: line %d is damaged (%s)" % (path, i + 1, e)) from None
             if header is None:
-                if rec.get("kind") != "session" or rec.get("format") != FORMAT:
+                if rec.get("kind") != "session" or rec.get("format") not in (FORMAT,
+                                                                              OLD_FORMAT):
                     raise SessionError("%s: not a texelpad session file" % path)
-                header = rec
+                header = effective_header(rec)
             else:
                 records.append(rec)
         if header is None:

@@ -23,7 +23,11 @@ borders are the cue under test): `condition` "narrow" (SD 1.2) or "wide"
 gives the generator's pitch_db/irregularity_db of that lognormal),
 `min_cpmm` 1 (the generator redraws pitches below it: docs/generator.md) and
 `phase` "reset". A config's "distribution" (a texel texture's keys) still
-replaces the whole stimulus, as before.
+replaces the whole stimulus, as before. Each texture holds as many whole
+texels as fit in `fit_mm` (100 mm, seed 001's display) and in the board's
+display (the TPaD here: 101.76 mm); `whole_texels` false plays one texel
+region over the whole display instead (the design before, and what a
+display shorter than one texel plays: the one texel, cut at its end).
 
 Choices recorded in Config: the floor (one step: a length never goes below
 it), the threshold rule; `remainder_level`: the display after the last whole
@@ -36,7 +40,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from texel.gen.lognormal import to_db
-from texel.gen.params import DX_MM
+from texel.gen.params import DX_MM, NYQUIST_CPMM
 
 CONDITIONS = {"narrow": 1.2, "wide": 4.3}     # seed 001: the lognormal's SD, c/mm
 
@@ -57,6 +61,8 @@ class Config:
     min_cpmm: float | None = 1.0
     phase: str = "reset"
     remainder_level: float = 0.0
+    whole_texels: bool = True       # False: one texel region over the whole display (before)
+    fit_mm: float = 100.0           # seed 001: the texels that fit in the 100-mm display
 
     def texture(self) -> dict:
         """The texel texture's keys of the staircase's distribution (no
@@ -82,9 +88,15 @@ class Config:
             raise ValueError("remainder_level: expected a friction level 0 .. 1, got %r"
                              % (self.remainder_level,))
         if self.min_cpmm is not None and (isinstance(self.min_cpmm, bool) or not isinstance(
-                self.min_cpmm, (int, float)) or not 0.01 <= self.min_cpmm <= 94.0):
-            raise ValueError("min_cpmm: expected null or 0.01 .. 94 c/mm, got %r"
-                             % (self.min_cpmm,))
+                self.min_cpmm, (int, float)) or not 0.01 <= self.min_cpmm <= NYQUIST_CPMM):
+            raise ValueError("min_cpmm: expected null or 0.01 .. %.2f c/mm, got %r"
+                             % (NYQUIST_CPMM, self.min_cpmm))
+        if not isinstance(self.whole_texels, bool):
+            raise ValueError("whole_texels: expected true or false, got %r"
+                             % (self.whole_texels,))
+        if isinstance(self.fit_mm, bool) or not isinstance(self.fit_mm, (int, float)) \
+                or not 0 < self.fit_mm <= 10000:
+            raise ValueError("fit_mm: expected a length in mm > 0, got %r" % (self.fit_mm,))
         if isinstance(self.mean_cpmm, bool) or not isinstance(self.mean_cpmm, (int, float)):
             raise ValueError("mean_cpmm: expected a number, got %r" % (self.mean_cpmm,))
         self.texture()                  # to_db refuses a mean the generator cannot play

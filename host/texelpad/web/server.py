@@ -97,8 +97,9 @@ class Live:
     playing: int | None = None              # the option playing (None: nothing of this session)
     connection: int = 0                     # the owner's connection it played on
     playing_scene: dict[str, Any] | None = None
-    moves: int = 0                          # free exploration: slider changes this trial
+    moves: int = 0                          # sliding protocols: slider changes this trial
     sliders: tuple[float, float] | None = None
+    resume_scene: dict[str, Any] | None = None  # resumed mid-trial: the scene the file last had
 
     @property
     def protocol(self) -> str:
@@ -189,6 +190,11 @@ class Lab:
         if q.done:
             return
         if Q.sliding(lv.protocol, lv.state):
+            if lv.resume_scene is not None:     # the very texture the file says was playing
+                _, canonical = self.owner.push(lv.resume_scene)
+                lv.playing, lv.playing_scene, lv.resume_scene = 0, canonical, None
+                self._took_board(lv)
+                return
             p, s = lv.sliders or lv.state.config.start
             self._slide(lv, p, s, record=lv.sliders is None)
         else:
@@ -260,6 +266,7 @@ class Lab:
         except (TypeError, ValueError) as e:
             raise Refused("config: %s" % e) from None
         config["texture_format"] = S.texture_format(config)    # the header says it: 2 unless asked
+        config = protocols.resolved(proto, state, config)       # every choice, defaults included
         display = self.owner.display()
         if "reference" in config:   # the board's own validation, before any file is made
             host_check(S.split(config["reference"],
@@ -316,6 +323,7 @@ class Lab:
                 if moves:
                     lv.moves = moves[-1]["move"] + 1
                     lv.sliders = (moves[-1][ka], moves[-1][kb])
+                    lv.resume_scene = moves[-1].get("scene")
             self.live[key] = lv
         return lv
 
@@ -397,6 +405,12 @@ class Lab:
         self._asked(lv, body["question"], "answered")
         q = self._question(lv)
         taken = Q.normalise(lv.protocol, q, lv.state, body.get("answer"))
+        if Q.sliding(lv.protocol, lv.state):    # the match is what plays, never another
+            answered = tuple(taken[k] for k in Q.SLIDER_KEYS[lv.protocol])
+            if lv.sliders is None or answered != tuple(lv.sliders):
+                raise Conflict("the sliders answered %s are not what plays (%s): feel it, "
+                               "then answer - nothing changed"
+                               % (list(answered), list(lv.sliders or ())))
         if lv.playing is None or self.board_session != key or \
                 lv.connection != self.owner.connections:
             raise Conflict("the board does not play this question now (%s): feel it again, "
