@@ -34,7 +34,7 @@ def effective_header(header: dict[str, Any]) -> dict[str, Any]:
     config = out.setdefault("config", {})
     if not isinstance(config, dict):
         return out                      # (protocols.start says what is wrong with it)
-    for key, value in OLD_DEFAULTS.get(out.get("protocol"), {}).items():
+    for key, value in OLD_DEFAULTS.get(str(out.get("protocol")), {}).items():
         config.setdefault(key, copy.deepcopy(value))
     out["legacy"] = True                # (a /1 session: the old defaults filled in)
     return out

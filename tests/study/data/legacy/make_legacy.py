@@ -1,8 +1,10 @@
-"""Make session files with texelpad as it was before issue 20 (commit 9ec54e9):
+"""Make session files with texelpad as it was before issue 20 (commit 9ec54e9,
+checked out at /tmp/legacy: `git worktree add /tmp/legacy 9ec54e9`, then
+`.venv/bin/python tests/study/data/legacy/make_legacy.py OUT_DIR`):
 the fixtures of tests/study/test_legacy_sessions.py. Each answer record holds
 what the old lab recorded: the answer, the scene the question played (option
 0, or the free exploration's slider scene) and the question's detail."""
-import json, sys
+import sys
 from pathlib import Path
 sys.path[:0] = ["/tmp/legacy/host", "/tmp/legacy/device"]
 from texelpad.study import configs as C, protocols, questions as Q
