@@ -73,6 +73,25 @@ def test_the_rater_data_shipped_is_the_published_data():
                                              rater_matches()[name]))
 
 
+def test_rater_rows_app_pairs_by_index_as_the_app_did():
+    import csv
+    from texelpad.analysis.calibration import rater_dir
+    with open(rater_dir() / "trained_rater_texel_pitches.csv", newline="") as f:
+        rows = {r[0]: np.array([float(v) for v in r[1:]]) for r in list(csv.reader(f))[1:]}
+    for name in NINE:                           # the app: data row k beside reference row k
+        assert np.array_equal(rater.pitches(name, "app"), rows[name])
+    assert not np.array_equal(rater.pitches("4sin", "app"), rater.pitches("4sin"))
+    st = Quant(1, Config(matches=OWN, order="lab", exemplars=LAB_EXEMPLARS, rater_rows="app"))
+    while st.current_source != "rater":
+        st.answer(3)
+    ref, q = st.current
+    assert st.texture()["u16"] == rater.rendering(ref, q, st.phases[st.trial], "app")
+    with pytest.raises(ValueError, match="rater_rows"):
+        Config(matches=OWN, rater_rows="csv")
+    with pytest.raises(ValueError, match="repeats"):
+        Config(matches=OWN, order="lab", exemplars=LAB_EXEMPLARS, repeats=2)
+
+
 def test_quantization_is_buildfine5s_rounding_of_the_logged_sequence():
     # MATLAB: pull = q*round(pull/q), halves away from zero; q = 0.1 decade at 1 dB
     f = np.array([10 ** 0.0500001, 10 ** -0.0500001, 10 ** 0.0499999, 10 ** 0.149,

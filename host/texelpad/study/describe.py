@@ -36,7 +36,11 @@ from .session import SessionError
 TPAD_DISPLAY: dict[str, Any] = {"positions": 19200, "dx_um": 5.3}
 POSITIONS_MAX = 1048576             # texel.runtime.boards.POSITIONS_MAX
 DX_UM_MAX = 1000.0                  # texel.runtime.boards.DX_UM_MAX
-STAIRCASE_LISTED = 40               # staircase trials listed (its length depends on answers)
+# staircase trials listed (its length depends on the answers: the simulated participant with
+# a 3 mm threshold, texelpad.study.participant, needs a median 61 trials, 95th percentile 72,
+# at most 83 over seeds 0..199; each trial's seeds depend on the session's seed and the
+# trial's number only, so the list is what any run plays up to here)
+STAIRCASE_LISTED = 150
 
 
 # --- the config ---------------------------------------------------------------------
@@ -190,6 +194,9 @@ def _quant(st: Any, header: dict[str, Any], display: dict[str, Any]) -> dict[str
         left = {"kind": "reference", "name": ref}
         if src == "rater":
             what = "the rater's logged sequence of %s quantized at %g dB" % (of, q)
+            if c.rater_rows == "app":
+                what = ("the rater's data row the app played beside %s (rater_rows 'app'), "
+                        "quantized at %g dB" % (of, q))
             if phases is not None:
                 what += ", start phase %.6f cycle" % phases[k]
             right = {"kind": "samples", "fit": "tile", "what": what,

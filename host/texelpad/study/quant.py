@@ -23,7 +23,13 @@ Choices recorded in Config (and so in every session file's header):
   ("own" plays that reading).
 - `order`: "seeded" (default: the 27 in an order drawn from the session's
   seed) or "lab" (the app's fixed compareOrder, the same for every subject,
-  LAB_ORDER). The app's order names reference rows 2, 5, 9 of its data for
+  LAB_ORDER).
+- `rater_rows`: "by_texture" (default: each reference beside the rater's
+  rendering OF IT - the data's rows assigned by their statistics,
+  calibration.rater_pitches) or "app" (the app's pairing: reference row k
+  beside the rater's data row k, which by the statistics is another
+  texture's rendering for seven of the nine; with order "lab" this is the
+  app's 27 trials as they played). The app's order names reference rows 2, 5, 9 of its data for
   the quantized trials: 3sin, pink and sawtooth in the published row order,
   where the paper says the exemplars are 4sin, pink and sawtooth; "lab"
   plays the app's rows as they are, "seeded" the paper's exemplars.
@@ -106,6 +112,7 @@ class Config:
     levels_db: tuple[float, ...] = ()       # () = paper (1, 3, 5); levels (0, 1, 3, 5); matrix (0,)
     quantized_source: str = "rater"
     order: str = "seeded"
+    rater_rows: str = "by_texture"      # "app": the app's row-by-index pairing (rater.pitches)
     repeats: int = 1
     texel_samples: int = 50
     scale: tuple[int, int] = (1, 5)
@@ -148,6 +155,10 @@ class Config:
         if self.quantized_source not in SOURCES:
             raise ValueError("quantized_source: expected 'rater' (the app's) or 'own' (Fig. "
                              "15's caption), got %r" % (self.quantized_source,))
+        if self.rater_rows not in rater.ROWS:
+            raise ValueError("rater_rows: expected 'by_texture' (each reference beside the "
+                             "rater's rendering of it) or 'app' (the app's row by index), got %r"
+                             % (self.rater_rows,))
         if self.order not in ("seeded", "lab"):
             raise ValueError("order: expected 'seeded' or 'lab' (the app's fixed order), got %r"
                              % (self.order,))
@@ -262,7 +273,8 @@ class Quant:
         ref, match, source, q = self._trials[self.trial]
         if source == "rater":
             return {"kind": "samples", "fit": "tile",
-                    "u16": rater.rendering(match, q, self._phases[self.trial])}
+                    "u16": rater.rendering(match, q, self._phases[self.trial],
+                                           self.config.rater_rows)}
         return self.own_texture(match, q, v)
 
     def answer(self, rating: Any) -> dict[str, Any]:

@@ -48,9 +48,22 @@ def match(name: str) -> dict[str, float]:
     return dict(data()["matches"][_name(name)])
 
 
-def pitches(name: str) -> np.ndarray:
-    """The 192 texel pitches (c/mm) of the rater's rendering of `name`."""
-    return np.array(data()["pitches_cpmm"][_name(name)], dtype=np.float64)
+ROWS = ("by_texture", "app")
+
+
+def pitches(name: str, rows: str = "by_texture") -> np.ndarray:
+    """The 192 texel pitches (c/mm) of the rater's rendering of `name`.
+    rows "by_texture": the sequence whose statistics match the rater's match
+    of `name` (calibration.rater_pitches); "app": the row the lab's app
+    played beside reference `name` - the data file's row of the same index,
+    which by its statistics is the rendering of another texture for seven
+    of the nine (docs/lab.md, "As the papers ran them")."""
+    if rows not in ROWS:
+        raise ValueError("rater_rows: expected 'by_texture' or 'app', got %r" % (rows,))
+    name = _name(name)
+    if rows == "app":
+        name = {label: t for t, label in data()["csv_row"].items()}[name]
+    return np.array(data()["pitches_cpmm"][name], dtype=np.float64)
 
 
 def texel_samples() -> int:
@@ -70,7 +83,8 @@ def quantize(f_cpmm: np.ndarray, quant_db: float) -> np.ndarray:
     return 10.0 ** (q * _round_half_away(np.log10(f_cpmm) / q))
 
 
-def rendering(name: str, quant_db: float, phase_u: float) -> tuple[int, ...]:
+def rendering(name: str, quant_db: float, phase_u: float,
+              rows: str = "by_texture") -> tuple[int, ...]:
     """The rater's rendering of `name`, its pitches quantized at quant_db, as
     display samples (u16, one per 5.3 um position, 9,600 of them): sin of a
     phase that starts at 2 pi phase_u and advances 2 pi f_i DX_MM per sample
@@ -78,7 +92,7 @@ def rendering(name: str, quant_db: float, phase_u: float) -> tuple[int, ...]:
     (round half up)."""
     if not (isinstance(phase_u, float) and 0.0 <= phase_u < 1.0):
         raise ValueError("phase_u: expected a float in [0, 1), got %r" % (phase_u,))
-    f = quantize(pitches(name), quant_db)
+    f = quantize(pitches(name, rows), quant_db)
     inc = np.repeat(2.0 * math.pi * f * DX_MM, texel_samples())
     theta = 2.0 * math.pi * phase_u + np.concatenate(([0.0], np.cumsum(inc)[:-1]))
     u16 = np.floor((np.sin(theta) + 1.0) / 2.0 * 65535.0 + 0.5).astype(np.int64)
