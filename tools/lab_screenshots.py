@@ -60,7 +60,7 @@ def screens(data: Path) -> None:
                 if proto == "free":
                     page.fill("#pitch", "620")
                     page.fill("#irregularity", "380")
-                    page.check("#confidence-4")
+                    page.fill("#confidence-slider", "4")
                 elif proto == "mapping":
                     page.fill("#pitch", "450")
                     page.fill("#irregularity", "200")

@@ -47,7 +47,7 @@ def test_free_sliders_redraw_on_every_change_and_clamp_at_nyquist():
 
 @pytest.mark.parametrize("answer, fragment", [
     ({"pitch_db": 3, "irregularity_db": -10}, "expected {pitch_db"),
-    ({"pitch_db": 3, "irregularity_db": -10, "confidence": 6}, "confidence: expected 1 .. 5"),
+    ({"pitch_db": 3, "irregularity_db": -10, "confidence": 6}, "confidence: expected a number 1 .. 5"),
     ({"pitch_db": 3, "irregularity_db": -10, "confidence": True}, "confidence"),
     ({"pitch_db": 30, "irregularity_db": -10, "confidence": 3}, "outside the slider"),
     ("3", "expected {pitch_db"),

@@ -262,3 +262,27 @@ def test_every_protocols_session_replays_from_its_file(protocol, tmp_path):
     for attr in ("matches", "ratings", "track", "history", "order"):
         if hasattr(st, attr):
             assert getattr(again, attr) == getattr(st, attr), attr
+
+
+# --- the app's rating and confidence sliders: continuous 1..5 from 3 ----------------------
+
+def test_ratings_and_confidence_are_the_apps_continuous_sliders():
+    # the app: DifferentSlider/ConfidenceSlider Limits [1 5], Value 3, read as a double
+    st = Quant(2, Config(matches=OWN))
+    q = questions.ask("quant", st, {"config": {}, "seed": 2}, DISPLAY)
+    assert q.public["slider"] == {"range": [1, 5], "start": 3.0, "step": 0.01}
+    assert q.public["answers"] is None
+    assert questions.normalise("quant", q, st, 3.456) == 3.46
+    for bad in (True, 0.99, 5.01, "3", None, float("nan")):
+        with pytest.raises(ValueError, match="similarity"):
+            questions.normalise("quant", q, st, bad)
+    assert st.answer(2.5)["similarity"] == 2.5
+    buttons = Quant(2, Config(matches=OWN, rating="buttons"))
+    with pytest.raises(ValueError, match="similarity"):
+        buttons.answer(2.5)
+    free = protocols.start("free", {}, 1)
+    a = free.checked_answer({"pitch_db": 1.0, "irregularity_db": -3.0, "confidence": 3.333})
+    assert a["confidence"] == 3.33
+    old = protocols.start("free", {"confidence_input": "buttons"}, 1)
+    with pytest.raises(ValueError, match="confidence"):
+        old.checked_answer({"pitch_db": 1.0, "irregularity_db": -3.0, "confidence": 3.5})

@@ -174,7 +174,7 @@ def test_free_exploration_then_quantization_clicked_through(browser, lab):
         for v in (200, 700, 450 + 10 * i):
             p.fill("#pitch", str(v))
         p.fill("#irregularity", str(300 + 20 * i))
-        p.check("#confidence-%d" % (1 + i % 5))
+        p.fill("#confidence-slider", str(1 + 0.5 * i))     # the app's continuous slider
         p.click("#submit")
         _wait_answers(p, i + 1, done=i == 8)
     s = _finish(url, data, sid, 9)
@@ -182,6 +182,7 @@ def test_free_exploration_then_quantization_clicked_through(browser, lab):
     # the lab's app's sliders: pitch 0..1000 over -10..20 dB, irregularity linear in sigma
     # over 0..1 decade (position 300: sigma 0.3 decade = 10 log10 0.3 = -5.229 dB)
     assert answers[0]["answer"] == {"pitch_db": 3.5, "irregularity_db": -5.229, "confidence": 1}
+    assert [a["answer"]["confidence"] for a in answers] == [1 + 0.5 * i for i in range(9)]
     assert answers[0]["scene"]["regions"][1]["texture"]["pitch_db"] == 3.5
     assert answers[0]["scene"]["regions"][1]["texture"]["texel_samples"] == 50
     moves = [r for r in s.records if r["kind"] == "move" and r["trial"] == 0]
@@ -190,8 +191,10 @@ def test_free_exploration_then_quantization_clicked_through(browser, lab):
     exp2, q, qid, detail = _start(browser, url, "quant-paper", "web04", 5, matches=sid)
     assert "quant_db" in detail and "source" in detail
     _blind(q)
+    assert q.get_attribute("#rating", "value") == "3"       # the app's slider starts at 3
     for i in range(27):
-        q.click("#answer-%d" % (i % 5))
+        q.fill("#rating", str(round(1 + 0.15 * i, 2)))      # continuous, 1 .. 4.9
+        q.click("#submit-rating")
         _wait_answers(q, i + 1, done=i == 26)
     qs = _finish(url, data, qid, 27)
     felt = {a["state"]["reference"]: a["scene"]["regions"][1]["texture"] for a in answers}
@@ -207,7 +210,7 @@ def test_free_exploration_then_quantization_clicked_through(browser, lab):
             assert tex["kind"] == "samples" and len(tex["u16"]) == 9600
     assert sorted(sources) == sorted([("own", 0.0)] * 9 + [("rater", 0.0)] * 9 +
                                      [("rater", q) for q in (1.0, 3.0, 5.0)] * 3)
-    assert [r["answer"] for r in qs.answers()] == [1 + i % 5 for i in range(27)]
+    assert [r["answer"] for r in qs.answers()] == [round(1 + 0.15 * i, 2) for i in range(27)]
 
 
 def test_mapping_clicked_through(browser, lab):
@@ -257,13 +260,15 @@ def test_a_double_click_gives_one_answer(browser, lab):
     exp, p, sid, _ = _start(browser, url, "quant-exemplars", "web06", 1)
     posts = _answer_posts(p)
     assert p.inner_text("#progress").startswith("trial 1 of 12 - 0 answers")
-    p.dblclick("#answer-2")
+    p.fill("#rating", "3")
+    p.dblclick("#submit-rating")
     _wait_answers(p, 1)
-    p.wait_for_selector("#answer-4:not([disabled])")
+    p.wait_for_selector("#submit-rating:not([disabled])")
     assert p.inner_text("#progress").startswith("trial 2 of 12 - 1 answer")
-    p.dblclick("#answer-4")
+    p.fill("#rating", "5")
+    p.dblclick("#submit-rating")
     _wait_answers(p, 2)
-    p.wait_for_selector("#answer-4:not([disabled])")
+    p.wait_for_selector("#submit-rating:not([disabled])")
     assert p.inner_text("#progress").startswith("trial 3 of 12 - 2 answers")
     s = Session.open(Path(data) / (sid + ".jsonl"))
     assert [r["answer"] for r in s.answers()] == [3, 5]
@@ -273,7 +278,7 @@ def test_a_double_click_gives_one_answer(browser, lab):
     exp2, f, fid, _ = _start(browser, url, "free-nine", "web06", 2)
     posts = _answer_posts(f)
     f.fill("#pitch", "300")
-    f.check("#confidence-4")
+    f.fill("#confidence-slider", "4")
     f.dblclick("#submit")
     _wait_answers(f, 1)
     f.wait_for_selector("#submit:not([disabled])")

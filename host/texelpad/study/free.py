@@ -23,7 +23,9 @@ NU-Haptics-Lab/SinglePitchTexel): pitch linear in log10 P over [-1, 2]
 - texel length 50 samples (0.265 mm), the app's `texelLength` (and the
   rater's renderings', study/rater.py); the paper's text says 0.25 mm (47);
 - values are kept to 0.001 dB, the format-2 grid (texel.gen.grid), so the
-  texture is the same on every board.
+  texture is the same on every board;
+- `confidence_input`: "slider" (the app's ConfidenceSlider: continuous over
+  1..5, starting at 3, kept to 0.01) or "buttons" (whole numbers).
 
 Answers: {"pitch_db": x, "irregularity_db": y, "confidence": 1..5}. Pure logic.
 """
@@ -51,9 +53,15 @@ class Config:
     start: tuple[float, float] = (5.0, SIGMA_START)
     texel_samples: int = 50
     confidence: tuple[int, int] = (1, 5)
+    # the app's ConfidenceSlider: continuous over 1..5 from 3 (kept to 0.01); "buttons":
+    # whole numbers (the design before)
+    confidence_input: str = "slider"
 
     def __post_init__(self) -> None:
         check_references(self.references)
+        if self.confidence_input not in ("slider", "buttons"):
+            raise ValueError("confidence_input: expected 'slider' (continuous, the app's) or "
+                             "'buttons', got %r" % (self.confidence_input,))
         if self.irregularity_slider not in ("sigma", "db"):
             raise ValueError("irregularity_slider: expected 'sigma' (linear in sigma, the lab's "
                              "app) or 'db', got %r" % (self.irregularity_slider,))
@@ -89,6 +97,20 @@ def check_references(refs: tuple[str, ...]) -> None:
     if not refs or any(r not in NINE for r in refs) or len(set(refs)) != len(refs):
         raise ValueError("references: expected distinct names among %s, got %r"
                          % (", ".join(NINE), refs))
+
+
+def rating_of(what: str, x: Any, scale: tuple[int, int], how: str) -> float | int:
+    """A rating checked on its scale: a whole number ("buttons") or any number
+    kept to 0.01 ("slider"); never a bool (JSON true is not 1)."""
+    lo, hi = scale
+    if how == "buttons":
+        if isinstance(x, bool) or not isinstance(x, int) or not lo <= x <= hi:
+            raise ValueError("%s: expected %d .. %d, got %r" % (what, lo, hi, x))
+        return x
+    if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x) \
+            or not lo <= x <= hi:
+        raise ValueError("%s: expected a number %d .. %d, got %r" % (what, lo, hi, x))
+    return round(float(x), 2)
 
 
 def _number(what: str, x: Any, lo: float, hi: float) -> float:
@@ -143,10 +165,8 @@ class Free:
             raise ValueError("answer: expected {pitch_db, irregularity_db, confidence}, got %r"
                              % (a,))
         p, s = self.check(a["pitch_db"], a["irregularity_db"])
-        lo, hi = self.config.confidence
-        c = a["confidence"]
-        if isinstance(c, bool) or not isinstance(c, int) or not lo <= c <= hi:
-            raise ValueError("confidence: expected %d .. %d, got %r" % (lo, hi, c))
+        c = rating_of("confidence", a["confidence"], self.config.confidence,
+                      self.config.confidence_input)
         return {"pitch_db": p, "irregularity_db": s, "confidence": c}
 
     def answer(self, a: Any) -> dict[str, Any]:

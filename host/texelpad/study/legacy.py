@@ -17,8 +17,9 @@ from typing import Any
 OLD_FORMAT = "texelpad-session/1"
 # per protocol: the field and what a /1 session played when its config did not say
 OLD_DEFAULTS: dict[str, dict[str, Any]] = {
-    "free": {"irregularity_slider": "db", "start": [5.0, -15.0], "texel_samples": 47},
-    "quant": {"design": "levels", "texel_samples": 47},
+    "free": {"irregularity_slider": "db", "start": [5.0, -15.0], "texel_samples": 47,
+             "confidence_input": "buttons"},
+    "quant": {"design": "levels", "texel_samples": 47, "rating": "buttons"},
     "pursuit": {"presentation": "split", "fresh": False},
     "staircase": {"whole_texels": False,
                   "distribution": {"pitch_db": 10.0, "irregularity_db": -10.0}},

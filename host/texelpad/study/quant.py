@@ -44,7 +44,9 @@ own matches at each of levels_db, 12 trials) and "matrix" (seed 000's 3 x 3
 similarity ratings after the guided exploration: every reference against
 every reference's match, at q = levels_db[0]).
 
-Answers: the similarity rating, an int on `scale` (1..5). Pure logic.
+Answers: the similarity rating on `scale` (1..5): any number kept to 0.01
+with `rating` "slider" (the app's continuous slider, starting at 3), a whole
+number with "buttons". Pure logic.
 """
 from __future__ import annotations
 
@@ -58,7 +60,7 @@ from texel.gen.params import FORMAT_NEW, IRREG_DB_MAX, IRREG_DB_MIN, PITCH_DB_MA
 from texel.gen.reference import STUDY_NAMES as NINE
 
 from . import rater
-from .free import check_references
+from .free import check_references, rating_of
 
 EXEMPLARS = ("4sin", "pink", "sawtooth")
 DESIGNS = ("paper", "levels", "matrix")
@@ -74,7 +76,10 @@ _APP_COMPARE_ORDER = (
 LAB_ORDER = tuple((NINE[row - 1], SOURCES[src], round(q * 10.0, 3))
                   for src, row, q in _APP_COMPARE_ORDER)
 LAB_EXEMPLARS = ("3sin", "pink", "sawtooth")    # the app's quantized rows (docstring)
+RATINGS = ("slider", "buttons")
 MATCH_KEYS = {"pitch_db", "irregularity_db"}
+
+
 MATCH_OPTIONAL = {"seed", "texel_samples", "v"}
 
 
@@ -116,6 +121,9 @@ class Config:
     repeats: int = 1
     texel_samples: int = 50
     scale: tuple[int, int] = (1, 5)
+    # the app's DifferentSlider / SimilaritySlider: continuous over the scale, at 3 to start
+    # (kept to 0.01); "buttons": whole numbers, one button each (the design before)
+    rating: str = "slider"
     match_source: str = "given"         # "given" or the session ids the matches came from
 
     def __post_init__(self) -> None:
@@ -155,6 +163,9 @@ class Config:
         if self.quantized_source not in SOURCES:
             raise ValueError("quantized_source: expected 'rater' (the app's) or 'own' (Fig. "
                              "15's caption), got %r" % (self.quantized_source,))
+        if self.rating not in RATINGS:
+            raise ValueError("rating: expected 'slider' (continuous, the app's) or 'buttons', "
+                             "got %r" % (self.rating,))
         if self.rater_rows not in rater.ROWS:
             raise ValueError("rater_rows: expected 'by_texture' (each reference beside the "
                              "rater's rendering of it) or 'app' (the app's row by index), got %r"
@@ -277,12 +288,14 @@ class Quant:
                                            self.config.rater_rows)}
         return self.own_texture(match, q, v)
 
-    def answer(self, rating: Any) -> dict[str, Any]:
+    def checked_answer(self, rating: Any) -> float | int:
+        """The rating checked on the scale (ValueError says why)."""
         if self.done:
             raise ValueError("the quantization test is finished: nothing to answer")
-        lo, hi = self.config.scale
-        if isinstance(rating, bool) or not isinstance(rating, int) or not lo <= rating <= hi:
-            raise ValueError("similarity: expected %d .. %d, got %r" % (lo, hi, rating))
+        return rating_of("similarity", rating, self.config.scale, self.config.rating)
+
+    def answer(self, rating: Any) -> dict[str, Any]:
+        rating = self.checked_answer(rating)
         ref, match, source, q = self._trials[self.trial]
         entry = {"trial": self.trial, "reference": ref, "match_of": match, "source": source,
                  "quant_db": q, "similarity": rating}

@@ -169,6 +169,7 @@ def _free(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
                      "of": len(st.order),
                      "sliders": c.sliders(),
                      "start": list(c.start), "confidence": list(c.confidence),
+                     "confidence_input": c.confidence_input,
                      "options": [], "answers": None},
                     [], {"reference": st.reference, "trial": st.trial,
                          "matches": len(st.matches)})
@@ -221,8 +222,12 @@ def _quant(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question
     shown = tex if tex.get("kind") != "samples" else {   # (9,600 values: the record has them)
         "kind": "samples", "rater": st.current_match, "quant_db": level,
         "texel_samples": rater.texel_samples(), "values": len(tex["u16"])}
-    return Question({"done": False, "kind": "rate", "trial": st.trial, "of": len(st.trials),
-                     "options": ["rendering"], "answers": list(range(lo, hi + 1))},
+    rating: dict[str, Any] = {"answers": list(range(lo, hi + 1))}
+    if st.config.rating == "slider":    # the app's slider: continuous, at the middle (3) to start
+        rating = {"answers": None, "slider": {"range": [lo, hi], "start": (lo + hi) / 2,
+                                              "step": 0.01}}
+    return Question(dict({"done": False, "kind": "rate", "trial": st.trial,
+                          "of": len(st.trials), "options": ["rendering"]}, **rating),
                     [S.split({"kind": "reference", "name": ref}, tex, display,
                              name="rendering")],
                     {"reference": ref, "match_of": st.current_match, "source": st.current_source,
@@ -235,7 +240,7 @@ def normalise(protocol: str, q: Question, state: Any, answer: Any) -> Any:
     so true is not 1 and {"choose": true} is not {"choose": 1}."""
     if q.done:
         raise ValueError("the session is finished")
-    if protocol in ("free", "mapping"):
+    if protocol in ("free", "mapping", "quant"):
         return state.checked_answer(answer)
     allowed = q.public["answers"]
     if _js(answer) not in [_js(a) for a in allowed]:

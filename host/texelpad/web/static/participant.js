@@ -141,8 +141,9 @@ function show(res) {
     ? "Feel the reference, A and B (one at a time, on the whole display). Which of A and B is " +
       "closer to the reference?"
     : q.kind === "rate"
-    ? PROMPTS.rate + " (" + q.answers[0] + " = completely different, " +
-      q.answers[q.answers.length - 1] + " = identical)"
+    ? PROMPTS.rate + " (" + (q.slider ? q.slider.range[0] : q.answers[0]) +
+      " = completely different, " +
+      (q.slider ? q.slider.range[1] : q.answers[q.answers.length - 1]) + " = identical)"
     : PROMPTS[q.kind] || "";
   $("feel").innerHTML = ""; $("answers").innerHTML = "";
   $("sliders").hidden = q.kind !== "sliders";
@@ -167,7 +168,18 @@ function show(res) {
     const box = $("confidence");
     box.hidden = !q.confidence;
     box.querySelectorAll("label").forEach((l) => l.remove());
-    for (let c = q.confidence ? q.confidence[0] : 1; q.confidence && c <= q.confidence[1]; c++) {
+    const confSlider = q.confidence && q.confidence_input === "slider";
+    if (confSlider) {                   // the lab's app: a continuous slider from the middle
+      const l = el("label", {});
+      l.appendChild(document.createTextNode(q.confidence[0] + " "));
+      l.appendChild(el("input", {type: "range", id: "confidence-slider", min: q.confidence[0],
+                                 max: q.confidence[1], step: "0.01",
+                                 value: String((q.confidence[0] + q.confidence[1]) / 2)}));
+      l.appendChild(document.createTextNode(" " + q.confidence[1]));
+      box.appendChild(l);
+    }
+    for (let c = q.confidence ? q.confidence[0] : 1;
+         q.confidence && !confSlider && c <= q.confidence[1]; c++) {
       const l = el("label", {});
       l.appendChild(el("input", {type: "radio", name: "confidence", id: "confidence-" + c,
                                  value: String(c)}));
@@ -176,13 +188,27 @@ function show(res) {
     }
     $("answers").appendChild(el("button", {id: "submit", onclick: async () => {
       if (busy) return;
-      const c = document.querySelector("input[name=confidence]:checked");
+      const c = confSlider ? $("confidence-slider")
+                           : document.querySelector("input[name=confidence]:checked");
       if (q.confidence && !c) { showError("choose your confidence (1-5) first"); return; }
       setBusy(true);            // at once: a second click of a double-click finds it disabled
       while (sliderBusy) await new Promise((r) => setTimeout(r, 20));
       await answer(Object.assign(sliderValues(), q.confidence ? {confidence: Number(c.value)}
                                                               : {}));
     }}, "this is my match"));
+  } else if (q.kind === "rate" && q.slider) {   // the lab's app: a continuous rating slider
+    const [lo, hi] = q.slider.range;
+    const l = el("label", {});
+    l.appendChild(document.createTextNode(lo + " "));
+    l.appendChild(el("input", {type: "range", id: "rating", min: lo, max: hi,
+                               step: String(q.slider.step), value: String(q.slider.start)}));
+    l.appendChild(document.createTextNode(" " + hi));
+    $("answers").appendChild(l);
+    $("answers").appendChild(el("button", {id: "submit-rating", onclick: () => {
+      if (busy) return;
+      setBusy(true);            // at once: a second click of a double-click finds it disabled
+      answer(Number($("rating").value));
+    }}, "submit this rating"));
   } else {
     q.answers.forEach((a, i) => {
       $("answers").appendChild(el("button", {id: "answer-" + i, onclick: () => {
