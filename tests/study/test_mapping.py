@@ -90,11 +90,6 @@ def test_a_slider_setting_renders_seed_001s_lognormal():
 
 def test_every_texture_is_one_the_board_takes():
     st = Mapping(4)
-    try:
-        texel_params.validate({"pitch_db": 0.0, "irregularity_db": -10.0, "min_cpmm": 1.0,
-                               "phase": "reset"})
-    except ValueError as e:
-        pytest.skip("the device takes no min_cpmm/phase yet (issue 20 part 1): %s" % e)
     for p, i in ((0, 0), (0, 100), (100, 0), (100, 100), (50, 50)):
         tex = st.texture(p, i, 0)
         canon = texel_params.validate(dict(tex, length_samples=9600))

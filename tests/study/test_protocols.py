@@ -207,15 +207,18 @@ def _run_pursuit(sess: Session, state: Pursuit, sim: SimulatedParticipant, stop_
 GIVEN = {"matches": {r: {"pitch_db": 6.0, "irregularity_db": -12.0, "seed": 11 + k,
                          "texel_samples": 50, "v": 2} for k, r in enumerate(NINE)}}
 CONFIGS = {"free": {}, "quant": GIVEN, "pursuit": {}, "staircase": {},
-           "search": {"dims": ["pitch", "irregularity"]}}
+           "search": {"dims": ["pitch", "irregularity"]}, "mapping": {}}
 
 
 def _end(protocol, state):
     return {"free": lambda: state.matches, "quant": lambda: state.ratings,
-            "staircase": lambda: state.track}.get(protocol, lambda: state.history)()
+            "staircase": lambda: state.track,
+            "mapping": lambda: (state.matches, state.ratings)}.get(
+                protocol, lambda: state.history)()
 
 
-@pytest.mark.parametrize("protocol", ["free", "quant", "pursuit", "staircase", "search"])
+@pytest.mark.parametrize("protocol", ["free", "quant", "pursuit", "staircase", "search",
+                                      "mapping"])
 def test_a_session_resumes_after_a_kill_at_every_step(protocol, tmp_path):
     """The uninterrupted run, then for every answer k a copy of the file as a
     crash would leave it after k answers (and with a torn half record after
