@@ -76,7 +76,8 @@ exec(HELPERS, _H)
 SPLIT = _H["split"]()
 TEXEL_RIGHT = {"pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7}
 
-TEXEL_ALLOWED = "kind, pitch_db, irregularity_db, texel_samples, quant_db, seed, gain, v, band_limit_cpmm"
+TEXEL_ALLOWED = ("kind, pitch_db, irregularity_db, texel_samples, quant_db, seed, gain, v, "
+                 "band_limit_cpmm, min_cpmm, phase")
 KINDS = "texel, reference, constant, samples, brush"
 REF_NAMES = ", ".join(texel.reference_names())
 

@@ -190,7 +190,8 @@ def _key(k):
 def _check_keys(path, d, allowed, options=()):
     """Refuse keys not in `allowed` or `options`; with several, name the
     smallest shown form (dict order differs between CPython and MicroPython).
-    The message lists `allowed` (the texel options: docs/generator.md)."""
+    The message lists `allowed`, then `options` (the texel options:
+    docs/generator.md)."""
     bad = None
     for k in d:
         if not (isinstance(k, str) and (k in allowed or k in options)):
@@ -198,7 +199,7 @@ def _check_keys(path, d, allowed, options=()):
             if bad is None or s < bad:
                 bad = s
     if bad is not None:
-        fail(path, "unknown key %s (allowed: %s)" % (bad, ", ".join(allowed)))
+        fail(path, "unknown key %s (allowed: %s)" % (bad, ", ".join(tuple(allowed) + tuple(options))))
 
 
 def _dict(path, v, what):
@@ -377,8 +378,8 @@ def _texture(path, tex, n):
              % (_qstr(kind) if isinstance(kind, str) else _got(kind), ", ".join(KINDS)))
     if kind == "texel" and "length_samples" in tex:
         fail(path + ".length_samples", "set by the region (here %d samples); remove it" % n)
-    # (the unknown-key message lists TEXTURE_KEYS: tests/runtime/test_scene.py
-    # pins it as TEXEL_ALLOWED)
+    # (the unknown-key message lists TEXTURE_KEYS and the options:
+    # tests/runtime/test_scene.py pins it as TEXEL_ALLOWED)
     _check_keys(path, tex, TEXTURE_KEYS[kind], TEXEL_OPTIONS if kind == "texel" else ())
     if kind == "texel":
         return _texel(path, tex, n)
