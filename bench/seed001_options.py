@@ -55,12 +55,14 @@ def _tpo_plan(p, reps):
 
 
 def cases() -> list[tuple[str, dict[str, Any]]]:
+    zero = dict(zip(("pitch_db", "irregularity_db"), to_db(*slider_values(0.0, 0.0))))
     lo = dict(zip(("pitch_db", "irregularity_db"), to_db(*slider_values(0.0, 10.0))))
     mid = dict(zip(("pitch_db", "irregularity_db"), to_db(*slider_values(50.0, 50.0))))
     out = []
     for name, base, n, length in (
             ("staircase 26 mm, whole display", STAIR, 4906, 19200),
             ("staircase 1.25 mm (floor), whole display", STAIR, 236, 19200),
+            ("mapping P=0 I=0 (no draw reaches 1 c/mm)", zero, 189, 9600),
             ("mapping P=0 I=10 (mean 0.75 c/mm), half display", lo, 189, 9600),
             ("mapping P=50 I=50, half display", mid, 189, 9600),
             ("50-sample texels, whole display (384 texels)", STAIR, 50, 19200)):

@@ -263,6 +263,25 @@ def test_tries_cap_plays_at_the_bound(v):
 
 
 @pytest.mark.parametrize("v", [1, 2])
+@pytest.mark.parametrize("pitch_db, irregularity_db, hopeless", [
+    (-20.0, -30.0, True), (-1.2, -20.0, True), (-1.2, -12.0, False), (-3.0, -8.0, False),
+    (0.5, -30.0, False)])
+def test_skipping_hopeless_tries_changes_nothing(v, pitch_db, irregularity_db, hopeless,
+                                                 monkeypatch):
+    """When no draw can reach the bound (the largest z the generator gives is
+    below it) the tries are skipped: the same plan as trying them all."""
+    p = {"pitch_db": pitch_db, "irregularity_db": irregularity_db, "texel_samples": 189,
+         "length_samples": 9600, "min_cpmm": 1.0, "seed": 9, "phase": "reset", "v": v}
+    fast = plan_of(p)
+    monkeypatch.setattr(options, "SKIP_HOPELESS", False)
+    slow = plan_of(p)
+    assert (fast.redrawn, fast.at_min) == (slow.redrawn, slow.at_min)
+    assert list(fast.t28) == list(slow.t28) and list(fast.d28) == list(slow.d28)
+    assert list(fast.f) == list(slow.f)
+    assert (fast.at_min == fast.count) is hopeless      # hopeless: every texel at the bound
+
+
+@pytest.mark.parametrize("v", [1, 2])
 @pytest.mark.parametrize("which", ["wide", "narrow"])
 def test_bounded_pitches_follow_the_truncated_lognormal(v, which):
     """One texel per sample, 150,000 texels (seed 001's numbers with its

@@ -37,12 +37,13 @@
 # seed's second stream.
 import math
 from . import params as _params
-from .rng import Rng
+from .rng import Rng, ppnd16, uniform_of
 from .grid import mdb
 from .plan import UNITS_PER_TURN, PHASE_MASK, _TWO_PI, _DX, _frac_u28, round_half_away
 from .plan_int import step_d, norm_q24, mulmod28, Y_LO, Y_HI, NYQ_EXP, MASK28
 
 MIN_TRIES = 64
+SKIP_HOPELESS = True    # (tests turn it off to prove the skip changes nothing)
 # The redraw stream: gen/rng.py's generator and seeding with other constants,
 # the fractional parts of sqrt(2), sqrt(3), sqrt(5) (SHA-256's first words)
 # in 16-bit halves. A second stream, so the main one - and every texel that
@@ -91,28 +92,39 @@ def _below(y, dmin, tab):
 
 def redraw_int(plan, ys, dmin, tab):
     """Redraw, in place in ys, the log pitch of every texel below the bound;
-    returns (texels redrawn, texels left at the bound)."""
+    returns (texels redrawn, texels left at the bound). A texel left at the
+    bound keeps its first draw's y (it plays D_MIN: tail_int; PlanInt.f
+    shows the bound). When no draw can reach the bound - the largest z the
+    inverse normal gives (x = 2^32 - 1) is below it; log_pitch and _below are
+    monotone in z - the tries are skipped: the same plan, without up to
+    MIN_TRIES draws per texel (a mean far below the bound at a small spread:
+    seed 001's mapping at low P and I; bench/seed001_options.py)."""
     d28 = plan.d28
     rng = None
     redrawn = 0
     at_min = 0
+    hopeless = SKIP_HOPELESS and _below(
+        log_pitch(norm_q24(0xFFFF, 0xFFFF, tab), plan.mu, plan.sigma, plan.q), dmin, tab)
     for i in range(plan.count):
         # d28 >= D_MIN: not below (a capped step is D_CAP > D_MIN: params
         # refuses min >= band limit); under it, the step may still be an
         # aliased one (e >= 28, reduced mod a turn): step_d tells
         if d28[i] >= dmin or not _below(ys[i], dmin, tab):
             continue
+        redrawn += 1
+        if hopeless:
+            at_min += 1
+            continue
         if rng is None:
             rng = Rng(plan.params["seed"], consts=REDRAW_CONSTS)
-        redrawn += 1
         for _ in range(MIN_TRIES):
             hi, lo = rng.next_hi_lo()
             y = log_pitch(norm_q24(hi, lo, tab), plan.mu, plan.sigma, plan.q)
             if not _below(y, dmin, tab):
+                ys[i] = y
                 break
         else:
             at_min += 1
-        ys[i] = y
     return redrawn, at_min
 
 
@@ -181,12 +193,23 @@ def redraw_float(plan, F):
     rng = None
     redrawn = 0
     at_min = 0
+    # no draw can reach the bound when the largest z there is (u = 1 - 2^-33:
+    # 6.36) gives a pitch 0.1 % below it (the margin covers the runtime's float
+    # rounding): the tries are skipped (redraw_int's reasoning)
+    top = mu + sigma * ppnd16(uniform_of(0xFFFF, 0xFFFF, F), uniform_of(0, 0, F))
+    if q > 0.0:
+        top = q * round_half_away(top / q)
+    hopeless = SKIP_HOPELESS and 10.0 ** top * 1.001 < fmin
     for i in range(plan.count):
         if F(f[i]) >= fmin:
             continue
+        redrawn += 1
+        if hopeless:
+            f[i] = fmin
+            at_min += 1
+            continue
         if rng is None:
             rng = Rng(p["seed"], F, REDRAW_CONSTS)
-        redrawn += 1
         for _ in range(MIN_TRIES):
             pull = mu + sigma * rng.normal()
             if q > 0.0:
