@@ -143,15 +143,27 @@ def shipped_scenes() -> list[tuple[str, dict[str, Any]]]:
 def study_scenes(display: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
     """What the lab pushes: the nine free-exploration trials (each reference
     left, the sliders' start texture right), then the first question's
-    scenes of every other shipped study config."""
-    from texelpad.study import configs, protocols, questions, scenes as S
+    scenes of every other shipped study config (the mapping's: its sliders'
+    start; the paper's quantization test, which takes the participant's own
+    matches, with the trained rater's standing in for them)."""
+    from texel.gen.params import PITCH_DB_MAX
+    from texelpad.study import configs, protocols, questions, rater, scenes as S
     out = []
     every = configs.available()
     for name, c in sorted(every.items()):
         if "error" in c:
             continue
-        header = {"protocol": c["protocol"], "config": c["config"], "seed": 1}
-        st = protocols.start(c["protocol"], c["config"], 1)
+        config = dict(c["config"])
+        if c["protocol"] == "quant" and not config.get("matches"):
+            config["matches"] = {r: dict(m, pitch_db=min(PITCH_DB_MAX, m["pitch_db"]))
+                                 for r, m in ((r, rater.match(r))           # (white, blue: 20 dB)
+                                              for r in rater.data()["matches"])}
+        header = {"protocol": c["protocol"], "config": config, "seed": 1}
+        st = protocols.start(c["protocol"], config, 1)
+        if c["protocol"] == "mapping":
+            sc, _ = questions.slider_scene(st, header, display, *st.config.start, 0, "mapping")
+            out.append(("%s trial 1 sliders' start" % name, sc))
+            continue
         if c["protocol"] == "free":
             v = S.texture_format(c["config"])
             p0, s0 = c["config"]["start"]

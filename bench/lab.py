@@ -36,49 +36,18 @@ from texelpad.study.questions import slider_scene
 from texelpad.web.owner import BoardOwner
 
 
-def run(steps: int = 200) -> dict:
-    with stop_on_signals():
-        vb = open_virtual(source=True)
-        try:
-            owner = BoardOwner(vb.port, "virtual", realtime=True)
-            display = owner.display()
-            times = []
-            free = Free(1)                  # the free exploration: its nine trials in turn
-            per = max(1, steps // len(free.order))
-            refs = []
-            for k in range(steps):
-                free.trial = min(k // per, len(free.order) - 1)
-                refs.append(free.reference)
-                # the same slider sweep as run_http: pitch back and forth, irregularity up
-                pitch = round(-10 + 30 * abs((k % 40) - 20) / 20, 3)
-                irr = round(-30 + 30 * (k % 97) / 97, 3)
-                scene, _ = slider_scene(free, {}, display, pitch, irr, k)
-                t0 = time.perf_counter()
-                st, _ = owner.push(scene)
-                times.append((time.perf_counter() - t0) * 1e3)
-            last = owner.status()
-            owner.close()
-        finally:
-            vb.stop()
-    return dict(_figures(times, refs), overruns=last["overruns"],
-                refreshes=last["refreshes"], board="virtual (MicroPython unix port, real time)",
-                path="BoardOwner.push in this process")
-
-
-def run_mapping(steps: int = 200) -> dict:
-    """Seed 001's mapping: slider changes through the owner (module docstring)."""
+def _through_owner(steps: int, step, path: str) -> dict:
+    """Push `steps` slider scenes through the lab's owner on a fresh virtual
+    board: step(k, display) -> (scene, the reference it compares against)."""
     with stop_on_signals():
         vb = open_virtual(source=True)
         try:
             owner = BoardOwner(vb.port, "virtual", realtime=True)
             display = owner.display()
             times, refs = [], []
-            st = Mapping(1)
             for k in range(steps):
-                pitch = float(abs((k % 40) - 20) * 5)       # 0 .. 100 and back
-                irr = float(k % 101)
-                scene, _ = slider_scene(st, {}, display, pitch, irr, k, "mapping")
-                refs.append(st.reference)
+                scene, ref = step(k, display)
+                refs.append(ref)
                 t0 = time.perf_counter()
                 owner.push(scene)
                 times.append((time.perf_counter() - t0) * 1e3)
@@ -88,7 +57,31 @@ def run_mapping(steps: int = 200) -> dict:
             vb.stop()
     return dict(_figures(times, refs), overruns=last["overruns"],
                 refreshes=last["refreshes"], board="virtual (MicroPython unix port, real time)",
-                path="BoardOwner.push in this process, seed 001's mapping")
+                path=path)
+
+
+def run(steps: int = 200) -> dict:
+    free = Free(1)                  # the free exploration: its nine trials in turn
+    per = max(1, steps // len(free.order))
+
+    def step(k: int, display: dict) -> tuple[dict, str]:
+        free.trial = min(k // per, len(free.order) - 1)
+        # the same slider sweep as run_http: pitch back and forth, irregularity up
+        pitch = round(-10 + 30 * abs((k % 40) - 20) / 20, 3)
+        irr = round(-30 + 30 * (k % 97) / 97, 3)
+        return slider_scene(free, {}, display, pitch, irr, k)[0], free.reference
+    return _through_owner(steps, step, "BoardOwner.push in this process")
+
+
+def run_mapping(steps: int = 200) -> dict:
+    """Seed 001's mapping: slider changes through the owner (module docstring)."""
+    st = Mapping(1)
+
+    def step(k: int, display: dict) -> tuple[dict, str]:
+        pitch = float(abs((k % 40) - 20) * 5)       # 0 .. 100 and back
+        irr = float(k % 101)
+        return slider_scene(st, {}, display, pitch, irr, k, "mapping")[0], st.reference
+    return _through_owner(steps, step, "BoardOwner.push in this process, seed 001's mapping")
 
 
 def _figures(times: list[float], refs: list[str]) -> dict:

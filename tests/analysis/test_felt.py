@@ -249,7 +249,7 @@ def test_quantization_ratings_follow_the_felt_distance():
     m = {n: {"pitch_db": E.encode(E.reference_map(n), intervals=False)["pitch_db"],
              "irregularity_db": E.encode(E.reference_map(n), intervals=False)
              ["irregularity_db"]} for n in Q.EXEMPLARS}
-    state = Q.Quant(seed=1, config=Q.Config(matches=m, texel_samples=50))
+    state = Q.Quant(seed=1, config=Q.Config(matches=m, texel_samples=50, design="levels"))
     sim = SimulatedParticipant(Point(0.5, 0.5))
     got = {}
     while not state.done:

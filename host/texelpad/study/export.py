@@ -645,18 +645,23 @@ def plot_fig2(d: dict[str, Any], out: Path) -> Path:
     return _save(fig, out)
 
 
+def _series(ax: Any, k: int, xs: Sequence[float], rows: Sequence[Sequence[float]],
+            label: str) -> None:
+    """One series of Fig. 4: every participant's value at each x (nudged by k
+    on the log axis so series do not hide each other) and their means, joined."""
+    off = 1.08 ** (k - 1)
+    for x, vals in zip(xs, rows):
+        ax.plot([x * off] * len(vals), vals, "o", color="C%d" % k, ms=4, alpha=0.7)
+    avg = [(x * off, _mean(v)) for x, v in zip(xs, rows) if v]
+    ax.plot([x for x, _ in avg], [y for _, y in avg], "-", color="C%d" % k, label=label)
+
+
 def plot_fig4(d: dict[str, Any], out: Path) -> Path:
     plt = _pyplot()
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 4.2))
     fcs, zetas = d["fc_cpmm"], d["zetas"]
     for k, z in enumerate(zetas):
-        rows = d["fig4a_mean_cpmm"][k]
-        off = 1.08 ** (k - 1)
-        for f, vals in zip(fcs, rows):
-            ax.plot([f * off] * len(vals), vals, "o", color="C%d" % k, ms=4, alpha=0.7)
-        avg = [(f * off, _mean(v)) for f, v in zip(fcs, rows) if v]
-        ax.plot([x for x, _ in avg], [y for _, y in avg], "-", color="C%d" % k,
-                label="zeta %g" % z)
+        _series(ax, k, fcs, d["fig4a_mean_cpmm"][k], "zeta %g" % z)
     ax.plot([0.5, 40], [0.5, 40], ":", color="0.4", label="equal")
     for f in fcs:
         ax.axvline(f, ls="--", color="0.85", lw=0.8)
@@ -667,12 +672,7 @@ def plot_fig4(d: dict[str, Any], out: Path) -> Path:
     ax.legend(fontsize=8)
     ax.set_title("a) pitch", fontsize=8)
     for k, f in enumerate(fcs):
-        rows = d["fig4b_irregularity_normalised"][k]
-        off = 1.08 ** (k - 1)
-        for z, vals in zip(zetas, rows):
-            bx.plot([z * off] * len(vals), vals, "o", color="C%d" % k, ms=4, alpha=0.7)
-        avg = [(z * off, _mean(v)) for z, v in zip(zetas, rows) if v]
-        bx.plot([x for x, _ in avg], [y for _, y in avg], "-", color="C%d" % k,
+        _series(ax=bx, k=k, xs=zetas, rows=d["fig4b_irregularity_normalised"][k],
                 label="%g c/mm" % f)
     for z in zetas:
         bx.axvline(z, ls="--", color="0.85", lw=0.8)
