@@ -48,7 +48,11 @@ file's header); each is ours:
 - the references: seed 0 (`reference_seed`: the device's own bp-<fc>-<zeta>
   realisation), uploaded as 9,600 uint16 samples ("samples", the same on
   every board) or played by the board itself ("board", seed 0 only)
-  (`reference_play`); friction levels +-3 SD over 0 .. 1 (bandpass.py);
+  (`reference_play`); friction levels +-3 SD over 0 .. 1 (bandpass.py).
+  "samples" re-uploads the 9,600 values with every slider change (about
+  85 ms of bench.lab's 172 ms median per change on the virtual board);
+  "board" builds it once per trial and reuses it, but that build takes
+  18.9 s on an RP2040 (bench/results/seed001_options.txt);
 - summary(): Fig. 4b's "normalized" Irregularity is min-max over the
   participant's nine matches; the self-match statistic's SD is the sample SD.
 
