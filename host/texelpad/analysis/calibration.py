@@ -102,13 +102,14 @@ def rater_pitches(shared: str | Path | None = None
 
 
 def render_pitches(pitches: Sequence[float] | np.ndarray,
-                   texel_samples: int = RATER_TEXEL_SAMPLES
+                   texel_samples: int = RATER_TEXEL_SAMPLES, phase0: float = 0.0
                    ) -> np.ndarray:
     """The map (0..1) of texels with these pitches (c/mm), as the lab's
     generator renders them: the phase advances 2 pi f_i DX per sample of texel
-    i, continuous across texels, from 0; (sin + 1) / 2 (docs/generator.md)."""
+    i, continuous across texels, from phase0 (rad); (sin + 1) / 2
+    (docs/generator.md)."""
     inc = np.repeat(2.0 * np.pi * np.asarray(pitches, dtype=np.float64) * DX_MM, texel_samples)
-    theta = np.concatenate(([0.0], np.cumsum(inc)[:-1]))
+    theta = phase0 + np.concatenate(([0.0], np.cumsum(inc)[:-1]))
     return (np.sin(theta) + 1.0) / 2.0
 
 

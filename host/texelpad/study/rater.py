@@ -26,8 +26,9 @@ from typing import Any
 
 import numpy as np
 
-from texel.gen.params import DX_MM
 from texel.gen.reference import STUDY_NAMES
+
+from ..analysis.calibration import render_pitches
 
 DATA = Path(__file__).with_name("data") / "trained_rater.json"
 
@@ -92,8 +93,7 @@ def rendering(name: str, quant_db: float, phase_u: float,
     (round half up)."""
     if not (isinstance(phase_u, float) and 0.0 <= phase_u < 1.0):
         raise ValueError("phase_u: expected a float in [0, 1), got %r" % (phase_u,))
-    f = quantize(pitches(name, rows), quant_db)
-    inc = np.repeat(2.0 * math.pi * f * DX_MM, texel_samples())
-    theta = 2.0 * math.pi * phase_u + np.concatenate(([0.0], np.cumsum(inc)[:-1]))
-    u16 = np.floor((np.sin(theta) + 1.0) / 2.0 * 65535.0 + 0.5).astype(np.int64)
+    m = render_pitches(quantize(pitches(name, rows), quant_db), texel_samples(),
+                       2.0 * math.pi * phase_u)
+    u16 = np.floor(m * 65535.0 + 0.5).astype(np.int64)
     return tuple(int(v) for v in u16)
