@@ -156,12 +156,11 @@ def study_scenes(display: dict[str, Any]) -> list[tuple[str, dict[str, Any]]]:
         config = dict(c["config"])
         if c["protocol"] == "quant" and not config.get("matches"):
             config["matches"] = {r: dict(m, pitch_db=min(PITCH_DB_MAX, m["pitch_db"]))
-                                 for r, m in ((r, rater.match(r))           # (white, blue: 20 dB)
-                                              for r in rater.data()["matches"])}
+                                 for r, m in rater.data()["matches"].items()}   # (white: 20 dB)
         header = {"protocol": c["protocol"], "config": config, "seed": 1}
         st = protocols.start(c["protocol"], config, 1)
         if c["protocol"] == "mapping":
-            sc, _ = questions.slider_scene(st, header, display, *st.config.start, 0, "mapping")
+            sc, _ = questions.slider_scene(st, header, display, *st.config.start, 0)
             out.append(("%s trial 1 sliders' start" % name, sc))
             continue
         if c["protocol"] == "free":

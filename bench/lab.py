@@ -80,7 +80,7 @@ def run_mapping(steps: int = 200) -> dict:
     def step(k: int, display: dict) -> tuple[dict, str]:
         pitch = float(abs((k % 40) - 20) * 5)       # 0 .. 100 and back
         irr = float(k % 101)
-        return slider_scene(st, {}, display, pitch, irr, k, "mapping")[0], st.reference
+        return slider_scene(st, {}, display, pitch, irr, k)[0], st.reference
     return _through_owner(steps, step, "BoardOwner.push in this process, seed 001's mapping")
 
 

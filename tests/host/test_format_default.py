@@ -130,7 +130,7 @@ def test_shipped_study_configs_say_format_2_and_play_it(name):
             scene, _ = questions.slider_scene(state, h, TPAD, 3.0, -10.0, 0)
             scenes = [scene]
         elif h["protocol"] == "mapping":
-            scene, _ = questions.slider_scene(state, h, TPAD, 30, 20, 0, "mapping")
+            scene, _ = questions.slider_scene(state, h, TPAD, 30, 20, 0)
             scenes = [scene]
         else:
             scenes = questions.ask(h["protocol"], state, h, TPAD).options

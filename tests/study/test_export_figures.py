@@ -37,7 +37,7 @@ def _run(data, proto, participant, config, seed, answer, n=None):
     k = 0
     while not st.done and (n is None or k < n):
         if Q.sliding(proto, st):
-            sc, _ = Q.slider_scene(st, s.header, TPAD_DISPLAY, *st.config.start, 0, proto)
+            sc, _ = Q.slider_scene(st, s.header, TPAD_DISPLAY, *st.config.start, 0)
         else:
             sc = Q.ask(proto, st, s.header, TPAD_DISPLAY).options[0]
         a = answer(st)

@@ -19,10 +19,11 @@ A display sample array (a rater's logged rendering, a band-pass reference:
 """
 from __future__ import annotations
 
-import dataclasses
 import json
 from pathlib import Path
 from typing import Any, Callable
+
+from texel.runtime.boards import DX_UM_MAX, POSITIONS_MAX
 
 from . import bandpass
 from . import configs as C
@@ -34,8 +35,6 @@ from .session import SessionError
 
 # the TPaD of seeds 000 and 001: 19,200 positions of 5.3 um (texel.runtime.boards)
 TPAD_DISPLAY: dict[str, Any] = {"positions": 19200, "dx_um": 5.3}
-POSITIONS_MAX = 1048576             # texel.runtime.boards.POSITIONS_MAX
-DX_UM_MAX = 1000.0                  # texel.runtime.boards.DX_UM_MAX
 # staircase trials listed (its length depends on the answers: the simulated participant with
 # a 3 mm threshold, texelpad.study.participant, needs a median 61 trials, 95th percentile 72,
 # at most 83 over seeds 0..199; each trial's seeds depend on the session's seed and the
@@ -86,17 +85,19 @@ def header_config(name: str, cf: dict[str, Any]) -> dict[str, Any]:
 
 
 def full_config(proto: str, state: Any, header: dict[str, Any]) -> dict[str, Any]:
-    """Every choice field: the header's config and the defaults the
-    protocol's Config fills in (JSON: tuples as lists)."""
-    if dataclasses.is_dataclass(getattr(state, "config", None)):
-        fields = dataclasses.asdict(state.config)
-    else:                               # the search: its own fields
-        fields = {k: getattr(state, k) for k in ("dims", "x0", "sigma0", "texture_seed",
-                                                   "texture_format")}
-        fields["x0"] = fields["x0"] if fields["x0"] is not None else [0.5] * len(state.dims)
+    """Every choice field: what a session's header records
+    (protocols.resolved: the Config's fields, defaults included, and the
+    scenes' keys), plus the search's own fields and the staircase's stimulus
+    as it plays (JSON: tuples as lists)."""
+    if proto != "search":
+        out = protocols.resolved(proto, state, header)
+        if proto == "staircase" and "distribution" not in out:
+            out["distribution"] = state.config.texture()
+        return out
+    fields = {k: getattr(state, k) for k in ("dims", "x0", "sigma0", "texture_seed",
+                                               "texture_format")}
+    fields["x0"] = fields["x0"] if fields["x0"] is not None else [0.5] * len(state.dims)
     out = dict(fields, **{k: v for k, v in header.items() if k in protocols.SCENE_KEYS})
-    if proto == "staircase" and "distribution" not in out:
-        out["distribution"] = state.config.texture()
     return json.loads(json.dumps(out))
 
 
@@ -170,7 +171,7 @@ def _free(st: Any, header: dict[str, Any], display: dict[str, Any]) -> dict[str,
     c = st.config
     trials = []
     while not st.done:
-        sc, _ = Q.slider_scene(st, header, display, c.start[0], c.start[1], 0, "free")
+        sc, _ = Q.slider_scene(st, header, display, c.start[0], c.start[1], 0)
         trials.append({"trial": st.trial, "reference": st.reference,
                        "options": [_option("sliders", sc, display)], "move": 0,
                        "answer": "pitch_db, irregularity_db (sliders), confidence %d .. %d"
@@ -225,7 +226,7 @@ def _mapping(st: Any, header: dict[str, Any], display: dict[str, Any]) -> dict[s
     trials = []
     while st.phase == "match":
         ref = st.reference
-        sc, _ = Q.slider_scene(st, header, display, c.start[0], c.start[1], 0, "mapping")
+        sc, _ = Q.slider_scene(st, header, display, c.start[0], c.start[1], 0)
         what = "band-pass reference %s seed %d" % (ref, c.reference_seed)
         trials.append({"trial": st.trial, "phase": "match", "reference": ref,
                        "options": [_option("sliders", sc, display, what)], "move": 0,

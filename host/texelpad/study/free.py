@@ -141,6 +141,10 @@ class Free:
     def reference(self) -> str:
         return self.order[self.trial]
 
+    def reference_texture(self) -> dict[str, Any]:
+        """The current trial's reference as the display plays it."""
+        return {"kind": "reference", "name": self.reference}
+
     def check(self, pitch_db: Any, irregularity_db: Any) -> tuple[float, float]:
         """Slider values, checked and on the 0.001 dB grid."""
         c = self.config

@@ -13,10 +13,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from texel.gen.reference import STUDY_NAMES as NINE
-
+from . import protocols
 from . import questions as Q
-from .quant import EXEMPLARS
 from .session import Session
 
 FELT_KEYS = ("pitch_db", "irregularity_db", "seed", "texel_samples", "v")
@@ -65,8 +63,7 @@ def from_end_point(protocol: str, session: Session, state: Any) -> dict[str, dic
 
 
 def references_of(config: dict[str, Any]) -> tuple[str, ...]:
-    """The references a quant config rates (its Config's default when it names none)."""
-    refs = config.get("references")
-    if refs:
-        return tuple(refs)
-    return NINE if config.get("design", "paper") == "paper" else EXEMPLARS
+    """The references a quant config rates (its Config's default when it
+    names none): the config's own resolution, its matches aside (they are
+    what is being looked for). ValueError for a config the protocol refuses."""
+    return tuple(protocols.start("quant", dict(config, matches=None), 0).config.references)

@@ -11,7 +11,7 @@ pure logic (scenes are plain dicts for Board.push; the web layer pushes them).
                      participant page)
     normalise(protocol, q, state, answer)  -> the answer the protocol takes,
                      or ValueError (checked before anything is written)
-    slider_scene(state, header, display, a, b, move, protocol="free")
+    slider_scene(state, header, display, a, b, move)
                   -> the scene for a slider setting (the free exploration;
                      the mapping's first phase): sliding(protocol, state)
                      says when a protocol asks with sliders, SLIDER_KEYS
@@ -176,19 +176,14 @@ def _free(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
 
 
 def slider_scene(st: Any, header: dict[str, Any], display: dict[str, Any], a: Any, b: Any,
-                 move: int, protocol: str = "free"
-                 ) -> tuple[dict[str, Any], tuple[float, float]]:
-    """The scene for a slider setting (checked: ValueError for a value off
-    the sliders) and the setting as kept (free: 0.001 dB; mapping: the
-    slider's step): the reference left, the rendering right."""
-    if protocol == "mapping":
-        p, s = st.check(a, b)
-        return S.split(st.reference_texture(), st.texture(p, s, move, format_of(header)),
-                       display, name="rendering"), (p, s)
+                 move: int) -> tuple[dict[str, Any], tuple[float, float]]:
+    """The scene of a sliding protocol (the free exploration; the mapping's
+    first phase) for a slider setting - its reference left, the rendering
+    right - and the setting as kept (free: 0.001 dB; mapping: the slider's
+    step). ValueError for a value off the sliders."""
     p, s = st.check(a, b)
-    ref = {"kind": "reference", "name": st.reference}
-    return S.split(ref, st.texture(p, s, move, format_of(header)), display,
-                   name="rendering"), (p, s)
+    return S.split(st.reference_texture(), st.texture(p, s, move, format_of(header)),
+                   display, name="rendering"), (p, s)
 
 
 def _mapping(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:

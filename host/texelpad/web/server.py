@@ -202,7 +202,7 @@ class Lab:
 
     def _slide(self, lv: Live, pitch: Any, irregularity: Any, record: bool = True) -> dict:
         scene, (p, s) = Q.slider_scene(lv.state, lv.session.header, self.owner.display(),
-                                       pitch, irregularity, lv.moves, lv.protocol)
+                                       pitch, irregularity, lv.moves)
         _, canonical = self.owner.push(scene)
         lv.playing, lv.playing_scene, lv.sliders = 0, canonical, (p, s)
         self._took_board(lv)
