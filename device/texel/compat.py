@@ -105,12 +105,56 @@ except ImportError:                     # pragma: no cover - every target has ar
 
 
 def u16_buffer(n):
-    """A zeroed uint16 buffer of n samples (2 bytes each). It briefly needs
-    two 2n-byte blocks (the zeroed bytes, then the array): a single-block
-    array('H', range(n)) zeroed by slices measured 72 ms against 7.4 ms for a
-    19,200-sample map on the emulated Pico, too slow for a push; callers
-    that build often pass their own buffer (out=)."""
+    """A zeroed uint16 buffer of n samples (2 bytes each).
+
+    The fast way briefly needs two 2n-byte blocks (the zeroed bytes, then the
+    array); on a fragmented heap the second can fail although one would fit
+    (a 19,200-sample map on a 180 KB heap failed so, depending on nothing more
+    than the length of the import path's strings). Then the buffer is built in
+    one block (u16_one_block) and zeroed by slices. That measured 72 ms against
+    7.4 ms for a 19,200-sample map on the emulated Pico, so it is only the
+    fallback; callers that build often pass their own buffer (out=)."""
+    try:
+        return array("H", bytes(2 * n))
+    except MemoryError:
+        if n > 65536:                   # u16_one_block would take the two-block way
+            raise
+    return _zeroed(u16_one_block(n))
+
+
+def u16_one_block(n):
+    """An uint16 buffer of n samples, contents undefined (the caller
+    overwrites all of it). array('H', range(n)) sizes the array from
+    len(range) and allocates just that block; array('H', bytes(2n)) needs a
+    second 2n-byte block for the zeroed bytes at the same time - on a
+    fragmented board heap that is the difference between fitting and not.
+    (MicroPython would silently wrap values above 65535, CPython refuses
+    them: longer buffers take the bytes path.)"""
+    if n <= 65536:
+        return array("H", range(n))
     return array("H", bytes(2 * n))
+
+
+_ZERO_RUN = 256
+
+
+def _zeroed(a):
+    # Slice assignment from a small zero array: one C memcpy a run, no per
+    # sample Python loop. A port without array slice assignment (the
+    # MICROPY_PY_ARRAY_SLICE_ASSIGN option) zeroes sample by sample.
+    n = len(a)
+    z = array("H", bytes(2 * _ZERO_RUN))
+    i = 0
+    try:
+        while i + _ZERO_RUN <= n:
+            a[i:i + _ZERO_RUN] = z
+            i += _ZERO_RUN
+    except (TypeError, NotImplementedError):
+        pass
+    while i < n:
+        a[i] = 0
+        i += 1
+    return a
 
 
 def check_u16_out(out, n):

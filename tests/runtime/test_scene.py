@@ -653,8 +653,10 @@ def test_max_bytes_budget():
 
 def test_memory_error_becomes_value_error(monkeypatch):
     # CPython cannot run out of memory on cue: make the second buffer fail.
-    # (tests below provoke a real MemoryError under MicroPython.)
-    real = S.array
+    # (tests below provoke a real MemoryError under MicroPython.) The region
+    # buffers come from compat.u16_one_block.
+    from texel import compat
+    real = compat.array
     calls = []
 
     def failing(code, init=()):
@@ -664,7 +666,7 @@ def test_memory_error_becomes_value_error(monkeypatch):
                 raise MemoryError
         return real(code, init)
 
-    monkeypatch.setattr(S, "array", failing)
+    monkeypatch.setattr(compat, "array", failing)
     # an explicit engine renders both halves into buffers: the second fails
     with pytest.raises(ValueError, match=r"^scene: out of memory while building \(needs 38448 bytes"):
         S.build(SPLIT, D, engine="int")

@@ -68,6 +68,7 @@
 # study's split screen has 2 regions) and loses ~0.15 us in the worst
 # 16-region case: linear scan.
 from array import array
+from ..compat import u16_one_block
 from ..gen.params import validate as texel_validate
 from ..gen.params import SPEC as TEXEL_SPEC
 from ..gen.params import KEYS as _TEXEL_ALL_KEYS
@@ -554,19 +555,6 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
     return sc
 
 
-def _u16(n):
-    """An uint16 buffer of n samples, contents undefined (every caller
-    overwrites all of it). array('H', range(n)) sizes the array from
-    len(range) and allocates just that block; array('H', bytes(2n)) would
-    need a second 2n-byte block for the zeroed bytes at the same time - on a
-    fragmented board heap that is the difference between fitting and not.
-    (MicroPython would silently wrap values above 65535, CPython refuses
-    them: longer buffers take the bytes path.)"""
-    if n <= 65536:
-        return array("H", range(n))
-    return array("H", bytes(2 * n))
-
-
 def _shared(reuse, tex, n):
     """The buffer of reuse's region playing tex over n positions (a reference
     or a brush: what they paint depends on the texture and the length
@@ -641,7 +629,7 @@ def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
                 table[j + 2] = K_CHUNK
                 bufs.append(tex["u16"].chunks)  # the upload itself, exactly region-long
             else:
-                bufs.append(_u16(e - s))        # exactly region-long
+                bufs.append(u16_one_block(e - s))        # exactly region-long
     # 2. render into them
     for k, ch in painted:                   # the board got ~200 numbers, paints here
         from ..gen.brush import paint

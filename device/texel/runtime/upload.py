@@ -10,6 +10,7 @@
 # only an upload needs them: kept here, the unix port's 176 KB heap test
 # still builds the split screen (compat grown by them, it did not).
 from array import array
+from ..compat import u16_one_block
 from .scene import MAX_SAMPLES, CHUNK_BITS, CHUNK_MASK
 
 
@@ -68,9 +69,8 @@ class Chunks:
     CHUNKS = True               # what scene.validate/build look for (no literal has it)
 
     def __init__(self, n):
-        from .scene import _u16
         self.n = n
-        self.chunks = tuple(_u16(min(CHUNK, n - o)) for o in range(0, n, CHUNK))
+        self.chunks = tuple(u16_one_block(min(CHUNK, n - o)) for o in range(0, n, CHUNK))
 
     def __len__(self):
         return self.n
