@@ -1,5 +1,9 @@
+import importlib.util
+import json
 import os
+import shutil
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -49,7 +53,49 @@ _hyp_settings.register_profile("texelpad-nightly", derandomize=False, **_HYP_COM
 
 
 def pytest_configure(config):
+    # Each test process (the run, or each pytest-xdist worker: tools/test.sh runs
+    # two) announces the virtual boards its tests start in a folder of its own
+    # (host/texelpad/sim/virtual.py registry_dir): a board another worker's test
+    # runs, or one the developer has running, is never found by auto-detection.
+    # Tests that need their own registry still set TEXELPAD_RUNTIME_DIR.
+    global _RUNTIME_DIR
+    _RUNTIME_DIR = tempfile.mkdtemp(prefix="texelpad-tests-run-")
+    os.environ["TEXELPAD_RUNTIME_DIR"] = _RUNTIME_DIR
     name = os.environ.get("TEXELPAD_HYPOTHESIS", "default") or "default"
     if name not in HYPOTHESIS_PROFILES:
         raise pytest.UsageError("TEXELPAD_HYPOTHESIS=%s: expected one of %s"
                                 % (name, ", ".join(HYPOTHESIS_PROFILES)))
+
+
+def pytest_unconfigure(config):
+    if _RUNTIME_DIR:
+        shutil.rmtree(_RUNTIME_DIR, ignore_errors=True)
+
+
+_RUNTIME_DIR = ""
+
+
+# --- pytest-xdist: the fuzz targets' table (tests/fuzz/conftest.py) ----------------
+# The controller collects nothing, so tests/fuzz/conftest.py is not loaded there:
+# each worker hands its figures over (workeroutput), and they are merged and
+# printed here, as one process would have printed them.
+_FUZZ_FROM_WORKERS: list[str] = []
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_testnodedown(node, error):
+    out = getattr(node, "workeroutput", {}).get("fuzz_stats")
+    if out:
+        _FUZZ_FROM_WORKERS.append(out)
+
+
+def pytest_terminal_summary(terminalreporter, exitstatus, config):
+    if not _FUZZ_FROM_WORKERS:
+        return
+    spec = importlib.util.spec_from_file_location(
+        "texelpad_fuzz_conftest", Path(__file__).resolve().parent / "fuzz" / "conftest.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    for out in _FUZZ_FROM_WORKERS:
+        mod.fuzzlib.merge(json.loads(out))
+    mod.report(terminalreporter, exitstatus, config)

@@ -6,6 +6,11 @@
 #   bash tools/test.sh            every test (CI)
 #   bash tools/test.sh --fast     the development slice: -m "not slow" (about 2 minutes)
 #   bash tools/test.sh ARGS...    any pytest arguments (a file, -k, -x ...)
+#
+# The tests run on two pytest-xdist workers, a test file to a worker (loadfile:
+# a file's module fixtures - a lab process, a browser, a booted emulated Pico -
+# are set up once). TEXELPAD_TEST_WORKERS=N sets how many; 0 runs them in this
+# one process (then -s shows what tests print, e.g. the measured figures).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 args=()
@@ -20,4 +25,7 @@ done
 .venv/bin/python -m ruff check --quiet host device tools tests bench
 .venv/bin/python -m mypy --no-error-summary               # host/texelpad ([tool.mypy] files)
 .venv/bin/python -m mypy --no-error-summary bench         # the research benchmarks, on their own
-exec .venv/bin/python -m pytest -q ${args[@]+"${args[@]}"}
+workers="${TEXELPAD_TEST_WORKERS:-2}"
+xdist=()
+if [ "$workers" != 0 ]; then xdist=(-n "$workers" --dist loadfile); fi
+exec .venv/bin/python -m pytest -q ${xdist[@]+"${xdist[@]}"} ${args[@]+"${args[@]}"}

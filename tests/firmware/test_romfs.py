@@ -121,3 +121,31 @@ def test_every_viper_module_runs_from_ram_not_from_the_freeze():
     frozen = romfs.frozen_sources()
     for rel in romfs.RAM_MODULES:
         assert not deco.search(frozen["texel/" + rel].decode())
+
+
+def test_a_second_build_into_one_folder_waits_for_the_first(tmp_path):
+    """build_firmware holds an exclusive flock on OUT/.build.lock: a second
+    build into the same folder (another terminal, another test worker) says it
+    waits and starts only when the first lets go."""
+    import fcntl
+    import threading
+    first = open(tmp_path / ".build.lock", "w")
+    fcntl.flock(first, fcntl.LOCK_EX)           # the build that is running
+    said: list[str] = []
+    entered = threading.Event()
+
+    def second():
+        with build._one_build_at_a_time(tmp_path, said.append):
+            entered.set()
+
+    t = threading.Thread(target=second)
+    t.start()
+    for _ in range(1000):                         # until the second has tried once
+        if said:
+            break
+        threading.Event().wait(0.01)
+    assert not entered.is_set()                   # it waits on the first
+    assert said == ["another build is using %s: waiting for it to end" % tmp_path]
+    first.close()                                # the first build ends
+    assert entered.wait(10)
+    t.join(10)

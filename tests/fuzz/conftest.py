@@ -60,7 +60,21 @@ def pytest_runtest_makereport(item, call):
             {"type": type(x).__name__, "message": fuzzlib.short(str(x), 600)})
 
 
+def pytest_sessionfinish(session, exitstatus):
+    """A pytest-xdist worker hands its figures to the controller, which does
+    not load this file (it collects nothing): tests/conftest.py merges them
+    and prints the table with report() below."""
+    out = getattr(session.config, "workeroutput", None)
+    if out is not None and fuzzlib.STATS:
+        out["fuzz_stats"] = json.dumps({n: s.as_dict() for n, s in fuzzlib.STATS.items()},
+                                       default=str)
+
+
 def pytest_terminal_summary(terminalreporter, exitstatus, config):
+    report(terminalreporter, exitstatus, config)
+
+
+def report(terminalreporter, exitstatus, config):
     if not fuzzlib.STATS:
         return
     tr = terminalreporter

@@ -99,6 +99,23 @@ class Stats:
 STATS: dict[str, Stats] = collections.defaultdict(Stats)
 
 
+def merge(figures: dict) -> None:
+    """Add a worker's STATS (name -> Stats.as_dict(), as pytest-xdist hands
+    them to the controller: tests/conftest.py) into this process's STATS."""
+    for name, d in figures.items():
+        s = STATS[name]
+        s.cases += d["cases"]
+        s.seconds += d["seconds"]
+        s.wall += d["wall_s"]
+        if d["slowest_case_s"] > s.slowest:
+            s.slowest, s.slowest_case = d["slowest_case_s"], d["slowest_case"]
+        s.outcomes.update(d["outcomes"])
+        for k, v in d["known_bugs"].items():
+            s.known[k] += v["count"]
+            s.known_first.setdefault(k, v["first"])
+        s.failures.extend(d["failures"])
+
+
 @contextlib.contextmanager
 def case(target: str, describe: Callable[[], str] = lambda: ""):
     """One case of `target`: counted and timed (real time) into STATS."""

@@ -22,6 +22,7 @@ frozen power-up (frozen_main.py as main.py) and never writes into the board fold
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -30,7 +31,7 @@ import subprocess
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Iterator
 
 from .. import __version__, toolchain
 from ..deploy import image
@@ -238,10 +239,36 @@ def build_firmware(board_dir: str | os.PathLike, out_dir: str | os.PathLike,
     t0 = time.monotonic()
     board_dir = Path(board_dir).resolve()
     board = check_board_dir(board_dir)
-    name = board["name"]
-    base, capacity, storage = layout(board_dir)
     out = Path(out_dir).resolve()
     out.mkdir(parents=True, exist_ok=True)
+    with _one_build_at_a_time(out, say):
+        return _build(board_dir, board, out, micropython, ulab, say, t0)
+
+
+@contextlib.contextmanager
+def _one_build_at_a_time(out: Path, say: Callable[[str], None]) -> Iterator[None]:
+    """An exclusive flock on out/.build.lock while building: two builds into
+    one folder (two terminals, or two test workers sharing the tests' cache)
+    would write the same CMake tree and .uf2 at once. The second waits, then
+    finds the tree built and only relinks. No fcntl (Windows): no lock."""
+    try:
+        import fcntl
+    except ImportError:                 # pragma: no cover - not POSIX
+        yield
+        return
+    with open(out / ".build.lock", "w") as f:
+        try:
+            fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            say("another build is using %s: waiting for it to end" % out)
+            fcntl.flock(f, fcntl.LOCK_EX)
+        yield                           # closing the file lets go of the lock
+
+
+def _build(board_dir: Path, board: dict, out: Path, micropython: str | os.PathLike | None,
+           ulab: str | os.PathLike | None, say: Callable[[str], None], t0: float) -> Built:
+    name = board["name"]
+    base, capacity, storage = layout(board_dir)
     say("texelpad's data for the ROMFS partition (maps, boards); its code is frozen")
     files, img = romfs_payload(board_dir, board)
     if len(img) > capacity:
