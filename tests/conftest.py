@@ -52,7 +52,47 @@ _hyp_settings.register_profile("texelpad-default", derandomize=True, **_HYP_COMM
 _hyp_settings.register_profile("texelpad-nightly", derandomize=False, **_HYP_COMMON)
 
 
+# --- hypothesis' constants: the same pool in every test process -------------------
+# Hypothesis (6.131 on) mixes into its draws the literal constants of the project's
+# modules loaded when a property runs (hypothesis.internal.constants_ast), so what a
+# derandomized property draws depends on what its process imported before it. On
+# pytest-xdist workers (tools/test.sh) that is whichever test files a worker happened
+# to run first: a CircuitPython build property once drew a 10.5 km display that the
+# one-process order never did. So every test process imports every module of the
+# project first (about 2 s), and the default profile's cases are the same on every
+# run again, however the files are spread.
+NOT_IMPORTED = ("texel.main", "texelpad.firmware.frozen_main")   # board scripts: they start the display
+
+
+def import_every_module() -> list[str]:
+    """Import texel, texelpad, bench and tools/*.py (as the tests that use
+    them do: tools/ on sys.path); return the modules that do not import on
+    CPython (the viper and board-hardware modules)."""
+    import importlib
+    import pkgutil
+    tools = ROOT / "tools"
+    if str(tools) not in sys.path:
+        sys.path.append(str(tools))
+    names = ["texel", "texelpad", "bench"] + sorted(f.stem for f in tools.glob("*.py"))
+    failed = []
+    for name in names:
+        try:
+            m = importlib.import_module(name)
+        except Exception:                               # noqa: BLE001 - listed, not raised
+            failed.append(name)
+            continue
+        for info in pkgutil.walk_packages(getattr(m, "__path__", []), name + "."):
+            if info.name in NOT_IMPORTED or info.name.endswith(".__main__"):
+                continue
+            try:
+                importlib.import_module(info.name)
+            except Exception:                           # noqa: BLE001
+                failed.append(info.name)
+    return failed
+
+
 def pytest_configure(config):
+    import_every_module()
     # Each test process (the run, or each pytest-xdist worker: tools/test.sh runs
     # two) announces the virtual boards its tests start in a folder of its own
     # (host/texelpad/sim/virtual.py registry_dir): a board another worker's test

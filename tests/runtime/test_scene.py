@@ -1382,3 +1382,40 @@ def test_a_push_shares_the_playing_scenes_unchanged_reference_and_brush():
         other = dict(left, seed=6) if left["kind"] == "brush" else dict(left, name="pink")
         c = S.build(split(9.0, other), D, reuse=a)
         assert c.buffers()[0] is not a.buffers()[0]
+
+
+# --- a region ending at the display's own length, at every float precision --------------
+
+EDGE_DISPLAYS = [(16143, 652816.0989344482),     # 10.5 km: CircuitPython refused its own end
+                 (1048576, 1000000.0), (1048576, 1.0), (1, 1000000.0), (19200, 5.3),
+                 (777777, 999999.9)]
+EDGE_SCRIPT = """
+import json
+from texel.runtime import scene as S
+out = []
+for positions, dx_um, end_mm in %s:
+    d = {'positions': positions, 'dx_um': dx_um}
+    sc = {'regions': [{'start_mm': 0, 'end_mm': end_mm,
+                       'texture': {'kind': 'constant', 'level': 0}}]}
+    try:
+        c, spans, n, dx = S.check(sc, d)
+        out.append(['ok', spans])
+    except ValueError as e:
+        out.append(['refused', str(e)])
+print(json.dumps(out))
+"""
+
+
+@pytest.mark.parametrize("name", [mpy.toolchain.UNIX_PORT, *mpy.toolchain.INSTRUMENTS])
+def test_a_region_to_the_displays_own_length_is_accepted_at_every_precision(name):
+    """The host writes end_mm as the display's length rounded to 0.1 um
+    (S._mm); every interpreter accepts it and puts the end on the last
+    position - on CircuitPython's 30-bit floats too, where 'length + 1 mm'
+    was the length again for a 10.5 km display (found by the build property
+    on CircuitPython, tests/runtime/test_scene_property.py)."""
+    exe = mpy.toolchain.interpreter(name)
+    if exe is None:
+        pytest.skip("%s is not on this machine (../shared/instruments)" % name)
+    cases = [(p, dx, S._mm(p, dx)) for p, dx in EDGE_DISPLAYS]
+    got = mpy.run_json(EDGE_SCRIPT % repr(cases), exe=exe)
+    assert got == [["ok", [[0, p]]] for p, _ in EDGE_DISPLAYS], got

@@ -255,12 +255,19 @@ def _mm_in(path, v, total_mm, positions, dx_um):
     """A region boundary in mm: a finite number in [0, display length]. A
     value past the end by less than half a position is accepted (it rounds
     onto the last boundary: float rounding of positions * dx must not refuse
-    the display's own length)."""
+    the display's own length). The pre-check's slack is two positions, not a
+    fixed mm: on CircuitPython's 30-bit floats a display of 16,143 x 652.8 mm
+    positions (10.5 km) is 10,538,408 mm, whose float steps are 2 mm, so
+    total_mm + 1.0 was total_mm again and its own length (the literal rounding
+    to 10,538,410) was refused. Two positions are at least 4 float steps on
+    every allowed display: a step there is at most total_mm * 2^-21 (a 22-bit
+    significand), and a position is total_mm / positions >= total_mm * 2^-20."""
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         return _num(path, v, 0.0, total_mm)
-    if isinstance(v, int) and (v < 0 or v > total_mm + 1.0):
+    lim = total_mm + 1.0 + dx_um / 500.0
+    if isinstance(v, int) and (v < 0 or v > lim):
         return _num(path, v, 0.0, total_mm)          # refused without float overflow
-    if v == v and 0.0 <= v <= total_mm + 1.0 and to_position(v, dx_um) <= positions:
+    if v == v and 0.0 <= v <= lim and to_position(v, dx_um) <= positions:
         return float(v)
     return _num(path, v, 0.0, total_mm)
 
