@@ -92,6 +92,12 @@ def import_every_module() -> list[str]:
 
 
 def pytest_configure(config):
+    name = os.environ.get("TEXELPAD_HYPOTHESIS", "default") or "default"
+    if name not in HYPOTHESIS_PROFILES:
+        raise pytest.UsageError("TEXELPAD_HYPOTHESIS=%s: expected one of %s"
+                                % (name, ", ".join(HYPOTHESIS_PROFILES)))
+    if getattr(config.option, "numprocesses", None) and not hasattr(config, "workerinput"):
+        return                  # the pytest-xdist controller: it runs no test
     import_every_module()
     # Each test process (the run, or each pytest-xdist worker: tools/test.sh runs
     # two) announces the virtual boards its tests start in a folder of its own
@@ -101,10 +107,6 @@ def pytest_configure(config):
     global _RUNTIME_DIR
     _RUNTIME_DIR = tempfile.mkdtemp(prefix="texelpad-tests-run-")
     os.environ["TEXELPAD_RUNTIME_DIR"] = _RUNTIME_DIR
-    name = os.environ.get("TEXELPAD_HYPOTHESIS", "default") or "default"
-    if name not in HYPOTHESIS_PROFILES:
-        raise pytest.UsageError("TEXELPAD_HYPOTHESIS=%s: expected one of %s"
-                                % (name, ", ".join(HYPOTHESIS_PROFILES)))
 
 
 def pytest_unconfigure(config):

@@ -129,6 +129,7 @@ def test_a_second_build_into_one_folder_waits_for_the_first(tmp_path):
     waits and starts only when the first lets go."""
     import fcntl
     import threading
+    import time
     first = open(tmp_path / ".build.lock", "w")
     fcntl.flock(first, fcntl.LOCK_EX)           # the build that is running
     said: list[str] = []
@@ -143,7 +144,7 @@ def test_a_second_build_into_one_folder_waits_for_the_first(tmp_path):
     for _ in range(1000):                         # until the second has tried once
         if said:
             break
-        threading.Event().wait(0.01)
+        time.sleep(0.01)
     assert not entered.is_set()                   # it waits on the first
     assert said == ["another build is using %s: waiting for it to end" % tmp_path]
     first.close()                                # the first build ends

@@ -636,7 +636,7 @@ def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
                 table[j + 2] = K_CHUNK
                 bufs.append(tex["u16"].chunks)  # the upload itself, exactly region-long
             else:
-                bufs.append(u16_one_block(e - s))        # exactly region-long
+                bufs.append(u16_one_block(e - s))    # exactly region-long
     # 2. render into them
     for k, ch in painted:                   # the board got ~200 numbers, paints here
         from ..gen.brush import paint
