@@ -91,7 +91,7 @@ def _fit_report(data: C.Data, cal: C.Calibration, fit: C.Fit) -> dict[str, Any]:
     per = [{"texture": n, "reference": pts[n][0].as_dict(), "rater_rendering": pts[n][1].as_dict(),
             "felt_distance_db": pts[n][0].distance(pts[n][1]),
             "quoted_pitch_db": C.QUOTED_PITCH_DB.get(n)} for n in names]
-    return {"rows_assigned": data.rows,
+    return {"rater_labels": C.rater_label_check(),
             "fit": {"constants": C.constants_of(fit.model), "loss": fit.loss,
                     "model": fit.model.as_dict()},
             "ranked": [{"loss": lo, "constants": c} for lo, c in ranked[:8]],
@@ -164,9 +164,12 @@ def format_report(res: dict) -> str:
 
 
 def _format_fit(res: dict) -> list[str]:
-    L = ["the rater's pitch file: its rows assigned to the matches by their statistics "
-         "(texture <- the file's label)",
-         "  " + ", ".join("%s <- %s" % (k, v) for k, v in res["rows_assigned"].items()), "",
+    lab = res["rater_labels"]
+    L = ["the rater's pitch file, read by its labels: each row's log mean / log SD (dB) "
+         "against its label's match",
+         "  " + ", ".join("%s %.2f dB" % (k, v["distance_db"]) for k, v in lab["rows"].items()),
+         "  labels' cost %.3f dB^2, the least any assignment has %.3f dB^2" % (
+             lab["labels_cost"], lab["best_cost"]), "",
          "1. the fit over %d combinations of the assumed constants: loss (dB^2) = sum |felt(ref) "
          "- felt(rater's rendering)|^2 + (felt pitch - quoted)^2" % res["grid_size"]]
     for r in res["ranked"]:

@@ -18,7 +18,8 @@ from texelpad.study.session import FORMAT, Session
 
 LEGACY = Path(__file__).with_name("data") / "legacy"
 DISPLAY = {"positions": 19200, "dx_um": 5.3}
-FILES = sorted(p.name for p in LEGACY.glob("*.jsonl"))
+FILES = sorted(p.name for p in LEGACY.glob("*.jsonl") if not p.name.startswith("quant-v2"))
+V2_FILES = sorted(p.name for p in LEGACY.glob("quant-v2-*.jsonl"))
 
 
 def test_there_is_an_old_session_of_every_protocol_that_was():
@@ -83,3 +84,46 @@ def test_a_new_sessions_header_names_every_choice(tmp_path):
         # the header starts the same protocol
         again = protocols.start(proto, h["config"], 3)
         assert again.config == state.config
+
+
+def _digested(scene: dict) -> dict:
+    """The scene as make_v2.py keeps it: each sample array as its sha256."""
+    import hashlib
+    out = json.loads(json.dumps(scene))
+    for reg in out.get("regions", []):
+        tex = reg.get("texture", reg)
+        if "u16" in tex:
+            tex["u16"] = "sha256:" + hashlib.sha256(json.dumps(tex["u16"]).encode()).hexdigest()
+    return out
+
+
+@pytest.mark.parametrize("name", V2_FILES)
+def test_a_v2_quant_session_replays_as_it_ran(name):
+    # format /2, made by texelpad at 882b9d3 (make_v2.py) before the rater's pitch file was
+    # relabelled: its rater trials played the rows as they were read then (by statistics,
+    # square's and triangle's swapped; or 'app' by index) and 'lab' read the app's rows in the
+    # family order - every one of its 27 scenes, the rater's samples included, plays again
+    s = Session.open(LEGACY / name)
+    h = s.header
+    assert s.header["format"] == "texelpad-session/2" and h["legacy"]
+    assert h["config"]["rater_rows"] in ("statistics-2026", "index-2026")
+    assert h["config"]["lab_rows"] == "family_order"
+    state = protocols.start("quant", h["config"], h["seed"])
+    records = list(s.answers())
+    assert len(records) == 27
+    for k, rec in enumerate(records):
+        q = questions.ask("quant", state, h, DISPLAY)
+        assert _digested(q.options[0]) == rec["scene"], (name, k)
+        protocols.apply("quant", state, rec["answer"])
+    assert state.done and len(rows(s)) == 27
+    # the same session under today's reading plays other rater rows on some trials
+    fresh = dict(h["config"], rater_rows="by_texture", lab_rows="test_order")
+    if fresh.get("order") == "lab":
+        fresh["exemplars"] = ["4sin", "blue", "sawtooth"]
+    now = protocols.start("quant", fresh, h["seed"])
+    differ = 0
+    for rec in records:
+        q = questions.ask("quant", now, h, DISPLAY)
+        differ += _digested(q.options[0]) != rec["scene"]
+        protocols.apply("quant", now, rec["answer"])
+    assert differ > 0

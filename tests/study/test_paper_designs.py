@@ -23,7 +23,8 @@ from texelpad.study import scenes as S
 from texelpad.study.free import Config as FreeConfig
 from texelpad.study.participant import SimulatedParticipant
 from texelpad.study.pursuit import Config as PursuitConfig
-from texelpad.study.quant import LAB_EXEMPLARS, LAB_ORDER, NINE, Config, Quant
+from texelpad.study.quant import LAB_EXEMPLARS, LAB_ORDER, NINE, Config, Quant, lab_exemplars, \
+    lab_order
 from texelpad.study.session import Session
 from texelpad.study.space import Point
 from texelpad.study.staircase import Config as StairConfig
@@ -53,43 +54,66 @@ def test_the_paper_design_is_27_trials_18_unquantized_and_9_quantized_exemplars(
 
 
 def test_order_lab_is_the_apps_compare_order_row_by_row():
-    # the app: compareOrder = [0 3 0; 0 1 0; 1 5 0.1; ...; 1 2 0.5] (source, row, decades)
-    assert LAB_ORDER[0] == ("4sin", "own", 0.0) and LAB_ORDER[1] == ("2sin", "own", 0.0)
-    assert LAB_ORDER[2] == ("pink", "rater", 1.0) and LAB_ORDER[-1] == ("3sin", "rater", 5.0)
+    # the app: compareOrder = [0 3 0; 0 1 0; 1 5 0.1; ...; 1 2 0.5] (source, row, decades); its
+    # rows in the lab's test order [8 3 5 2 6 4 7 1 9] (1-based, family order): row 3 is pink,
+    # row 1 triangle, row 5 blue, row 2 4sin
+    assert rater.TEST_ORDER_NAMES == ("triangle", "4sin", "pink", "3sin", "blue", "white",
+                                      "square", "2sin", "sawtooth")
+    assert LAB_ORDER[0] == ("pink", "own", 0.0) and LAB_ORDER[1] == ("triangle", "own", 0.0)
+    assert LAB_ORDER[2] == ("blue", "rater", 1.0) and LAB_ORDER[-1] == ("4sin", "rater", 5.0)
+    assert LAB_EXEMPLARS == ("4sin", "blue", "sawtooth")
     st = Quant(1, Config(matches=OWN, order="lab", exemplars=LAB_EXEMPLARS))
     assert [(t["reference"], t["source"], t["quant_db"]) for t in st.plan] == list(LAB_ORDER)
+    # each of the nine once beside the own match and once beside the rater's, unquantized
+    for src in ("own", "rater"):
+        assert sorted(r for r, s_, q in LAB_ORDER if s_ == src and q == 0) == sorted(NINE)
     with pytest.raises(ValueError, match="order 'lab' plays the app's 27"):
         Config(matches=OWN, order="lab")                     # the paper's exemplars: not the app's
+    # the other reading: the rows in the published family order
+    fam = lab_order("family_order")
+    assert fam[0] == ("4sin", "own", 0.0) and fam[-1] == ("3sin", "rater", 5.0)
+    assert lab_exemplars("family_order") == ("3sin", "pink", "sawtooth")
+    st = Quant(1, Config(matches=OWN, order="lab", lab_rows="family_order",
+                         exemplars=lab_exemplars("family_order")))
+    assert [(t["reference"], t["source"], t["quant_db"]) for t in st.plan] == list(fam)
+    with pytest.raises(ValueError, match="lab_rows"):
+        Config(matches=OWN, lab_rows="alphabetical")
+    with pytest.raises(ValueError, match="repeats"):
+        Config(matches=OWN, order="lab", exemplars=LAB_EXEMPLARS, repeats=2)
 
 
 def test_the_rater_data_shipped_is_the_published_data():
     sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tools"))
     import gen_rater_data
     assert rater.data() == gen_rater_data.build()
-    pitches, _ = rater_pitches()
+    pitches = rater_pitches()
     for name in NINE:
         assert np.array_equal(rater.pitches(name), pitches[name])
         assert rater.match(name) == dict(zip(("pitch_db", "irregularity_db"),
                                              rater_matches()[name]))
 
 
-def test_rater_rows_app_pairs_by_index_as_the_app_did():
+def test_each_reference_plays_beside_the_raters_rendering_of_it():
     import csv
     from texelpad.analysis.calibration import rater_dir
     with open(rater_dir() / "trained_rater_texel_pitches.csv", newline="") as f:
         rows = {r[0]: np.array([float(v) for v in r[1:]]) for r in list(csv.reader(f))[1:]}
-    for name in NINE:                           # the app: data row k beside reference row k
-        assert np.array_equal(rater.pitches(name, "app"), rows[name])
-    assert not np.array_equal(rater.pitches("4sin", "app"), rater.pitches("4sin"))
-    st = Quant(1, Config(matches=OWN, order="lab", exemplars=LAB_EXEMPLARS, rater_rows="app"))
+    for name in NINE:                           # by the file's labels
+        assert np.array_equal(rater.pitches(name), rows[name])
+    # what older sessions played (study/legacy.py): by statistics, square's and triangle's
+    # swapped; the old 'app' mode, data row k (texture TEST_ORDER[k]) beside reference k
+    assert np.array_equal(rater.pitches("square", "statistics-2026"), rows["triangle"])
+    assert np.array_equal(rater.pitches("pink", "statistics-2026"), rows["pink"])
+    assert np.array_equal(rater.pitches("2sin", "index-2026"), rows["triangle"])
+    assert np.array_equal(rater.pitches("sawtooth", "index-2026"), rows["sawtooth"])
+    st = Quant(1, Config(matches=OWN, order="lab", exemplars=LAB_EXEMPLARS))
     while st.current_source != "rater":
         st.answer(3)
     ref, q = st.current
-    assert st.texture()["u16"] == rater.rendering(ref, q, st.phases[st.trial], "app")
-    with pytest.raises(ValueError, match="rater_rows"):
-        Config(matches=OWN, rater_rows="csv")
-    with pytest.raises(ValueError, match="repeats"):
-        Config(matches=OWN, order="lab", exemplars=LAB_EXEMPLARS, repeats=2)
+    assert st.texture()["u16"] == rater.rendering(ref, q, st.phases[st.trial])
+    for bad in ("app", "csv"):          # 'app' only encoded the mislabelling: gone
+        with pytest.raises(ValueError, match="rater_rows"):
+            Config(matches=OWN, rater_rows=bad)
 
 
 def test_quantization_is_buildfine5s_rounding_of_the_logged_sequence():

@@ -25,11 +25,15 @@ leave_one_out() refits without each texture in turn and reports the held-out
 texture: how the fold's model matches the rater's rendering to the reference,
 how its encoder lands against the rater's parameters and the quoted mean.
 
-The rater's texel-pitch file labels its rows in another order than the
-matches file (its row "2sin" has the statistics of the square/triangle match,
-"white" of 3sin's, ...): rater_pitches() assigns each row to the match whose
-pitch and irregularity its 192 pitches have (the Hungarian assignment on
-their log mean and log SD), and reports the assignment.
+The rater's texel-pitch file labels each row with its texture (corrected
+2026-11-28, ../shared/golden/README.md: the lab's .mat stores the sequences
+in its test order, and an earlier copy labelled them in family order, so
+seven of nine labels were wrong). rater_pitches() reads the rows by their
+labels; rater_label_check() measures each row's log mean and log SD against
+the match it is labelled with and solves the assignment by statistics alone
+(Hungarian, on those two numbers), so a test can say the labels are right.
+Square's and triangle's matches are identical (-0.045 dB, -10 dB): the
+statistics cannot tell those two rows apart, only the labels can.
 
 Pure analysis: numpy, scipy and texel; never the link or a web framework.
 """
@@ -56,6 +60,7 @@ QUOTED_PITCH_DB = {"2sin": 4.8, "3sin": 6.0, "4sin": 7.8,
                    "square": 0.0, "triangle": 0.0, "sawtooth": 0.0}
 NAMES = ("2sin", "3sin", "4sin", "white", "pink", "blue", "square", "triangle", "sawtooth")
 RATER_TEXEL_SAMPLES = 50          # the rater's renderings: 50-sample texels, 9,600 samples
+RATER_TEXELS = 192
 # the grid of the assumed constants (perception's comments say why each is assumed)
 CONSTANTS = {"full_scale_sl_db": (20.0, 25.0, 30.0, 35.0, 40.0, 45.0, 50.0, 60.0),
              "slope_above_db_per_octave": (6.0, 12.0, 18.0, 24.0, 36.0),
@@ -80,25 +85,47 @@ def rater_matches(shared: str | Path | None = None) -> dict[str, tuple[float, fl
     return {r["texture"]: (float(r["pitch_db"]), float(r["irregularity_db"])) for r in rows}
 
 
-def rater_pitches(shared: str | Path | None = None
-                  ) -> tuple[dict[str, np.ndarray], dict[str, str]]:
-    """({texture: the 192 texel pitches (c/mm) of the rater's rendering},
-    {texture: the label of the file's row it came from}): rows assigned to
-    matches by their statistics (module docstring)."""
-    from scipy.optimize import linear_sum_assignment
-    matches = rater_matches(shared)
+def rater_pitches(shared: str | Path | None = None) -> dict[str, np.ndarray]:
+    """{texture: the 192 texel pitches (c/mm) of the rater's rendering of it},
+    read by the file's row labels (module docstring)."""
     with open(rater_dir(shared) / "trained_rater_texel_pitches.csv", newline="") as f:
         rows = list(csv.reader(f))[1:]
-    labels = [r[0] for r in rows]
-    seqs = [np.array([float(v) for v in r[1:]]) for r in rows]
-    names = list(matches)
-    stats = np.array([[10.0 * float(np.mean(np.log10(s))),
-                       10.0 * math.log10(float(np.std(np.log10(s), ddof=1)))] for s in seqs])
+    out = {r[0]: np.array([float(v) for v in r[1:]]) for r in rows}
+    if sorted(out) != sorted(NAMES) or len(rows) != len(NAMES):
+        raise ValueError("the rater's pitch file: expected one row for each of %s, got %s"
+                         % (", ".join(NAMES), ", ".join(r[0] for r in rows)))
+    for name, seq in out.items():
+        if seq.size != RATER_TEXELS or not np.all(np.isfinite(seq)) or not np.all(seq > 0):
+            raise ValueError("the rater's pitch file: row %r needs %d positive pitches"
+                             % (name, RATER_TEXELS))
+    return out
+
+
+def log_stats_db(pitches: np.ndarray) -> tuple[float, float]:
+    """(10 log10 of the geometric mean pitch, 10 log10 of the SD of log10 f):
+    the (pitch_db, irregularity_db) a texel sequence has."""
+    lg = np.log10(np.asarray(pitches, dtype=np.float64))
+    return 10.0 * float(np.mean(lg)), 10.0 * math.log10(float(np.std(lg, ddof=1)))
+
+
+def rater_label_check(shared: str | Path | None = None) -> dict[str, Any]:
+    """Each row's statistics against the match its label names, and the
+    assignment the statistics alone make (module docstring):
+    {"rows": {label: {"stats_db", "match_db", "distance_db"}},
+     "by_statistics": {texture: label}, "labels_cost", "best_cost"} -
+    the labels are right when their cost is the least any assignment has."""
+    from scipy.optimize import linear_sum_assignment
+    matches = rater_matches(shared)
+    pitches = rater_pitches(shared)
+    names = list(NAMES)
+    stats = np.array([log_stats_db(pitches[n]) for n in names])
     target = np.array([matches[n] for n in names])
     cost = ((stats[:, None, :] - target[None, :, :]) ** 2).sum(axis=-1)
     ri, ci = linear_sum_assignment(cost)
-    return ({names[c]: seqs[r] for r, c in zip(ri, ci)},
-            {names[c]: labels[r] for r, c in zip(ri, ci)})
+    rows = {n: {"stats_db": [float(v) for v in stats[i]], "match_db": list(matches[n]),
+                "distance_db": float(math.sqrt(cost[i, i]))} for i, n in enumerate(names)}
+    return {"rows": rows, "by_statistics": {names[c]: names[r] for r, c in zip(ri, ci)},
+            "labels_cost": float(np.trace(cost)), "best_cost": float(cost[ri, ci].sum())}
 
 
 def render_pitches(pitches: Sequence[float] | np.ndarray,
@@ -122,7 +149,6 @@ class Data:
     rendering: dict[str, np.ndarray]
     spectra: dict[str, tuple[np.ndarray, np.ndarray]]
     matches: dict[str, tuple[float, float]]
-    rows: dict[str, str]
     m: int
 
     def points(self, model: P.Model) -> dict[str, tuple[P.FeltPoint, P.FeltPoint]]:
@@ -136,12 +162,12 @@ def load(shared: str | Path | None = None, names: Iterable[str] = NAMES) -> Data
     screen) and the rater's renderings, with their periodograms."""
     from .encoder import reference_map
     names = tuple(names)
-    pitches, rows = rater_pitches(shared)
+    pitches = rater_pitches(shared)
     ref = {n: reference_map(n) for n in names}
     ren = {n: render_pitches(pitches[n]) for n in names}
     spectra = {n: (P.periodogram(ref[n])[1], P.periodogram(ren[n])[1]) for n in names}
     m = P.segment_length(next(iter(ref.values())).size)
-    return Data(names, ref, ren, spectra, rater_matches(shared), rows, m)
+    return Data(names, ref, ren, spectra, rater_matches(shared), m)
 
 
 def loss(points: Mapping[str, tuple[P.FeltPoint, P.FeltPoint]], names: Iterable[str]) -> float:

@@ -195,9 +195,10 @@ def _quant(st: Any, header: dict[str, Any], display: dict[str, Any]) -> dict[str
         left = {"kind": "reference", "name": ref}
         if src == "rater":
             what = "the rater's logged sequence of %s quantized at %g dB" % (of, q)
-            if c.rater_rows == "app":
-                what = ("the rater's data row the app played beside %s (rater_rows 'app'), "
-                        "quantized at %g dB" % (of, q))
+            if c.rater_rows != "by_texture":
+                what = ("the rater's sequence of %s, which a session of rater_rows %r played "
+                        "beside %s, quantized at %g dB" % (rater.played(of, c.rater_rows),
+                                                          c.rater_rows, of, q))
             if phases is not None:
                 what += ", start phase %.6f cycle" % phases[k]
             right = {"kind": "samples", "fit": "tile", "what": what,

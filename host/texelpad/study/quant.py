@@ -23,16 +23,25 @@ Choices recorded in Config (and so in every session file's header):
   ("own" plays that reading).
 - `order`: "seeded" (default: the 27 in an order drawn from the session's
   seed) or "lab" (the app's fixed compareOrder, the same for every subject,
-  LAB_ORDER).
-- `rater_rows`: "by_texture" (default: each reference beside the rater's
-  rendering OF IT - the data's rows assigned by their statistics,
-  calibration.rater_pitches) or "app" (the app's pairing: reference row k
-  beside the rater's data row k, which by the statistics is another
-  texture's rendering for seven of the nine; with order "lab" this is the
-  app's 27 trials as they played). The app's order names reference rows 2, 5, 9 of its data for
-  the quantized trials: 3sin, pink and sawtooth in the published row order,
-  where the paper says the exemplars are 4sin, pink and sawtooth; "lab"
-  plays the app's rows as they are, "seeded" the paper's exemplars.
+  lab_order()).
+- `lab_rows`: which texture the app's "reference row" r names. The app
+  indexes reference_textures and the rater's data by row; the lab's data
+  stores its rows in its test order (reference_textures.mat's
+  reference_textures_test_order = [8 3 5 2 6 4 7 1 9], rater.TEST_ORDER), so
+  "test_order" (the default, the likelier reading) makes row r texture
+  TEST_ORDER[r]: the app's free exploration ran triangle, 4sin, pink, 3sin,
+  blue, white, square, 2sin, sawtooth and its quantized rows 2, 5, 9 are
+  4sin, blue and sawtooth. "family_order" reads row r in the published
+  family order (2sin ... sawtooth; rows 2, 5, 9 = 3sin, pink, sawtooth): the
+  reading texelpad had before 2026-11-28. Which one the app loaded is not in
+  the published code; under either, each reference sits beside the rater's
+  rendering of the same texture. The paper names the exemplars 4sin, pink
+  and sawtooth: the default design ("seeded") follows the paper, "lab" plays
+  the app's rows as they are.
+- `rater_rows`: "by_texture", each reference beside the rater's rendering of
+  it (rater.pitches). Sessions written before the rater's file was
+  relabelled carry what they played ("statistics-2026", "index-2026":
+  rater.LEGACY_ROWS, filled in by study/legacy.py) and replay as they ran.
 - the rater's rendering starts at a phase drawn from the session's seed (the
   app's buildFine5 draws rand()); own matches given without a seed (a match
   from a guided exploration or a search) take one drawn from the session's
@@ -65,17 +74,32 @@ from .free import check_references, rating_of
 EXEMPLARS = ("4sin", "pink", "sawtooth")
 DESIGNS = ("paper", "levels", "matrix")
 SOURCES = ("own", "rater")
-# The app's compareOrder: [source (0 own, 1 rater), reference row (1-based, the
-# published row order: texel.gen.reference.STUDY_NAMES), quantization (decades)].
+# The app's compareOrder (free_exploration_and_quantization_test_app): [source (0 own,
+# 1 rater), reference row (1-based), quantization (decades)]; what a row names: lab_rows.
 _APP_COMPARE_ORDER = (
     (0, 3, 0), (0, 1, 0), (1, 5, .1), (1, 9, 0), (1, 2, .1), (1, 9, .5), (0, 9, 0), (1, 7, 0),
     (1, 2, 0), (1, 4, 0), (1, 9, .1), (1, 5, .5), (1, 6, 0), (0, 6, 0), (1, 5, .3), (1, 5, 0),
     (1, 8, 0), (0, 8, 0), (0, 7, 0), (0, 4, 0), (0, 2, 0), (1, 1, 0), (1, 2, .3), (1, 9, .3),
     (0, 5, 0), (1, 3, 0), (1, 2, .5))
-# (reference, source, quant_db) per trial, in the app's order
-LAB_ORDER = tuple((NINE[row - 1], SOURCES[src], round(q * 10.0, 3))
-                  for src, row, q in _APP_COMPARE_ORDER)
-LAB_EXEMPLARS = ("3sin", "pink", "sawtooth")    # the app's quantized rows (docstring)
+# the texture each reference row names, per reading (docstring, `lab_rows`)
+LAB_ROWS = {"test_order": rater.TEST_ORDER_NAMES, "family_order": NINE}
+
+
+def lab_order(rows: str = "test_order") -> tuple[tuple[str, str, float], ...]:
+    """(reference, source, quant_db) per trial, in the app's order."""
+    names = LAB_ROWS[rows]
+    return tuple((names[row - 1], SOURCES[src], round(q * 10.0, 3))
+                 for src, row, q in _APP_COMPARE_ORDER)
+
+
+def lab_exemplars(rows: str = "test_order") -> tuple[str, ...]:
+    """The app's quantized references (its rows 2, 5, 9), per reading."""
+    names = LAB_ROWS[rows]
+    return tuple(names[r - 1] for r in (2, 5, 9))
+
+
+LAB_ORDER = lab_order()
+LAB_EXEMPLARS = lab_exemplars()         # 4sin, blue, sawtooth (test order)
 RATINGS = ("slider", "buttons")
 MATCH_KEYS = {"pitch_db", "irregularity_db"}
 
@@ -117,7 +141,8 @@ class Config:
     levels_db: tuple[float, ...] = ()       # () = paper (1, 3, 5); levels (0, 1, 3, 5); matrix (0,)
     quantized_source: str = "rater"
     order: str = "seeded"
-    rater_rows: str = "by_texture"      # "app": the app's row-by-index pairing (rater.pitches)
+    lab_rows: str = "test_order"        # what the app's reference rows name (docstring)
+    rater_rows: str = "by_texture"      # (older sessions: rater.LEGACY_ROWS, study/legacy.py)
     repeats: int = 1
     texel_samples: int = 50
     scale: tuple[int, int] = (1, 5)
@@ -166,10 +191,13 @@ class Config:
         if self.rating not in RATINGS:
             raise ValueError("rating: expected 'slider' (continuous, the app's) or 'buttons', "
                              "got %r" % (self.rating,))
-        if self.rater_rows not in rater.ROWS:
+        if self.rater_rows not in rater.ROWS + rater.LEGACY_ROWS:
             raise ValueError("rater_rows: expected 'by_texture' (each reference beside the "
-                             "rater's rendering of it) or 'app' (the app's row by index), got %r"
-                             % (self.rater_rows,))
+                             "rater's rendering of it), got %r" % (self.rater_rows,))
+        if self.lab_rows not in LAB_ROWS:
+            raise ValueError("lab_rows: expected 'test_order' (the app's rows in the lab's "
+                             "test order, the default) or 'family_order', got %r"
+                             % (self.lab_rows,))
         if self.order not in ("seeded", "lab"):
             raise ValueError("order: expected 'seeded' or 'lab' (the app's fixed order), got %r"
                              % (self.order,))
@@ -185,17 +213,18 @@ class Config:
             raise ValueError("repeats: order 'lab' plays the app's 27 trials once, got %r"
                              % (self.repeats,))
         if self.order == "lab" and (self.design != "paper" or tuple(self.references) != NINE
-                                    or tuple(self.exemplars) != LAB_EXEMPLARS
+                                    or tuple(self.exemplars) != lab_exemplars(self.lab_rows)
                                     or tuple(self.levels_db) != (1.0, 3.0, 5.0)):
             raise ValueError("order 'lab' plays the app's 27 trials as they were: design "
-                             "'paper', the nine references, exemplars %s, levels 1, 3, 5 dB"
-                             % ", ".join(LAB_EXEMPLARS))
+                             "'paper', the nine references, exemplars %s (lab_rows %r), "
+                             "levels 1, 3, 5 dB"
+                             % (", ".join(lab_exemplars(self.lab_rows)), self.lab_rows))
 
     def trials(self, rng: random.Random) -> list[tuple[str, str, str, float]]:
         """(reference, whose match, source, quant_db) per trial, in order."""
         if self.design == "paper":
             if self.order == "lab":
-                return [(r, r, self.quantized_source if q else s, q) for r, s, q in LAB_ORDER]
+                return [(r, r, self.quantized_source if q else s, q) for r, s, q in lab_order(self.lab_rows)]
             t = [(r, r, s, 0.0) for s in SOURCES for r in self.references]
             t += [(e, e, self.quantized_source, float(q)) for e in self.exemplars
                   for q in self.levels_db]

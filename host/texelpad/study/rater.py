@@ -49,22 +49,38 @@ def match(name: str) -> dict[str, float]:
     return dict(data()["matches"][_name(name)])
 
 
-ROWS = ("by_texture", "app")
+# The lab's data rows are in its test order (../shared/golden/README.md, "rater/"):
+# reference_textures.mat's reference_textures_test_order, 1-based in the family order
+# (texel.gen.reference.STUDY_NAMES): data row k holds texture TEST_ORDER[k].
+TEST_ORDER = (8, 3, 5, 2, 6, 4, 7, 1, 9)
+TEST_ORDER_NAMES = tuple(STUDY_NAMES[i - 1] for i in TEST_ORDER)
+# rater_rows: "by_texture" plays each reference beside the rater's rendering OF IT.
+# The other two are what session files written before the file was relabelled
+# (2026-11-28) played, kept so they replay as they ran (study/legacy.py fills them in):
+# "statistics-2026" - rows assigned by their statistics, which cannot tell square's from
+# triangle's (identical matches) and swapped those two; "index-2026" - the old mode
+# "app": reference k (family order) beside data row k, i.e. texture TEST_ORDER[k].
+ROWS = ("by_texture",)
+LEGACY_ROWS = ("statistics-2026", "index-2026")
+
+
+def played(name: str, rows: str) -> str:
+    """Whose rendering `rows` plays beside reference `name`."""
+    if rows == "by_texture":
+        return name
+    if rows == "statistics-2026":
+        return {"square": "triangle", "triangle": "square"}.get(name, name)
+    if rows == "index-2026":
+        return TEST_ORDER_NAMES[STUDY_NAMES.index(name)]
+    raise ValueError("rater_rows: expected 'by_texture' (each reference beside the rater's "
+                     "rendering of it), got %r" % (rows,))
 
 
 def pitches(name: str, rows: str = "by_texture") -> np.ndarray:
-    """The 192 texel pitches (c/mm) of the rater's rendering of `name`.
-    rows "by_texture": the sequence whose statistics match the rater's match
-    of `name` (calibration.rater_pitches); "app": the row the lab's app
-    played beside reference `name` - the data file's row of the same index,
-    which by its statistics is the rendering of another texture for seven
-    of the nine (docs/lab.md, "As the papers ran them")."""
-    if rows not in ROWS:
-        raise ValueError("rater_rows: expected 'by_texture' or 'app', got %r" % (rows,))
-    name = _name(name)
-    if rows == "app":
-        name = {label: t for t, label in data()["csv_row"].items()}[name]
-    return np.array(data()["pitches_cpmm"][name], dtype=np.float64)
+    """The 192 texel pitches (c/mm) of the rater's rendering of `name`
+    (rows "by_texture"); a LEGACY_ROWS value gives what a session written
+    before the relabelling played beside `name` (above)."""
+    return np.array(data()["pitches_cpmm"][played(_name(name), rows)], dtype=np.float64)
 
 
 def texel_samples() -> int:

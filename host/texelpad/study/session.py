@@ -35,10 +35,10 @@ from pathlib import Path
 from typing import Any, Iterator
 
 from .. import __version__
-from .legacy import OLD_FORMAT, effective_header
+from .legacy import OLD_FORMATS, effective_header
 
 NAME = re.compile(r"^[A-Za-z0-9_-]{1,40}$")
-FORMAT = "texelpad-session/2"          # /1: before issue 20 (study/legacy.py reads it)
+FORMAT = "texelpad-session/3"          # /1, /2: older (study/legacy.py reads them)
 
 
 class SessionError(ValueError):
@@ -114,7 +114,7 @@ class Session:
                 raise SessionError("%s: line %d is damaged (%s)" % (path, i + 1, e)) from None
             if header is None:
                 if rec.get("kind") != "session" or rec.get("format") not in (FORMAT,
-                                                                              OLD_FORMAT):
+                                                                              *OLD_FORMATS):
                     raise SessionError("%s: not a texelpad session file" % path)
                 header = effective_header(rec)
             else:
