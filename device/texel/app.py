@@ -156,7 +156,7 @@ def start(board_name, scene=None, realtime=False, fast=None, **hw_opts):
         sc = _rt.refresh.scene
         prev = (_rt.board["name"], sc.source if sc is not None else None, _rt.start_opts)
         sc = None                       # the old maps go with stop(): only the source stays
-        stop()
+    stop()          # (nothing running: disarms what a soft reset left, hw/rp2.py clear_stale_tick)
     try:
         try:
             _start(board, canonical, realtime, fast, hw_opts)

@@ -35,28 +35,42 @@
 #
 # Refresh interrupt (start()). When the callback offers native_entry()
 # (texel.runtime.refresh_viper.irq_rp2, on an RP2040) the refresh runs as a
-# raw interrupt: a spare PWM slice (7, or 6 when the carrier is on 7) counts
-# the refresh period in clk_sys cycles (125 MHz * 120 us = 15,000 = TOP+1:
-# the same 120 us as machine.Timer's whole microseconds) and its wrap
-# interrupt (PWM_IRQ_WRAP, IRQ 4) jumps through the RAM vector table to a
-# 12-instruction Thumb trampoline (_TRAMPOLINE below) that acknowledges the
-# wrap and calls the viper refresh's machine code. machine.Timer's path -
-# pico-sdk's alarm pool, mp_irq_dispatch (scheduler and GC locks, an nlr
-# frame, stack-limit swap), mp_call_function - and the viper function's
-# handling of a global took 10.7 us of the 21-24 us a refresh cost on the
-# emulated RP2040 (texelpad bench-refresh --chip rp2040, docs/runtime.md).
-# The vector handler has the highest priority, so other interrupts (USB)
-# delay it less. On this path the refresh also lets the ADC
-# convert continuously (START_MANY) and takes its last conversion, at most 2 us
-# old, instead of starting one and waiting 2 us for it (refresh_viper.core).
-# stop() disables the interrupt, the slice and the free-running ADC and puts
-# the old vector back. A soft reset that skips stop() disables every
-# PWM slice (MicroPython's machine_pwm_deinit_all), so the interrupt stops;
-# its enable bits stay set until the next start() or stop(): do not run
-# machine.PWM on the tick slice's pins (GPIO 14/15 for slice 7) after such a
-# reset before texel.app.start(). Anything unexpected (not an RP2040, the
-# vector table in flash, the slice in use, a period the slice cannot count
-# exactly) falls back to machine.Timer.
+# raw interrupt: a spare PWM slice (TICK_SLICES: 3, 2, 1 or 0, the first one
+# free and not the carrier's) counts the refresh period in clk_sys cycles
+# (125 MHz * 120 us = 15,000 = TOP+1: the same 120 us as machine.Timer's
+# whole microseconds) and its wrap interrupt (PWM_IRQ_WRAP, IRQ 4) jumps
+# through the RAM vector table to a 12-instruction Thumb trampoline
+# (_TRAMPOLINE below) that acknowledges the wrap and calls the viper
+# refresh's machine code. machine.Timer's path - pico-sdk's alarm pool,
+# mp_irq_dispatch (scheduler and GC locks, an nlr frame, stack-limit swap),
+# mp_call_function - and the viper function's handling of a global took
+# 10.7 us of the 21-24 us a refresh cost on the emulated RP2040 (texelpad
+# bench-refresh --chip rp2040, docs/runtime.md). The vector handler has the
+# highest priority, so other interrupts (USB) delay it less. On this path
+# the refresh also lets the ADC convert continuously (START_MANY) and takes
+# its last conversion, at most 2 us old, instead of starting one and waiting
+# 2 us for it (refresh_viper.core). stop() disables the interrupt, the slice
+# and the free-running ADC and puts the old vector back.
+#
+# Why slices 0..3: a soft reset (Ctrl-D, mpremote's exec, Thonny's Stop) does
+# not call stop(). MicroPython v1.28's machine_pwm_deinit_all
+# (ports/rp2/machine_pwm.c) disables machine_pwm_obj[i].slice for i < 8 -
+# the first eight channel objects, which are slices 0, 0, 1, 1, 2, 2, 3, 3 -
+# so slices 4..7 keep counting. A tick on slice 7 (texelpad before issue 30)
+# kept interrupting through the soft reset into a trampoline and machine code
+# in the freed heap, which the new interpreter overwrites: a HardFault (the
+# emulated Pico: "read from address ..., which is not 32 bit aligned"). A
+# tick on slices 0..3 is stopped by the soft reset itself, before the heap
+# is swept, with or without that loop's bug; if none of them is free the
+# refresh uses machine.Timer, which soft_timer_deinit stops. The texelpad
+# firmware also disarms it in C at the start of every soft reset
+# (boards/pico/mpconfigboard.h, MICROPY_BOARD_START_SOFT_RESET). The wrap
+# enable bits stay set across a soft reset: clear_stale_tick() disarms them
+# (texel/main.py at power-up, texel.app.start(), texel.app.stop()), so a
+# machine.PWM on a tick slice's pins cannot take the interrupt into a stale
+# vector. Anything unexpected (not an RP2040, the vector table in flash, no
+# free slice, a period the slice cannot count exactly) falls back to
+# machine.Timer.
 import sys
 import time
 from array import array
@@ -87,6 +101,9 @@ _NVIC_ICPR = const(0xE000E280)
 _NVIC_IPR1 = const(0xE000E404)     # priorities of IRQ 4..7, one byte each (bits 7:6 used)
 _ADC_CS = const(0x4004C000)       # bit 3 START_MANY: free-running conversions
 _SRAM = const(0x20000000)
+# the slices a soft reset stops (above), in the order tried; their wrap enables
+_TICK_SLICES = (3, 2, 1, 0)
+_STALE_INTE = const(0xCF)          # slices 0..3 and 6, 7 (the tick before issue 30)
 _SRAM_END = const(0x20042000)
 
 # The trampoline, Thumb-1 halfwords (ARMv6-M), then its five literals. The
@@ -105,18 +122,19 @@ _TRAMPOLINE = (
 
 def clear_stale_tick():
     """Disarm a refresh interrupt left behind by a soft reset that skipped
-    stop(): the NVIC enable of PWM_IRQ_WRAP and the tick slices' (6, 7) wrap
+    stop(): the NVIC enable of PWM_IRQ_WRAP and the tick slices' wrap
     enables stay set across it while the vector points at a trampoline in the
     freed heap, so a later machine.PWM on those slices' pins would jump there.
     Call it only while texelpad's refresh is not running (texel/main.py does
-    at power-up and after a soft reset from the REPL; texel.app.stop() when
+    at power-up, texel.app.start() before it starts, texel.app.stop() when
     nothing runs). Does nothing off an RP2040."""
     if not _is_rp2040():
         return
     m = machine.mem32
     m[_NVIC_ICER] = 1 << _PWM_IRQ
-    m[_PWM_BASE + _PWM_INTE] = m[_PWM_BASE + _PWM_INTE] & ~0xC0
+    m[_PWM_BASE + _PWM_INTE] = m[_PWM_BASE + _PWM_INTE] & ~_STALE_INTE
     m[_NVIC_ICPR] = 1 << _PWM_IRQ
+    m[_ADC_CS] = m[_ADC_CS] & ~8        # the refresh's free-running ADC (START_MANY)
 
 
 def _is_rp2040():
@@ -289,7 +307,13 @@ class Hw:
         it cannot be done here."""
         m = machine.mem32
         fun, code, args = entry
-        sl = 6 if self.slice == 7 else 7
+        sl = -1
+        for k in _TICK_SLICES:      # a slice a soft reset stops (top of this file)
+            if k != self.slice and not m[_PWM_BASE + _SLICE_STRIDE * k + _CH_CSR] & 1:
+                sl = k
+                break
+        if sl < 0:
+            return False                # every such slice is in use: machine.Timer
         base = _PWM_BASE + _SLICE_STRIDE * sl
         vtor = m[_VTOR] & 0xFFFFFFFF
         cycles = self._cpu_hz * period_us
@@ -303,8 +327,7 @@ class Hw:
                 return False
         ok = (_SRAM <= vtor < _SRAM_END and _SRAM <= fun < _SRAM_END
               and _SRAM <= code < _SRAM_END and _SRAM <= args < _SRAM_END
-              and machine.mem16[code & ~1] & 0xFF00 == 0xB500     # push {..., lr}: a function
-              and not m[base + _CH_CSR] & 1)                      # the slice is free
+              and machine.mem16[code & ~1] & 0xFF00 == 0xB500)    # push {..., lr}: a function
         if not ok:
             return False
         tramp = array("I", [0] * 11)
