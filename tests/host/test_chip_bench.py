@@ -36,7 +36,7 @@ def test_bench_refresh_on_the_emulated_chip(tmp_path):
     assert doc["failed"] == [] and doc["refresh"] == []          # the unix port was left out
     chip = doc["chip"]
     # the refresh runs as the PWM-wrap interrupt (hw/rp2.py), the viper body itself
-    assert chip["mode"] == "viper-irq" and chip["irq_source"].startswith("PWM slice 7 wrap")
+    assert chip["mode"] == "viper-irq" and chip["irq_source"].startswith("PWM slice 3 wrap")
     assert chip["machine_freq"] == 125_000_000 and chip["period_us"] == 120
     irq = chip["irq"]
     assert len(irq["reps"]) == 8 and all(r["refreshes"] > 100 for r in irq["reps"])
