@@ -122,7 +122,15 @@ def _teacher_one_liner(port: str, emu) -> None:
         assert emu.alive() and "EMULATOR ERROR" not in emu.stderr()
 
 
-def _soak(port: str, emu, board: str) -> list[str]:
+def _carrier_pin(r: Raw) -> tuple[int, int]:
+    """GP16's (FUNCSEL, OUTTOPAD): 4 = driven by PWM, 5 = a plain output (SIO); its level."""
+    out = r.exec("import machine; m = machine.mem32; "
+                 "print(m[0x40014084] & 31, (m[0x40014080] >> 9) & 1)")
+    f, level = out.split()
+    return int(f), int(level)
+
+
+def _soak(port: str, emu, board: str, hook: bool = False) -> list[str]:
     rng = random.Random(SEED)
     r = Raw(port, emu)
     log = []
@@ -153,6 +161,8 @@ def _soak(port: str, emu, board: str) -> list[str]:
             assert st["running"], (k, what, how, st)        # a Ctrl-C never stops the display
             if how == "raw-reset":
                 r.soft_reset_raw()
+                if hook:        # the firmware's C hook: the carrier pin a plain output, low
+                    assert _carrier_pin(r) == (5, 0), k
                 st = _status(r)
                 assert not st["running"], (k, st)           # carrier off, display stopped
                 playing = False
@@ -194,7 +204,7 @@ def test_the_firmware_survives_soft_resets_and_ctrl_c(fw):
     try:
         emu.start()
         _teacher_one_liner(emu.port, emu)
-        log = _soak(emu.port, emu, "pico")
+        log = _soak(emu.port, emu, "pico", hook=True)
         print("\n".join(["firmware soak (seed %d):" % SEED] + log))
     finally:
         summary = emu.stop()
