@@ -244,9 +244,15 @@ def _start(board, canonical, realtime, fast, hw_opts):
             hw.start(callback, rt.hz)
             if realtime and hasattr(hw, "run_realtime"):
                 hw.run_realtime()
-    except Exception:
-        hw.off()
-        _rt = None
+    except BaseException:
+        # also KeyboardInterrupt (Ctrl-C inside the first build, or a host that
+        # gave up and interrupts): no half-started runtime that says "running"
+        # but never refreshes, no tick left armed; the display is off
+        try:
+            hw.stop()
+        finally:
+            hw.off()
+            _rt = None
         raise
 
 

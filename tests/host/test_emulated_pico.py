@@ -386,6 +386,48 @@ def test_ctrl_c_during_the_upload_changes_nothing(port):
         assert b.link.eval("import texel.app as a\nprint(repr(len(a._uploads)))") == 0
 
 
+def test_a_host_that_gives_up_leaves_no_half_started_board(port, monkeypatch):
+    """The link's deadline passes while the board still builds (CI saw it: a
+    busy host, start + a texel scene over 30 s): the host interrupts the board
+    and says what plays - and that is true. A start cut off in its first
+    build once left a runtime that said "running" with 0 refreshes (its tick
+    never armed), and the next start ran out of memory (texel/app.py _start
+    now cleans up on KeyboardInterrupt too)."""
+    from texelpad.link.board import Board
+    from texelpad.link.transport import LinkTimeout
+    _playing(port)
+    for seed, func in enumerate(("start", "push"), 101):
+        # a texel scene no test played (nothing to reuse): seconds of build on this board
+        tex = _full({"kind": "texel", "pitch_db": 5.0, "irregularity_db": -6.0, "seed": seed,
+                     "v": 2})
+        with texelpad.connect(port) as b:
+            before = b.status()
+            monkeypatch.setattr(Board, "_long_work_s", lambda self: 0.1)
+            with pytest.raises(LinkTimeout) as e:
+                if func == "start":
+                    b.start("pico", tex)
+                else:
+                    b.push(tex)
+            said = str(e.value)
+        print("\n%s given up after 0.1 s: %s" % (func, said))
+        assert "did not finish %s() within 0.1 s; interrupted" % func in said, said
+        assert "--timeout S" in said
+        with texelpad.connect(port) as b:
+            st = b.status()
+            if st["running"]:           # what plays now refreshes
+                time.sleep(0.5)
+                assert b.status()["refreshes"] > st["refreshes"], st
+            if func == "push":
+                assert st["running"]
+                if "nothing changed" in said:
+                    assert st["pushes"] == before["pushes"]
+            elif "the display is stopped" in said:
+                assert not st["running"]
+            monkeypatch.undo()
+            st = b.start("pico") if not st["running"] else st
+            assert st["running"] and st["faults"] == 0
+
+
 # --- e: stop, status; scene pull round trip --------------------------------------------------
 
 def test_stop_then_status_then_scene_pull_round_trip(capsys, port, tmp_path):

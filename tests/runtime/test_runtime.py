@@ -420,3 +420,45 @@ def test_refresh_modes(tmp_path):
     assert "core1_viper" in r["core1"] and "not implemented" in r["core1"]
     assert r["loop_mode"] == "loop" and r["timers_started"] == 0
     assert r["loop_refreshes"] > 0
+
+
+INTERRUPTED_START = r"""
+import json, machine
+import texel.app as app
+import texel.runtime.scene as scene_mod
+machine.script_adc(26, [32000])
+build = scene_mod.build
+def ctrl_c(*a, **k):
+    raise KeyboardInterrupt         # Ctrl-C inside the first build (what a host that gave up sends)
+scene_mod.build = ctrl_c
+res = {}
+try:
+    app.start("pico")
+    res["raised"] = None
+except KeyboardInterrupt:
+    res["raised"] = "KeyboardInterrupt"
+tim = machine.TIMERS[-1] if machine.TIMERS else None
+res["running"] = app.status()["running"]
+res["timer_running"] = bool(tim and tim.running)
+res["cc"] = machine.pwm_cc(16)
+scene_mod.build = build
+app.start("pico")
+tim = machine.TIMERS[-1]
+tim.fire(50)
+res["refreshes"] = app.status()["refreshes"]
+app.stop()
+print(json.dumps(res))
+"""
+
+
+def test_ctrl_c_inside_start_leaves_nothing_half_started():
+    """KeyboardInterrupt inside start()'s first build (a Ctrl-C, or the host's
+    interrupt after it gave up waiting) on the MicroPython unix port with the
+    recording Pico fakes: it propagates, nothing says "running", no tick is
+    armed, the carrier is off - and the next start plays. (Before: the
+    runtime was left set but its tick never started - status said running
+    with 0 refreshes - and the next start ran out of memory.)"""
+    r = mpy.run_json(INTERRUPTED_START, extra_path=FAKES, timeout=120)
+    assert r["raised"] == "KeyboardInterrupt"
+    assert r["running"] is False and r["timer_running"] is False and r["cc"] == 0
+    assert r["refreshes"] == 50

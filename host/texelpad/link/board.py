@@ -29,11 +29,15 @@ from texel.gen.params import FORMAT_NEW
 from .. import __version__
 from . import protocol
 from .protocol import PROTOCOL, literal
-from .transport import ImageTooOld, Interrupted, Link, LinkError, NoBoard, NotTexelpad, NoUlab, \
-    answer, ports
+from .transport import ImageTooOld, Interrupted, Link, LinkError, LinkTimeout, NoBoard, \
+    NotTexelpad, NoUlab, answer, ports
 from .transport import unexpected as _bad
 
 HOST_IMAGE_VERSION = texel.__version__
+# s: what a start or push may take on the board (start + a texel push: ~16 s wall on
+# the emulated Pico alone - tests/host/test_emulated_pico.py prints it - and over 30 s
+# on a CI host running two emulators at once); --timeout raises it
+LONG_WORK_S = 60
 
 
 
@@ -182,7 +186,7 @@ class Board:
         then the call takes them in place of their values. Ctrl-C on the host
         (KeyboardInterrupt) interrupts the board too and says exactly what
         the board plays afterwards (Interrupted)."""
-        timeout = max(self.link.timeout, 30)
+        timeout = self._long_work_s()
         scene = args[scene_at]
         try:
             if scene is None:
@@ -199,6 +203,17 @@ class Board:
             return check_status(self.port, answer(self.port, ans, func + "()"))
         except KeyboardInterrupt:
             raise self._interrupted(func, before) from None
+        except LinkTimeout:
+            # the board is still at it (a build, an upload) or hung: interrupt it, so
+            # nothing finishes later behind the user's back, and say what plays now
+            raise LinkTimeout("%s did not finish %s() within %g s; %s (a board slower than "
+                              "a chip, e.g. an emulated one, may need --timeout S)"
+                              % (self.port, func, timeout, self._interrupted(func, before))
+                              ) from None
+
+    def _long_work_s(self) -> float:
+        """s a start or push may take on the board (the link's timeout, at least LONG_WORK_S)."""
+        return max(self.link.timeout, LONG_WORK_S)
 
     def _upload(self, values: list[list[int]],
                 progress: Callable[[int, int], None] | None) -> None:
