@@ -150,3 +150,36 @@ def test_a_second_build_into_one_folder_waits_for_the_first(tmp_path):
     first.close()                                # the first build ends
     assert entered.wait(10)
     t.join(10)
+
+
+def test_a_board_folder_board_check_refuses_is_refused_before_the_build(tmp_path, capsys):
+    """`texelpad firmware --board-dir DIR` runs `texelpad board check --firmware
+    texelpad` first (issue 30): a cpu_hz no PLL setting makes and a pin the
+    chip does not have are refused with the check's own lines, exit 2, in
+    well under a second - no 2-3 minute build, nothing written to --out."""
+    import shutil
+    import time
+    from support.cli import run_cli
+    d = tmp_path / "mine"
+    shutil.copytree(ROOT / "boards" / "pico", d)
+    doc = json.loads((d / "board.json").read_text())
+    doc.update(name="mine", cpu_hz=123456789)
+    doc["carrier"]["pins"] = [99]
+    (d / "board.json").write_text(json.dumps(doc))
+    out = tmp_path / "out"
+    t0 = time.monotonic()
+    code, so, err = run_cli(capsys, "firmware", "--board-dir", str(d), "--out", str(out))
+    print("refused in %.2f s" % (time.monotonic() - t0))
+    assert code == 2 and "Traceback" not in err, err
+    lines = err.strip().splitlines()
+    assert "cpu_hz: 123,456,789 Hz is not a clock the RP2040's PLL makes" in lines[0], err
+    assert "carrier.pins[0]: GPIO 99 does not exist" in lines[1], err
+    assert lines[2].endswith("2 problems for the texelpad firmware (texelpad board check %s "
+                             "--firmware texelpad says the same): fix them, then build"
+                             % (d / "board.json")), err
+    assert not out.exists() or not any(out.iterdir())
+    # the same lines as the check itself prints
+    code, so, check_err = run_cli(capsys, "board", "check", str(d / "board.json"),
+                                  "--firmware", "texelpad")
+    assert code == 2 and check_err.splitlines()[:2] == [
+        ln.split("--board-dir: ", 1)[-1] for ln in lines[:2]]

@@ -10,10 +10,13 @@ from .errors import EXIT_FAIL, EXIT_OK, CliError
 
 def add_firmware(p: argparse.ArgumentParser) -> None:
     p.description = (
-        "Build DIR/texelpad-NAME.uf2: MicroPython 1.28 + ulab with texelpad in a ROMFS "
-        "partition (docs/firmware.md). Drag it onto a Pico in BOOTSEL mode and it boots "
-        "playing its power-up scene. Makers do not need this: the .uf2 is published with each "
-        "release. Building needs Debian's gcc-arm-none-eabi libnewlib-arm-none-eabi cmake and a "
+        "Build DIR/texelpad-NAME.uf2: MicroPython 1.28 + ulab with texelpad's code frozen in "
+        "and its data (reference maps, tables, board files) in a ROMFS partition "
+        "(docs/firmware.md). Drag it onto a Pico in BOOTSEL mode and it boots playing its "
+        "power-up scene. texelpad has no release yet, so this is how a maker gets the .uf2 "
+        "today (tools/release_firmware.sh builds every board as a release would). A board "
+        "folder is checked first, as `texelpad board check --firmware texelpad` does. "
+        "Building needs Debian's gcc-arm-none-eabi libnewlib-arm-none-eabi cmake and a "
         "MicroPython v1.28.0 source tree (the offline kit in ../shared/instruments/mpfirmware, "
         "or --micropython DIR).")
     g = p.add_mutually_exclusive_group()
@@ -23,7 +26,11 @@ def add_firmware(p: argparse.ArgumentParser) -> None:
                    help="a board folder of your own (mpconfigboard.h, mpconfigboard.cmake, "
                         "pins.csv, manifest.py, board.json: copy boards/pico)")
     p.add_argument("--out", default="firmware", metavar="DIR",
-                   help="where the .uf2 (and .romfs, .elf, build/) go (default ./firmware)")
+                   help="where the .uf2 goes (default ./firmware), beside texelpad-NAME.romfs "
+                        "(the partition alone) and .elf (for a debugger), and the build's own: "
+                        "build/ and build.log (kept: a second build only relinks), board/ (the "
+                        "board folder as built, with the frozen power-up), usermods.cmake (the C "
+                        "modules), .build.lock (one build at a time per folder)")
     p.add_argument("--micropython", default=None, metavar="DIR",
                    help="a MicroPython v1.28.0 checkout to build with (default: the offline kit)")
     p.add_argument("--ulab", default=None, metavar="DIR",
