@@ -287,8 +287,8 @@ def push(scene):
         _install(checked[0], rt.diff(clock(), t0), checked)
     except MemoryError:
         gc.collect()
-        raise ValueError("scene does not fit in memory (%d bytes free); the current scene keeps playing"
-                         % (compat.heap_free() or 0))
+        raise ValueError("scene does not fit in memory (%s); the current scene keeps playing"
+                         % (compat.memory_words() or "the heap is full"))
     # _install collected already: a second collection here cost ~20 ms of the reply on an
     # RP2040 (bench/firmware.py)
     return status(collect=False)
@@ -457,10 +457,10 @@ def upload_begin(sizes):
         ups = [Upload(n) for n in sizes]
     except MemoryError:
         gc.collect()
-        raise ValueError("not enough memory on the board to receive %d sample values (%d bytes "
-                         "free) beside the scene playing, which keeps playing; to make room, "
+        raise ValueError("not enough memory on the board to receive %d sample values (%s) "
+                         "beside the scene playing, which keeps playing; to make room, "
                          "play a small scene first (texelpad push --constant 0)"
-                         % (sum(sizes), compat.heap_free() or 0))
+                         % (sum(sizes), compat.memory_words() or "the heap is full"))
     _uploads = ups
     return len(ups)
 
@@ -474,18 +474,18 @@ def upload_write(slot, offset, b64):
     if not isinstance(b64, str) or len(b64) > 4 * UPLOAD_PIECE_MAX // 3 * 2 + 8:
         raise ValueError("upload_write: a piece is base64 text of at most %d values"
                          % UPLOAD_PIECE_MAX)
-    full = ("not enough memory on the board for the next piece of the upload; the current "
-            "scene keeps playing")
+    full = ("not enough memory on the board for the next piece of the upload (%s); the "
+            "current scene keeps playing")
     try:
         data = binascii.a2b_base64(b64)
     except ValueError:
         raise ValueError("upload_write: the piece is not base64")
     except MemoryError:
-        raise ValueError(full)
+        raise ValueError(full % (compat.memory_words() or "the heap is full"))
     try:
         return _uploads[slot].write(offset, data)
     except MemoryError:
-        raise ValueError(full)
+        raise ValueError(full % (compat.memory_words() or "the heap is full"))
 
 
 def take_upload(slot):

@@ -191,3 +191,37 @@ def heap_free():
         return gc.mem_free()
     except (ImportError, AttributeError):
         return None
+
+
+def largest_free_block():
+    """Bytes of the largest block the heap can give now (after a collection),
+    to 64 bytes, or None where the interpreter has no gc.mem_free (CPython).
+    MicroPython's mem_info() prints it but returns nothing; so it is found by
+    allocating: a bisection of ~12 trial bytearrays, each freed at once. For
+    out-of-memory messages only (a fragmented heap can have 190 KB free and
+    no 38 KB block: the free total alone contradicts the refusal)."""
+    free = heap_free()
+    if free is None:
+        return None
+    lo, hi = 0, free + 1                # lo fits; hi does not
+    while hi - lo > 64:
+        mid = (lo + hi) // 2
+        try:
+            b = bytearray(mid)
+            del b
+            lo = mid
+        except MemoryError:
+            hi = mid
+    import gc
+    gc.collect()
+    return lo
+
+
+def memory_words():
+    """'F bytes free, the largest block L bytes' for an out-of-memory
+    message ('' on CPython)."""
+    big = largest_free_block()
+    if big is None:
+        return ""
+    import gc
+    return "%d bytes free, the largest free block %d bytes" % (gc.mem_free(), big)

@@ -504,6 +504,24 @@ def _need(c, spans, engine=None):
     return bufs + table, bufs, table
 
 
+def _biggest_block(c, spans, engine=None):
+    """Bytes of the largest single block the scene's regions take (a region
+    rendered by an engine, or samples given inline: exactly region-long);
+    0 when every region plays from a plan, chunks or flash."""
+    big = 0
+    for k in range(len(c["regions"])):
+        tex = c["regions"][k]["texture"]
+        n = spans[k][1] - spans[k][0]
+        if tex["kind"] in ("constant", "brush") or _on_plan(tex, n, engine):
+            continue
+        if tex["kind"] == "reference" and _flash_ref(tex["name"], n) is not None:
+            continue                    # the firmware's map in flash
+        if tex["kind"] == "samples" and getattr(tex["u16"], "CHUNKS", False):
+            continue
+        big = max(big, 2 * n)
+    return big
+
+
 def build(canonical, display, engine=None, idle_default=0, max_bytes=None, checked=None,
           reuse=None):
     """Allocate and render what the scene's regions use and return a Scene.
@@ -549,16 +567,13 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
     except MemoryError:
         pass
     if sc is None:
-        # whatever was allocated is unreachable now: give it back
-        try:
-            import gc
-            gc.collect()
-            free = gc.mem_free()
-        except (ImportError, AttributeError):
-            free = None
+        # whatever was allocated is unreachable now: give it back (memory_words collects)
+        from ..compat import memory_words
+        block = _biggest_block(c, spans, engine)
         raise ValueError("scene: out of memory while building (needs %d bytes: %d of sample "
-                         "buffers and plans + %d of region table; %s bytes free)"
-                         % (need, nbuf, ntab, "?" if free is None else free))
+                         "buffers and plans + %d of region table; %s%s)"
+                         % (need, nbuf, ntab, memory_words() or "the heap is full",
+                            ", and a region needs one block of %d" % block if block else ""))
     return sc
 
 
