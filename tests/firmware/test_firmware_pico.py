@@ -128,6 +128,12 @@ def test_a_full_screen_reference_and_a_brush_after_a_series_of_pushes(pico):
         b.push(full)
         st = b.status()
         assert st["scene"]["regions"][0]["name"] == "white" and st["scene"]["buffer_bytes"] == 0
+        # a map in flash takes no RAM, and status says so region by region too
+        assert (st["scene"]["regions"][0]["mode"], st["scene"]["regions"][0]["bytes"]) == (
+            "flash", 0)
+        from texelpad.cli.board import describe_scene
+        text = describe_scene(st["scene"])
+        assert "flash, 0 B" in text and "(1 map played in place from flash: no RAM)" in text, text
         b.push(brush)
         st = b.status()
         assert st["scene"]["regions"][0]["kind"] == "brush" and st["faults"] == 0

@@ -888,11 +888,15 @@ class Scene:
             j = STRIDE * k
             s, e = t[j], t[j + 1]
             tex = src[k]["texture"]
+            how = t[j + 2]
+            # a map in flash (the firmware's references, rom.rom_u16: not an array) takes
+            # no RAM: its bytes are 0, as in nbytes, and its mode says where it plays from
+            flash = how == K_BUF and not isinstance(self._bufs[t[j + 3]], array)
             d = {"kind": tex["kind"], "start": s, "end": e,
                  "start_mm": _mm(s, self.dx_um), "end_mm": _mm(e, self.dx_um),
-                 "bytes": (2 * (e - s) if t[j + 2] in (K_BUF, K_CHUNK) else
-                           8 * len(self._plans[t[j + 3]][0]) if t[j + 2] == K_PLAN else 0),
-                 "mode": ("constant", "map", "plan", "map")[t[j + 2]]}
+                 "bytes": (0 if flash else 2 * (e - s) if how in (K_BUF, K_CHUNK) else
+                           8 * len(self._plans[t[j + 3]][0]) if how == K_PLAN else 0),
+                 "mode": "flash" if flash else ("constant", "map", "plan", "map")[how]}
             kind = tex["kind"]
             if kind == "reference":
                 d["name"] = tex["name"]

@@ -40,8 +40,11 @@ def describe_scene(desc: dict[str, Any] | None) -> str:
             what = "samples (%d values, %s)" % (r["values"], r["fit"])
         lines.append("  %7.2f .. %7.2f mm  %-62s %s, %d B" % (
             r["start_mm"], r["end_mm"], what, r["mode"], r["bytes"]))
-    lines.append("  %d region%s, %d bytes on the board" % (
-        desc["count"], "" if desc["count"] == 1 else "s", desc["bytes"]))
+    flash = sum(1 for r in desc["regions"] if r["mode"] == "flash")
+    lines.append("  %d region%s, %d bytes of RAM on the board%s" % (
+        desc["count"], "" if desc["count"] == 1 else "s", desc["bytes"],
+        " (%d map%s played in place from flash: no RAM)" % (flash, "" if flash == 1 else "s")
+        if flash else ""))
     return "\n".join(lines)
 
 
@@ -170,9 +173,22 @@ def cmd_push(args: argparse.Namespace) -> int:
         else:
             print("now playing on %s (%s):" % (b.port, st.get("board")))
             print(describe_scene(st.get("scene")))
-            print("push: %.1f ms from the host call to the board's confirmation, %d bytes sent"
-                  % (dt * 1e3, b.link.sent - sent0))
+            print("push: %.1f ms from the host call to the board's confirmation, %d bytes sent%s"
+                  % (dt * 1e3, b.link.sent - sent0, board_push_time(st.get("last_push"))))
     return EXIT_OK
+
+
+def board_push_time(lp: dict[str, Any] | None) -> str:
+    """'; on the board's own clock: validate V + build B + swap S ms' from
+    status()["last_push"] (texel/app.py _install), or '' when the board gave none.
+    The host's wall time above it adds the link: the request's bytes, the
+    board's answer, the host's own check."""
+    if not isinstance(lp, dict) or not all(isinstance(lp.get(k), int)
+                                           for k in ("validate_us", "build_us", "swap_us")):
+        return ""
+    v, b, s = lp["validate_us"], lp["build_us"], lp["swap_us"]
+    return ("; on the board's own clock: validate %.1f + build %.1f + swap %.1f = %.1f ms"
+            % (v / 1e3, b / 1e3, s / 1e3, (v + b + s) / 1e3))
 
 
 def add_status(p: argparse.ArgumentParser) -> None:
