@@ -462,3 +462,62 @@ def test_ctrl_c_inside_start_leaves_nothing_half_started():
     assert r["raised"] == "KeyboardInterrupt"
     assert r["running"] is False and r["timer_running"] is False and r["cc"] == 0
     assert r["refreshes"] == 50
+
+
+TELEMETRY_PACKED = r"""
+import json, struct
+from texel.runtime.refresh import Refresh, TELEMETRY_SLOTS
+WRAP = 0x3FFFFFFF
+r = Refresh(None, None, None, None, None, 120)
+def fill(head, n):
+    # n samples written, the last one numbered head - 1 (mod 2^30), as step() writes them
+    for k in range(n):
+        h = (head - n + k) & WRAP
+        i = h % TELEMETRY_SLOTS
+        r.tel_t[i] = (h * 7919) & WRAP
+        r.tel_pos[i] = (h %% 19200) - (1 if h %% 5 == 0 else 0) * ((h %% 19200) + 1)
+        r.tel_amp[i] = (h * 31) & 0xFFFF
+    r.tel_head = head
+out = []
+# (head, samples written, tail): inside the ring, across its wrap, lapped, empty, and
+# across the counters' 2^30 wrap
+for head, n, tail in ((100, 100, 0), (300, 300, 250), (300, 300, 40), (1000, 1000, 0),
+                      (1000, 1000, 1000), (5, 300, WRAP - 100), (5, 300, WRAP - 600)):
+    fill(head, n)
+    want, wt, wl = r.telemetry_since(tail)
+    t, p, m, cnt, pt, pl = r.telemetry_packed_since(tail)
+    got = [(struct.unpack_from("<i", t, 4 * k)[0], struct.unpack_from("<i", p, 4 * k)[0],
+            struct.unpack_from("<H", m, 2 * k)[0]) for k in range(cnt)]
+    out.append([head, tail, len(want), wl, got == [tuple(x) for x in want], cnt == len(want),
+                pt == wt, pl == wl, len(t) == 4 * cnt and len(p) == 4 * cnt and len(m) == 2 * cnt])
+print(json.dumps(out))
+"""
+
+
+@pytest.mark.parametrize("runtime", [None, pytest.param("circuitpython", marks=pytest.mark.instruments)])
+def test_packed_telemetry_is_the_samples_telemetry_since_gives(runtime):
+    """Refresh.telemetry_packed_since (what the host reads, texel.app.telemetry_b64: the
+    ring copied by slicing, at C speed) gives exactly telemetry_since's samples, new
+    tail and lost count: inside the ring, across its wrap, lapped (lost counted), empty,
+    and across the counters' 2^30 wrap - on the MicroPython unix port, CircuitPython
+    and CPython."""
+    from texelpad import toolchain
+    exe = None
+    if runtime:
+        exe = toolchain.interpreter(runtime)
+        if exe is None:
+            pytest.skip("%s not found (../shared/instruments)" % runtime)
+    code = TELEMETRY_PACKED.replace("%%", "%")
+    rows = mpy.run_json(code, exe=exe)
+    ns: dict = {}
+    import contextlib
+    import io
+    import json
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        exec(code, ns)
+    assert json.loads(buf.getvalue()) == rows            # CPython: the same
+    for head, tail, n, lost, *same in rows:
+        assert all(same), (head, tail, n, lost, same)
+    assert [(r[2], r[3]) for r in rows] == [(100, 0), (50, 0), (256, 4), (256, 744), (0, 0),
+                                            (106, 0), (256, 350)]

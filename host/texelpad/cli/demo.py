@@ -53,6 +53,33 @@ def finger_truth(keyframes: list[tuple[float, float | None]], t0_us: int, dx_um:
     return np.rint(out).astype(np.int64)     # display indices, as the board's ADC sees them
 
 
+def fitting_rate(board: Any, want_hz: int = RATE_HZ, reads: int = 5) -> tuple[int, float]:
+    """(telemetry rate, board-time read interval in s): want_hz, or less when
+    this link cannot read the 256-sample ring (TELEMETRY_SLOTS) before it laps.
+    The interval is measured as collect() reads (full reads at want_hz, each
+    followed by POLL_S) on the board's own clock: the newest sample's time
+    stamp of one read to the next's. The emulated Pico takes ~0.2 s of wall
+    time per read, longer than the ring lasts at 2,083 Hz (123 ms). The rate
+    leaves the ring a 2x margin over the slowest read."""
+    from texel.runtime.refresh import TELEMETRY_SLOTS
+    newest = []
+    board.stream(want_hz)
+    try:
+        for _ in range(reads):
+            samples, _lost = board.telemetry()
+            if samples:
+                newest.append(samples[-1][0])
+            time.sleep(POLL_S)
+    finally:
+        board.stream(0)
+    # the time stamps wrap at 2^30 us (refresh.py _WRAP): a negative step is a wrap
+    gaps = [((b - a) % (1 << 30)) / 1e6 for a, b in zip(newest, newest[1:])]
+    worst = max(gaps) if gaps else 0.0
+    if worst <= 0:
+        return want_hz, worst
+    return max(1, min(want_hz, int(TELEMETRY_SLOTS / (2 * worst)))), worst
+
+
 def collect(board: Any, seconds: float, rate_hz: int = RATE_HZ) -> tuple[list, int]:
     """Telemetry for `seconds`: (samples, lost)."""
     samples = list(board.monitor(seconds, rate_hz=rate_hz, poll_s=POLL_S))
@@ -97,10 +124,17 @@ def run(port: str | None = None, out: str = "texelpad-demo.png", scene: dict | N
                 sweep_s = (SWEEP[-1][0]) / 1000.0
                 progress("sweeping the simulated finger across the display (%.1f s)" % sweep_s)
                 t0_us = b.finger(SWEEP)
+                report["telemetry_hz"] = RATE_HZ
                 samples, lost = collect(b, sweep_s + 0.1)
             else:
+                rate, read_s = fitting_rate(b)
+                report["telemetry_hz"] = rate
+                if rate < RATE_HZ:
+                    progress("telemetry at %d Hz, not %d: over this link a read comes every "
+                             "%.0f ms of the board's own time, and the 256-sample ring must "
+                             "outlast that twice" % (rate, RATE_HZ, read_s * 1e3))
                 progress("swipe your finger across the plate now (%g s)" % seconds)
-                samples, lost = collect(b, seconds)
+                samples, lost = collect(b, seconds, rate)
             tel = np.array(samples, dtype=np.int64).reshape(-1, 3)
             if vb is not None and len(tel):
                 truth = np.column_stack([tel[:, 0], finger_truth(SWEEP, t0_us, display["dx_um"],

@@ -24,6 +24,7 @@ from typing import Any, Callable, Iterator
 import texel
 import texel.app
 import texel.runtime.scene
+from texel.runtime.refresh import TELEMETRY_SLOTS   # the most one telemetry read returns
 from texel.gen.params import FORMAT_NEW
 
 from .. import __version__
@@ -334,13 +335,32 @@ class Board:
         return every
 
     def telemetry(self) -> tuple[list[tuple[int, int, int]], int]:
-        ans = self._app("telemetry")
-        if not (type(ans) in (tuple, list) and len(ans) == 2 and type(ans[0]) is list
-                and _is_int(ans[1]) and all(type(x) in (tuple, list) and len(x) == 3
-                                            and all(_is_int(v) for v in x) for x in ans[0])):
-            raise _bad(self.port, "telemetry()", ans)
-        samples, lost = ans
-        return [tuple(s) for s in samples], lost
+        """The samples since the last call, (t_us, position, amplitude), and how
+        many the ring lapped: texel.app.telemetry_b64 (the ring copied at C speed,
+        base64 of little-endian int32 times, int32 positions, uint16 amplitudes)."""
+        import base64
+        import binascii
+        from array import array
+        ans = self._app("telemetry_b64")
+        if not (type(ans) in (tuple, list) and len(ans) == 3 and _is_int(ans[0])
+                and 0 <= ans[0] <= TELEMETRY_SLOTS and type(ans[1]) is str and _is_int(ans[2])
+                and ans[2] >= 0):
+            raise _bad(self.port, "telemetry_b64()", ans)
+        n, text, lost = ans
+        try:
+            raw = base64.b64decode(text, validate=True)
+        except (binascii.Error, ValueError):
+            raise _bad(self.port, "telemetry_b64()", ans) from None
+        if len(raw) != 10 * n:
+            raise _bad(self.port, "telemetry_b64()", ans)
+        t, p, a = array("i"), array("i"), array("H")
+        t.frombytes(raw[:4 * n])
+        p.frombytes(raw[4 * n:8 * n])
+        a.frombytes(raw[8 * n:])
+        if sys.byteorder != "little":           # the board's order (every port's)
+            for x in (t, p, a):
+                x.byteswap()
+        return list(zip(t.tolist(), p.tolist(), a.tolist())), lost
 
     def monitor(self, seconds: float | None = None, rate_hz: int = 125,
                 poll_s: float | None = None) -> Iterator[tuple[int, int, int]]:
