@@ -234,3 +234,43 @@ def test_a_partition_a_cut_off_deploy_left_is_repaired_by_the_next(pico, capsys)
     with connect(pico.port, timeout=60) as b:
         st = b.start("pico")
         assert st["running"] and st["scene"]["regions"][0]["mode"] == "map"   # 4sin from flash
+
+
+def test_texelpad_virtual_boots_your_own_firmware(fw, tmp_path, capsys):
+    """`texelpad virtual --chip rp2040 --firmware FILE.uf2` (issue 30): the maker's own
+    build booted on the emulated Pico from the command line, its ROMFS partition in the
+    flash as a Pico's UF2 bootloader writes it; nothing deployed (the firmware carries
+    texelpad), its power-up scene playing, status through the port it prints. And the
+    flag's refusals: without --chip, a missing file (exit 2, one line each)."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    from texelpad.sim.emulated import why_not
+    code, out, err = run_cli(capsys, "virtual", "--firmware", str(fw.uf2))
+    assert code == 2 and "--firmware: boots a .uf2 on an emulated chip: give --chip rp2040" \
+        in err and err.count("\n") == 1, err
+    code, out, err = run_cli(capsys, "virtual", "--chip", "rp2040", "--firmware",
+                             str(tmp_path / "nope.uf2"))
+    assert code == 2 and "nope.uf2: no such file" in err and err.count("\n") == 1, err
+    if why_not():
+        pytest.skip(why_not())
+    exe = os.path.join(os.path.dirname(sys.executable), "texelpad")
+    env = dict(os.environ, TEXELPAD_RUNTIME_DIR=str(tmp_path / "run"))
+    p = subprocess.Popen([exe, "virtual", "--chip", "rp2040", "--firmware", str(fw.uf2)],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        port = p.stdout.readline().strip()
+        assert port.startswith("/dev/"), (port, p.stderr.read() if p.poll() is not None else "")
+        r = subprocess.run([exe, "status", "--port", port, "--timeout", "60", "--json"],
+                           capture_output=True, text=True, env=env, timeout=300)
+        assert r.returncode == 0, r.stderr
+        st = json.loads(r.stdout)
+        assert st["running"] and st["board"] == "pico" and st["refresh"] == "viper-irq", st
+        print("\nvirtual --chip rp2040 --firmware: %s, %s refreshes, scene %s"
+              % (st["firmware"], st["refreshes"], [x["kind"] for x in st["scene"]["regions"]]))
+    finally:
+        p.send_signal(signal.SIGTERM)
+        out, err = p.communicate(timeout=120)
+    assert p.returncode == 0, err
+    assert "the firmware carries texelpad: nothing to deploy" in err and "deploy:" not in err, err

@@ -34,6 +34,12 @@ def add_virtual(p: argparse.ArgumentParser) -> None:
                    help="with --chip: the finger on the softpot (ADC0): sweep (end to end and "
                         "back every 2 s), rest (mid-strip), lifted (default), or a JavaScript "
                         "function (ch, t_seconds) => 0..4095")
+    p.add_argument("--firmware", metavar="FILE.uf2",
+                   help="with --chip rp2040: boot this .uf2 as if dragged onto the Pico in "
+                        "BOOTSEL mode (e.g. texelpad firmware's firmware/texelpad-pico.uf2: it "
+                        "plays its power-up scene, nothing deployed; a stock MicroPython .uf2 "
+                        "gets texelpad's image deployed). A .uf2 with a ROMFS partition "
+                        "takes a new --flash file (or none)")
     p.add_argument("--flash", metavar="DIR|FILE",
                    help="keep the board's filesystem in the folder DIR (with --chip: in the "
                         "flash image FILE) between runs (default: temporary); its power-up "
@@ -102,6 +108,13 @@ def cmd_virtual(args: argparse.Namespace) -> int:
     if args.finger != "lifted" and not args.chip:
         raise CliError("--finger", "the unix-port virtual board's finger is scripted over the "
                        "link (Board.finger); --finger is for --chip rp2040")
+    if args.firmware is not None:
+        if not args.chip:
+            raise CliError("--firmware", "boots a .uf2 on an emulated chip: give --chip rp2040 "
+                           "too (the unix-port virtual board runs no firmware image)")
+        if not os.path.isfile(args.firmware):
+            raise CliError("--firmware", "%s: no such file (texelpad firmware --board pico "
+                           "builds firmware/texelpad-pico.uf2)" % args.firmware)
     if args.chip and args.source:
         raise CliError("--source", "the emulated %s runs the compiled image from its flash; "
                        "--source is for the unix-port virtual board" % args.chip)
@@ -117,7 +130,13 @@ def cmd_virtual(args: argparse.Namespace) -> int:
                     why = why_not()
                     if why:
                         raise CliError("--chip", why, EXIT_FAIL)
-                    vb = open_emulated(args.flash, not args.no_start, progress, args.finger)
+                    try:
+                        vb = open_emulated(args.flash, not args.no_start, progress, args.finger,
+                                           firmware=args.firmware)
+                    except RuntimeError as e:
+                        if args.firmware and str(e).startswith(str(args.firmware)):
+                            raise CliError("--firmware", str(e), EXIT_FAIL) from None
+                        raise
                 else:
                     vb = open_virtual(args.flash, args.source, not args.no_start, progress)
             except LinkError as e:

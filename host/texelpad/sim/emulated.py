@@ -276,25 +276,38 @@ def _tail(text: str, n: int = 600) -> str:
 
 def open_emulated(flash: str | None = None, start: bool = True,
                   progress: Callable[[str], None] | None = None,
-                  finger: str = "lifted") -> EmulatedPico:
+                  finger: str = "lifted", firmware: str | os.PathLike | None = None,
+                  ) -> EmulatedPico:
     """A started emulated Pico with texelpad's image deployed into its flash
     (only what changed, when the flash file already holds an image) and,
     unless start=False, the board file 'pico' playing the default scene;
-    finger: a FINGERS name or an --adc-js function."""
+    finger: a FINGERS name or an --adc-js function. firmware: a .uf2 to boot
+    instead of the instrument's stock MicroPython; when it is the texelpad
+    firmware (texel importable from its flash) nothing is deployed and its
+    power-up scene plays as it booted (a stock .uf2 gets the image deployed)."""
     from ..link.board import connect
     from ..deploy.install import deploy
     say = progress or (lambda m: None)
-    emu = EmulatedPico(flash, extra_args=("--adc-js", finger_js(finger)))
+    emu = EmulatedPico(flash, extra_args=("--adc-js", finger_js(finger)), firmware=firmware)
     try:
-        say("booting the emulated RP2040 (rp2040js, MicroPython firmware)")
+        say("booting the emulated RP2040 (rp2040js, %s)"
+            % ("firmware %s" % Path(firmware).name if firmware else "MicroPython firmware"))
         emu.start()
         with connect(emu.port, check=False, import_image=False, timeout=60) as b:
-            deploy(b, progress=(lambda m: say("deploy: " + m)))
+            # the texelpad firmware's ROMFS carries /rom/firmware.json (firmware/build.py)
+            frozen = firmware is not None and b.link.eval(
+                "import os\ntry:\n os.stat('/rom/firmware.json')\n print(True)\n"
+                "except OSError:\n print(False)")
+            if frozen:
+                say("the firmware carries texelpad: nothing to deploy")
+            else:
+                deploy(b, progress=(lambda m: say("deploy: " + m)))
         if start:
-            say("starting board file 'pico' (building the default scene takes a few "
-                "emulated seconds)")
             with connect(emu.port, timeout=60) as b:
-                b.start("pico")
+                if not b.status().get("running"):
+                    say("starting board file 'pico' (building the default scene takes a few "
+                        "emulated seconds)")
+                    b.start("pico")
     except BaseException:
         emu.stop()
         raise
