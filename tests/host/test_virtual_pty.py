@@ -53,3 +53,35 @@ def test_mpremote_drives_the_realtime_virtual_board():
         assert st2["refreshes"] > st1["refreshes"]       # still playing, never reset
         r = mpremote(port, "import texel.app as app; app.stop(); print(app.status()['running'])")
         assert r.stdout.strip() == "False"
+
+
+def test_a_plain_mpremote_exec_on_the_virtual_board_then_push_works(capsys):
+    """The teacher's plain `mpremote connect PORT exec "..."` (a soft reset before and after,
+    issue 30) on the playing virtual board, as typed: it answers, the soft reset stops the
+    display as a board's raw-REPL reset does (status: running False - the carrier is off),
+    and the next `texelpad status` works; `texelpad push` says in one line how to start
+    it, and `push --board virtual` plays again."""
+    import os
+    import subprocess
+    import sys
+    from support.cli import run_cli
+    exe = os.path.join(os.path.dirname(sys.executable), "mpremote")
+    with virtual_board() as port:
+        r = mpremote(port, "import texel.app as app; app.start('virtual', realtime=True)")
+        assert r.returncode == 0, r.stderr
+        assert _status(port)["running"] is True
+        for _ in range(2):
+            p = subprocess.run([exe, "connect", port, "exec",
+                                "import texel.app as app; print(app.status()['running'])"],
+                               capture_output=True, text=True, timeout=60)
+            assert p.returncode == 0 and p.stdout.strip() == "False", p.stdout + p.stderr
+        code, out, err = run_cli(capsys, "status", "--port", port)
+        assert code == 0 and out.startswith("texelpad is not running"), out + err
+        code, out, err = run_cli(capsys, "push", "--port", port, "--reference", "4sin")
+        assert code == 1 and err.count("\n") == 1 and "--board" in err, err
+        code, out, err = run_cli(capsys, "push", "--port", port, "--board", "virtual",
+                                 "--reference", "4sin")
+        assert code == 0 and "reference 4sin" in out, err
+        time.sleep(0.3)
+        st = _status(port)
+        assert st["running"] and st["refreshes"] > 0 and st["faults"] == 0
