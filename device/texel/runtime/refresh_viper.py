@@ -335,7 +335,7 @@ class _Rp2Irq:
         The code address is the function object's fourth word
         (py/objfun.h mp_obj_fun_bc_t.bytecode: a viper function's machine
         code); hw/rp2.py checks it before use."""
-        if _RP2 is not None:
+        if _RP2 is not None and _start_many_is_reset():
             # the ADC converts continuously from now on (core()'s START_MANY
             # branch): the refresh takes the last conversion instead of
             # starting one and waiting 2 us for it
@@ -343,6 +343,18 @@ class _Rp2Irq:
             S[S_ADC_CS] = (S[S_ADC_CS] & ~4) | 8
         a = id(core)
         return a, _word(a + 12), uctypes.addressof(_ARGS)
+
+
+def _start_many_is_reset():
+    """True on the texelpad firmware (its board name says so), whose soft-reset
+    hook in C turns the free-running ADC off (boards/pico/mpconfigboard.h).
+    Stock MicroPython leaves START_MANY on through a soft reset, and then a
+    user's machine.ADC(...).read_u16() waits for a READY that never comes: the
+    hardware/README calibration loop hung a stock Pico after a plain mpremote
+    exec on the emulated chip (tests/host/test_doc_mpremote.py). There the
+    refresh starts one conversion each time and waits its 2 us."""
+    import sys
+    return "(texelpad" in getattr(sys.implementation, "_machine", "")
 
 
 irq_rp2 = _Rp2Irq()     # what app.py gives the rp2 backend on an RP2040
