@@ -47,7 +47,8 @@
 # 10.7 us of the 21-24 us a refresh cost on the emulated RP2040 (texelpad
 # bench-refresh --chip rp2040, docs/runtime.md). The vector handler has the
 # highest priority, so other interrupts (USB) delay it less. On this path
-# the refresh also lets the ADC convert continuously (START_MANY) and takes
+# on the texelpad firmware (whose soft-reset hook stops it: refresh_viper
+# _start_many_is_reset) the refresh also lets the ADC convert continuously (START_MANY) and takes
 # its last conversion, at most 2 us old, instead of starting one and waiting
 # 2 us for it (refresh_viper.core). stop() disables the interrupt, the slice
 # and the free-running ADC and puts the old vector back.
