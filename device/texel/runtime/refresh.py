@@ -99,6 +99,30 @@ class Refresh:
         if dt > self.period_us:
             self.overruns = (self.overruns + 1) & _WRAP
 
+    def _unread(self, tail):
+        """(head, tail, n, lost): the ring's head now and the n samples from
+        tail still in the ring (lost: lapped before they were read)."""
+        head = self.tel_head
+        n = (head - tail) & _WRAP
+        lost = 0
+        if n > TELEMETRY_SLOTS:
+            lost = n - TELEMETRY_SLOTS
+            tail = (head - TELEMETRY_SLOTS) & _WRAP
+            n = TELEMETRY_SLOTS
+        return head, tail, n, lost
+
+    def _overwritten(self, head, n):
+        """How many of the n samples copied from the oldest on to drop: the
+        refresh runs on while they are copied (an IRQ, or the virtual board's
+        thread); if it came round to the slots copied first, those may hold
+        newer samples (time would go backwards) or half-written ones - drop
+        them, and one more for the slot it may have been writing."""
+        w = (self.tel_head - head) & _WRAP             # written during the copy
+        over = n + w - TELEMETRY_SLOTS
+        if not w or over < 0:
+            return 0
+        return over + 1 if over + 1 < n else n
+
     def telemetry_packed_since(self, tail):
         """telemetry_since at C speed: (t, pos, amp, count, new tail, lost),
         t and pos the samples' int32 values as bytes, amp their uint16 ones
@@ -108,56 +132,28 @@ class Refresh:
         samples - longer than the ring lasts at 2,083 Hz (123 ms), so the
         refresh lapped what was being copied (texelpad demo lost 2,731 of
         3,302). Same loss rules as telemetry_since."""
-        head = self.tel_head
-        n = (head - tail) & _WRAP
-        lost = 0
-        if n > TELEMETRY_SLOTS:
-            lost = n - TELEMETRY_SLOTS
-            tail = (head - TELEMETRY_SLOTS) & _WRAP
-            n = TELEMETRY_SLOTS
+        head, tail, n, lost = self._unread(tail)
         i = tail % TELEMETRY_SLOTS          # (2^30 is a multiple of the ring's 256 slots)
         a = n if i + n <= TELEMETRY_SLOTS else TELEMETRY_SLOTS - i
         t = _ring_bytes(self.tel_t, i, a, n - a)
         p = _ring_bytes(self.tel_pos, i, a, n - a)
         m = _ring_bytes(self.tel_amp, i, a, n - a)
-        w = (self.tel_head - head) & _WRAP             # written during the copy
-        if w:
-            over = n + w - TELEMETRY_SLOTS
-            if over >= 0:
-                drop = over + 1 if over + 1 < n else n
-                t, p, m = t[4 * drop:], p[4 * drop:], m[2 * drop:]
-                n -= drop
-                lost += drop
-        return t, p, m, n, head, lost
+        drop = self._overwritten(head, n)
+        if drop:
+            t, p, m = t[4 * drop:], p[4 * drop:], m[2 * drop:]
+        return t, p, m, n - drop, head, lost + drop
 
     def telemetry_since(self, tail):
         """Samples written since `tail` (a previous tel_head) as a list of
         (t_us, position, amplitude), the new tail, and how many were lost
         because the ring was lapped. Called from the REPL, not the IRQ."""
-        head = self.tel_head
-        n = (head - tail) & _WRAP
-        lost = 0
-        if n > TELEMETRY_SLOTS:
-            lost = n - TELEMETRY_SLOTS
-            tail = (head - TELEMETRY_SLOTS) & _WRAP
-            n = TELEMETRY_SLOTS
+        head, tail, n, lost = self._unread(tail)
         out = []
         for k in range(n):
             i = ((tail + k) & _WRAP) % TELEMETRY_SLOTS
             out.append((self.tel_t[i], self.tel_pos[i], self.tel_amp[i]))
-        # the refresh runs on while this copies (an IRQ, or the virtual
-        # board's thread): if it came round to the slots copied first, those
-        # may hold newer samples (time would go backwards) or half-written
-        # ones - drop them, counted as lost, and one more for the slot it
-        # may have been writing
-        w = (self.tel_head - head) & _WRAP             # written during the copy
-        if w:
-            over = n + w - TELEMETRY_SLOTS
-            if over >= 0:
-                drop = over + 1 if over + 1 < n else n
-                out = out[drop:]
-                lost += drop
-        return out, head, lost
+        drop = self._overwritten(head, n)
+        return out[drop:], head, lost + drop
 
 
 def _ring_bytes(ring, i, a, b):
