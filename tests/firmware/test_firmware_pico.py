@@ -52,7 +52,7 @@ def test_the_uf2_boots_playing_its_power_up_scene_with_texel_from_flash(pico):
     assert st["running"] and st["board"] == "pico" and st["refresh"] == "viper-irq"
     assert st["refreshes"] > 0 and st["overruns"] == 0 and st["faults"] == 0
     kinds = [(r["kind"], r["mode"]) for r in st["scene"]["regions"]]
-    assert kinds == [("reference", "map"), ("texel", "plan")]     # texel.app.DEFAULT_SCENE
+    assert kinds == [("reference", "flash"), ("texel", "plan")]     # texel.app.DEFAULT_SCENE
     # the reference plays from flash: only the texel region's plan is in RAM
     assert st["scene"]["buffer_bytes"] == st["scene"]["regions"][1]["bytes"]
     # texel's code is frozen in the firmware (a __file__ naming no file); its data is the ROMFS's
@@ -233,7 +233,7 @@ def test_a_partition_a_cut_off_deploy_left_is_repaired_by_the_next(pico, capsys)
     assert "texelpad firmware found (board pico" in err and "ROMFS partition rewritten" in out
     with connect(pico.port, timeout=60) as b:
         st = b.start("pico")
-        assert st["running"] and st["scene"]["regions"][0]["mode"] == "map"   # 4sin from flash
+        assert st["running"] and st["scene"]["regions"][0]["mode"] == "flash"   # 4sin from flash
 
 
 def test_texelpad_virtual_boots_your_own_firmware(fw, tmp_path, capsys):

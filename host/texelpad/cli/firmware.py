@@ -55,11 +55,34 @@ def _board_dir(args: argparse.Namespace) -> Path:
     return d
 
 
+def _board_check(board_dir: Path) -> None:
+    """What `texelpad board check --firmware texelpad` refuses in the folder's board.json
+    (e.g. a cpu_hz no PLL setting makes, a pin the PWM cannot drive): refused here with
+    its lines, exit 2, before a 2-3 minute build. A file that is not JSON is left to the
+    build's own folder check (firmware/build.py check_board_dir), which says so."""
+    import json
+    from ..deploy import boardcheck
+    path = board_dir / "board.json"
+    try:
+        doc = json.loads(path.read_text())
+    except (OSError, ValueError, RecursionError):
+        return
+    rep = boardcheck.check(doc, "texelpad", board_dir.name)
+    if rep.errors:
+        n = len(rep.errors)
+        raise CliError("--board-dir", "\n".join(
+            [p.line(str(path)) for p in rep.errors]
+            + ["%s: %d problem%s for the texelpad firmware (texelpad board check %s --firmware "
+               "texelpad says the same): fix %s, then build" % (path, n, "" if n == 1 else "s",
+                                                               path, "it" if n == 1 else "them")]))
+
+
 def cmd_firmware(args: argparse.Namespace) -> int:
     from ..firmware.build import FirmwareError, build_firmware
     if args.ulab and not args.micropython:
         raise CliError("--ulab", "goes with --micropython (the offline kit has its own ulab)")
     d = _board_dir(args)
+    _board_check(d)
     try:
         b = build_firmware(d, args.out, args.micropython, args.ulab,
                            progress=lambda m: print("firmware: " + m, file=sys.stderr, flush=True))

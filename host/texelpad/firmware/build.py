@@ -131,7 +131,6 @@ def check_board_dir(board_dir: Path) -> dict:
         if isinstance(doc, dict) and doc.get("name") != board_dir.name:
             raise ValueError("%s: name: %r: must be the board folder's name (%r)"
                              % (real, doc.get("name"), board_dir.name))
-        _board_check(doc, board_dir)
         board = boards.validate(doc, as_named)
     except RecursionError:
         raise FirmwareError("%s: not a board file (nested too deep)" % real) from None
@@ -143,22 +142,6 @@ def check_board_dir(board_dir: Path) -> dict:
                             "stock firmware" % (board_dir, board["port"]))
     layout(board_dir)
     return board
-
-
-def _board_check(doc: object, board_dir: Path) -> None:
-    """What `texelpad board check --firmware texelpad` refuses (e.g. a cpu_hz no PLL
-    setting makes, a pin the PWM cannot drive), refused here with its messages, one a
-    line, before a 2-3 minute build; its warnings go with a build."""
-    from ..deploy import boardcheck
-    rep = boardcheck.check(doc, "texelpad", board_dir.name)
-    if rep.errors:
-        shown = str(board_dir / "board.json")
-        n = len(rep.errors)
-        raise FirmwareError("\n".join(
-            [p.line(shown) for p in rep.errors]
-            + ["%s: %d problem%s for the texelpad firmware (texelpad board check %s --firmware "
-               "texelpad says the same): fix %s, then build" % (shown, n, "" if n == 1 else "s",
-                                                               shown, "it" if n == 1 else "them")]))
 
 
 def romfs_payload(board_dir: Path, board: dict) -> tuple[dict[str, bytes], bytes]:
