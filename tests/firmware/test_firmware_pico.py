@@ -12,7 +12,7 @@ import pytest
 
 from support.cli import run_cli
 from support.firmware import built
-from support.pico import emulated_pico  # noqa: F401
+from support.pico import emulated_pico
 
 pytestmark = [pytest.mark.slow, pytest.mark.instruments]
 
@@ -27,16 +27,8 @@ def fw():
 
 @pytest.fixture(scope="module")
 def pico(fw):
-    from texelpad.sim.emulated import EmulatedPico, why_not
-    why = why_not()
-    if why:
-        pytest.skip(why)
-    emu = EmulatedPico(firmware=fw.uf2)
-    try:
-        emu.start()
+    with emulated_pico(firmware=fw.uf2) as emu:
         yield emu
-    finally:
-        print("[emulated Pico] " + " ".join(emu.stop().split()))
 
 
 def _connect(port, **kw):

@@ -23,7 +23,7 @@ import pytest
 
 from support.firmware import built
 from support.repl import Raw, status as _status
-from support.pico import emulated_pico  # noqa: F401
+from support.pico import emulated_pico
 
 pytestmark = [pytest.mark.slow, pytest.mark.instruments]
 
@@ -126,19 +126,11 @@ def fw():
 
 
 def test_the_firmware_survives_soft_resets_and_ctrl_c(fw):
-    from texelpad.sim.emulated import EmulatedPico, why_not
-    why = why_not()
-    if why:
-        pytest.skip(why)
-    emu = EmulatedPico(firmware=fw.uf2)
-    try:
-        emu.start()
+    with emulated_pico(firmware=fw.uf2) as emu:
         _teacher_one_liner(emu.port, emu)
         log = _soak(emu.port, emu, "pico", hook=True)
         print("\n".join(["firmware soak (seed %d):" % SEED] + log))
-    finally:
-        summary = emu.stop()
-        print("[emulated Pico] " + " ".join(summary.split()))
+        summary = emu.stop()            # (its error lines, if any, are in the summary)
     assert "EMULATOR ERROR" not in summary
 
 

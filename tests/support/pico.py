@@ -38,15 +38,18 @@ def processes_mentioning(text: str) -> list[tuple[int, str]]:
 
 
 @contextmanager
-def emulated_pico(extra_args: tuple[str, ...] = ()) -> Iterator[EmulatedPico]:
+def emulated_pico(extra_args: tuple[str, ...] = (),
+                  firmware: str | os.PathLike | None = None) -> Iterator[EmulatedPico]:
     """A fresh emulated Pico on a pty (an empty temporary flash), stopped on
     the way out whatever happened (no process or folder left); pytest.skip
-    when this machine cannot run it (no instruments, no node). .notes is the
-    tests' own bookkeeping (e.g. whether it was deployed)."""
+    when this machine cannot run it (no instruments, no node). firmware: a
+    .uf2 booted as if dragged onto it (the texelpad firmware), else the
+    instrument's stock MicroPython. .notes is the tests' own bookkeeping
+    (e.g. whether it was deployed)."""
     why = why_not()
     if why:
         pytest.skip(why)
-    emu = EmulatedPico(extra_args=extra_args)
+    emu = EmulatedPico(extra_args=extra_args, firmware=firmware)
     emu.notes = {}
     try:
         emu.start()

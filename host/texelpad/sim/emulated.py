@@ -283,10 +283,11 @@ def open_emulated(flash: str | None = None, start: bool = True,
     unless start=False, the board file 'pico' playing the default scene;
     finger: a FINGERS name or an --adc-js function. firmware: a .uf2 to boot
     instead of the instrument's stock MicroPython; when it is the texelpad
-    firmware (texel importable from its flash) nothing is deployed and its
+    firmware (deploy's romfs_install.firmware_info) nothing is deployed and its
     power-up scene plays as it booted (a stock .uf2 gets the image deployed)."""
     from ..link.board import connect
     from ..deploy.install import deploy
+    from ..deploy.romfs_install import firmware_info
     say = progress or (lambda m: None)
     emu = EmulatedPico(flash, extra_args=("--adc-js", finger_js(finger)), firmware=firmware)
     try:
@@ -294,10 +295,10 @@ def open_emulated(flash: str | None = None, start: bool = True,
             % ("firmware %s" % Path(firmware).name if firmware else "MicroPython firmware"))
         emu.start()
         with connect(emu.port, check=False, import_image=False, timeout=60) as b:
-            # the texelpad firmware's ROMFS carries /rom/firmware.json (firmware/build.py)
-            frozen = firmware is not None and b.link.eval(
-                "import os\ntry:\n os.stat('/rom/firmware.json')\n print(True)\n"
-                "except OSError:\n print(False)")
+            # deploy's own test for the texelpad firmware; a partition that does not read
+            # (no image digest) is deployed, which repairs it
+            info = firmware_info(b) if firmware is not None else None
+            frozen = info is not None and info.get("image_sha256") is not None
             if frozen:
                 say("the firmware carries texelpad: nothing to deploy")
             else:
