@@ -644,3 +644,44 @@ def test_a_brush_region_paints_on_the_chip_as_on_the_host(capsys, port):
         st2 = b.status()
         assert st2["pushes"] == st["pushes"] and st2["scene"]["regions"][0]["kind"] == "brush"
         assert st2["refreshes"] > st["refreshes"] and st2["overruns"] == st["overruns"]
+
+
+def test_full_screen_reference_plays_beside_the_pico_scene_texel_samples_1_refused_saying_why(
+        capsys, port):
+    """Issue 30, as a teacher met it: after start('pico'), `push --reference
+    4sin` ran out of memory (one 38,400-byte block; the largest free was
+    34,362) and `push --texel-samples 1` said "needs 38432 bytes" with 197 KB
+    free. A reference is now rendered into 1 KB chunks and plays - the map
+    reference_u16 renders under CPython; texel_samples 1 is refused, saying
+    that the generator plans all 19,200 texels first and what plays from a
+    plan instead, and the reference plays on."""
+    import texel
+    want = texel.reference_u16("4sin", N)
+    with texelpad.connect(port, timeout=120) as b:
+        b.start("pico")
+    code, out, err = run_cli(capsys, "push", "--port", port, "--reference", "4sin")
+    assert code == 0, out + err
+    with texelpad.connect(port, timeout=120) as b:
+        st = b.status()
+        r = st["scene"]["regions"][0]
+        assert (r["kind"], r["name"], r["mode"], r["bytes"]) == ("reference", "4sin", "map", 2 * N)
+        out2 = b.link.exec("import texel.app as _A\nprint(repr([_A._rt.refresh.scene.amp(p) "
+                           "for p in range(0, %d, 41)]))" % N, timeout=60)
+        got = ast.literal_eval(out2.strip().splitlines()[-1])
+        # the Pico sums the sines in float32: round(v*65535) moves by one where v
+        # lands within float32's error (~1e-6, x 65535 ~ 0.1 u16) of a half
+        diff = [abs(a - want[p]) for a, p in zip(got, range(0, N, 41))]
+        _say(capsys, "\nfull-screen 4sin on the chip against CPython: %d of %d samples equal, worst %d u16"
+             % (diff.count(0), len(diff), max(diff)))
+        assert len(got) == len(diff) and max(diff) <= 1 and diff.count(0) >= 0.9 * len(diff)
+        n0 = st["refreshes"]
+    code, out, err = run_cli(capsys, "push", "--port", port, "--texel-samples", "1", *TEXEL)
+    _say(capsys, "\npush --texel-samples 1 beside the full-screen 4sin: exit %d: %s" % (code, err.strip()))
+    assert code != 0 and "out of memory" in err
+    assert re.search(r"region 0 renders 19200 texels \(texel_samples 1\): the generator plans them "
+                     r"all first, 12 bytes a texel \(230400 bytes\) besides its map; texel_samples "
+                     r"5 \.\. 65535 plays from the plan", err), err
+    with texelpad.connect(port, timeout=60) as b:
+        st2 = b.status()
+        assert st2["scene"]["regions"][0]["name"] == "4sin" and st2["refreshes"] > n0
+        assert st2["faults"] == 0
