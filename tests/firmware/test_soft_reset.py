@@ -24,22 +24,14 @@ from pathlib import Path
 import pytest
 
 from support.firmware import built
-from support.repl import Raw, status as _status
+from support.repl import SOAK_CONST, SOAK_TEXEL, SOAK_WORK, Raw, soak_code, status as _status
 from support.pico import emulated_pico
 
 pytestmark = [pytest.mark.slow, pytest.mark.instruments]
 
 SEED = 30
 ROUNDS = 22
-# cheap scenes: a constant (nothing to render), a texel half (a render the Ctrl-C can land in),
-# an uploaded samples region (the upload the Ctrl-C can land in)
-CONST = {"regions": [{"start_mm": 0, "end_mm": 101.76, "texture": {"kind": "constant",
-                                                                    "level": 0.3}}]}
-TEXEL = {"regions": [{"start_mm": 0, "end_mm": 50.88, "texture": {
-    "kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7, "v": 2}},
-    {"start_mm": 50.88, "end_mm": 101.76, "texture": {"kind": "constant", "level": 0.6}}]}
-SAMPLES = {"regions": [{"start_mm": 0, "end_mm": 101.76, "texture": {
-    "kind": "samples", "fit": "tile", "u16": [(k * 977) % 65536 for k in range(2400)]}}]}
+CONST, TEXEL = SOAK_CONST, SOAK_TEXEL
 
 
 def _teacher_one_liner(port: str, emu) -> None:
@@ -52,10 +44,6 @@ def _teacher_one_liner(port: str, emu) -> None:
         assert p.returncode == 0, p.stdout + p.stderr
         assert "'running': False" in p.stdout, p.stdout
         assert emu.alive() and "EMULATOR ERROR" not in emu.stderr()
-
-
-def _ticks(r: Raw) -> int:
-    return int(r.exec("import time; print(time.ticks_ms())"))
 
 
 def _carrier_pin(r: Raw) -> tuple[int, int]:
@@ -78,38 +66,27 @@ def _soak(port: str, emu, board: str, hook: bool = False) -> list[str]:
             t0 = time.monotonic()
             if not playing:
                 r.exec("import texel.app as app; app.start(%r, %r)" % (board, CONST))
-            what = rng.choice(("push", "upload", "telemetry", "idle"))
+            what = rng.choice(SOAK_WORK)
             how = rng.choice(("ctrl-c", "ctrl-c", "raw-reset", "raw-reset", "friendly-reset"))
-            code = {"push": "app.push(%r)" % (TEXEL,),
-                    # the host's upload (texelpad.link: upload_begin, pieces, a samples push)
-                    "upload": "import binascii\napp.upload_begin([2400])\n"
-                              "for i in range(0, 2400, 200): app.upload_write(0, i, "
-                              "binascii.b2a_base64(bytes(400)).decode().strip())\n"
-                              "app.push(%r)" % (SAMPLES,),
-                    "telemetry": "import time\napp.stream(125)\n"
-                                 "for _ in range(40): app.telemetry(); time.sleep_ms(20)",
-                    "idle": "import time; time.sleep_ms(3000)"}[what]
-            r.start("import texel.app as app\n" + code)
+            r.start(soak_code(what))
             time.sleep(rng.uniform(0.0, 2.5))   # a moment inside it (or after it ended)
-            r.s.write(b"\x03")                  # Ctrl-C: KeyboardInterrupt wherever it is
-            r.drain()
-            r.raw()
+            r.ctrl_c()                           # KeyboardInterrupt wherever it is
             st = _status(r)
             assert st["running"], (k, what, how, st)        # a Ctrl-C never stops the display
             if how != "ctrl-c":
-                b0 = _ticks(r)
+                b0 = r.ticks_ms()
             if how == "raw-reset":
                 r.soft_reset_raw()
+                board_ms.append((r.ticks_ms() - b0) % (1 << 30))  # ticks_ms wraps at 2^30
                 if hook:        # the firmware's C hook: the carrier pin a plain output, low
                     assert _carrier_pin(r) == (5, 0), k
-                board_ms.append((_ticks(r) - b0) % (1 << 30))  # ticks_ms wraps at 2^30
                 st = _status(r)
                 assert not st["running"], (k, st)           # carrier off, display stopped
                 playing = False
             elif how == "friendly-reset":
                 r.soft_reset_friendly()
                 r.raw()
-                board_ms.append((_ticks(r) - b0) % (1 << 30))
+                board_ms.append((r.ticks_ms() - b0) % (1 << 30))
                 st = _status(r)
                 assert st["running"], (k, st)               # main.py: the power-up scene
                 playing = True

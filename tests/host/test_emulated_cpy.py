@@ -9,10 +9,8 @@ was released) and the next start plays. And the plain `mpremote connect PORT exe
 No timing asserted; wall times printed."""
 from __future__ import annotations
 
-import os
 import random
 import shutil
-import signal
 import subprocess
 import sys
 import time
@@ -20,6 +18,7 @@ from pathlib import Path
 
 import pytest
 
+from support.proc import stop_group
 from support.repl import Raw, status as _status
 from texelpad import toolchain
 
@@ -118,14 +117,6 @@ def test_circuitpython_survives_ctrl_c_and_soft_reloads(tmp_path, capsys):
         assert q.returncode == 0 and "'running': False" in q.stdout, q.stdout + q.stderr
         assert proc.poll() is None
     finally:
-        try:
-            os.killpg(proc.pid, signal.SIGTERM)
-        except ProcessLookupError:
-            pass
-        try:
-            proc.wait(timeout=15)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
+        stop_group(proc)
     with capsys.disabled():
         print("\n".join(["\ncircuitpython rounds (seed %d):" % SEED] + log))

@@ -24,22 +24,14 @@ from pathlib import Path
 
 import pytest
 
-from support.repl import Raw, status as _status
+from support.repl import SOAK_CONST, SOAK_TEXEL, SOAK_WORK, Raw, soak_code, status as _status
 from support.stm32 import build_romfs, emulated_stm32
 
 pytestmark = [pytest.mark.slow, pytest.mark.instruments]
 
 SEED = 34
 ROUNDS = 12
-CONST = {"regions": [{"start_mm": 0, "end_mm": 101.76, "texture": {"kind": "constant",
-                                                                    "level": 0.3}}]}
-TEXEL = {"regions": [{"start_mm": 0, "end_mm": 50.88, "texture": {
-    "kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7, "v": 2}},
-    {"start_mm": 50.88, "end_mm": 101.76, "texture": {"kind": "constant", "level": 0.6}}]}
-# the uploaded values in place of the region's (as texelpad.link's push does): a 2,400-value
-# literal takes minutes through the emulated UART under --icount
-SAMPLES = ("{'regions': [{'start_mm': 0, 'end_mm': 101.76, 'texture': {'kind': 'samples', "
-           "'fit': 'tile', 'u16': app.take_upload(0)}}]}")
+CONST, TEXEL = SOAK_CONST, SOAK_TEXEL
 # TIM7 (refresh, APB1) and TIM8 (carrier, APB2): RM0090 register offsets
 TIMERS = ("import machine; m = machine.mem32; "
           "print(m[0x40001400] & 1, m[0x4000140C] & 1, m[0x40010400] & 1, m[0x40010420] & 0x5555)")
@@ -54,10 +46,6 @@ def _timers(r: Raw) -> dict:
     """TIM7 counting, TIM7 update interrupt enabled, TIM8 counting, TIM8 outputs enabled."""
     t7, irq, t8, ccer = (int(v) for v in r.exec(TIMERS).split())
     return {"tim7": t7, "tim7_irq": irq, "tim8": t8, "tim8_outputs": ccer}
-
-
-def _ticks(r: Raw) -> int:
-    return int(r.exec("import time; print(time.ticks_ms())"))
 
 
 def test_the_stm32_survives_soft_resets_and_ctrl_c(romfs, capsys):
@@ -77,31 +65,21 @@ def test_the_stm32_survives_soft_resets_and_ctrl_c(romfs, capsys):
                 t0 = time.monotonic()
                 if not playing:
                     r.exec("import texel.app as app; app.start('pyboard', %r)" % (CONST,))
-                what = rng.choice(("push", "upload", "telemetry", "idle"))
+                what = rng.choice(SOAK_WORK)
                 how = rng.choice(("ctrl-c", "raw-reset", "raw-reset", "friendly-reset"))
-                code = {"push": "app.push(%r)" % (TEXEL,),
-                        "upload": "import binascii\napp.upload_begin([2400])\n"
-                                  "for i in range(0, 2400, 200): app.upload_write(0, i, "
-                                  "binascii.b2a_base64(bytes(400)).decode().strip())\n"
-                                  "app.push(%s)" % (SAMPLES,),
-                        "telemetry": "import time\napp.stream(125)\n"
-                                     "for _ in range(40): app.telemetry(); time.sleep_ms(20)",
-                        "idle": "import time; time.sleep_ms(3000)"}[what]
-                r.start("import texel.app as app\n" + code)
+                r.start(soak_code(what))
                 time.sleep(rng.uniform(0.0, 1.0))
-                r.s.write(b"\x03")
-                r.drain()
-                r.raw()
+                r.ctrl_c()                           # KeyboardInterrupt wherever it is
                 st = _status(r)
                 assert st["running"], (k, what, how, st)        # a Ctrl-C never stops the display
                 if how != "ctrl-c":
-                    b0 = _ticks(r)
+                    b0 = r.ticks_ms()
                     if how == "raw-reset":
                         r.soft_reset_raw()
                     else:
                         r.soft_reset_friendly()
                         r.raw()
-                    board_ms.append((_ticks(r) - b0) % (1 << 30))   # ticks_ms wraps at 2^30
+                    board_ms.append((r.ticks_ms() - b0) % (1 << 30))   # ticks_ms wraps at 2^30
                     off = _timers(r)
                     assert off == {"tim7": 0, "tim7_irq": 0, "tim8": 0, "tim8_outputs": 0}, (k, off)
                     assert not _status(r)["running"], k

@@ -57,6 +57,16 @@ class Raw:
         assert not err, (code[:80], err)
         return out
 
+    def ctrl_c(self) -> None:
+        """Ctrl-C wherever the board is (a KeyboardInterrupt), then back at the raw REPL."""
+        self.s.write(b"\x03")
+        self.drain()
+        self.raw()
+
+    def ticks_ms(self) -> int:
+        """The board's own clock (time.ticks_ms: wraps at 2^30)."""
+        return int(self.exec("import time; print(time.ticks_ms())"))
+
     def soft_reset_raw(self) -> None:
         """Ctrl-D at the raw REPL prompt: mpremote's default before/after exec, Thonny's Stop."""
         self.s.write(b"\x04")
@@ -70,6 +80,32 @@ class Raw:
         self.s.write(b"\x04")
         self.read_until(b"soft reboot", 30)
         self.read_until(b">>> ", 300)             # main.py's power-up scene first
+
+
+# The soft-reset soaks' work (tests/firmware/test_soft_reset.py, tests/host/test_emulated_stm32.py):
+# cheap scenes - a constant (nothing to render), a texel half (a render the Ctrl-C can land in) -
+# and an upload the Ctrl-C can land in, its values then pushed in place of the region's as
+# texelpad.link's push does (a 2,400-value literal takes minutes through the STM32's UART)
+SOAK_CONST = {"regions": [{"start_mm": 0, "end_mm": 101.76, "texture": {"kind": "constant",
+                                                                         "level": 0.3}}]}
+SOAK_TEXEL = {"regions": [{"start_mm": 0, "end_mm": 50.88, "texture": {
+    "kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7, "v": 2}},
+    {"start_mm": 50.88, "end_mm": 101.76, "texture": {"kind": "constant", "level": 0.6}}]}
+SOAK_WORK = ("push", "upload", "telemetry", "idle")
+
+
+def soak_code(what: str) -> str:
+    """The board code of one soak round's work (SOAK_WORK), texel.app imported as app."""
+    return "import texel.app as app\n" + {
+        "push": "app.push(%r)" % (SOAK_TEXEL,),
+        "upload": "import binascii\napp.upload_begin([2400])\n"
+                  "for i in range(0, 2400, 200): app.upload_write(0, i, "
+                  "binascii.b2a_base64(bytes(400)).decode().strip())\n"
+                  "app.push({'regions': [{'start_mm': 0, 'end_mm': 101.76, 'texture': "
+                  "{'kind': 'samples', 'fit': 'tile', 'u16': app.take_upload(0)}}]})",
+        "telemetry": "import time\napp.stream(125)\n"
+                     "for _ in range(40): app.telemetry(); time.sleep_ms(20)",
+        "idle": "import time; time.sleep_ms(3000)"}[what]
 
 
 def status(r: Raw) -> dict:

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import os
 import shutil
-import signal
 import subprocess
 import sys
 from contextlib import contextmanager
@@ -21,6 +20,8 @@ from typing import Iterator
 import pytest
 
 from texelpad import toolchain
+
+from support.proc import stop_group
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -88,12 +89,4 @@ def emulated_stm32(romfs: Path, adc: str = "const:2000") -> Iterator[EmulatedSTM
         assert port.startswith("/dev/"), (port, proc.stderr.read().decode()[-500:] if proc.stderr else "")
         yield EmulatedSTM32(proc, port)
     finally:
-        try:
-            os.killpg(proc.pid, signal.SIGTERM)
-        except ProcessLookupError:
-            pass
-        try:
-            proc.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
+        stop_group(proc)
