@@ -11,8 +11,11 @@ The cause these pin (device/texel/hw/rp2.py, "Why slices 0..3"): MicroPython v1.
 reset stops PWM slices 0..3 only, and the refresh tick ran on slice 7, interrupting through
 the reset into code in the freed heap. No timing is asserted; the wall time of each round is
 printed, and the board's own clock from the last command before each soft reset to the first
-answer after it (rp2emu's clock follows the wall while the board waits with nothing scheduled,
-so this is an upper bound of the board's time to answer, the host's turnaround included)."""
+answer after it. After a raw-REPL reset the display is stopped and rp2emu's clock follows the
+wall while the board waits, so that figure is an upper bound of the board's time to answer
+(the host's turnaround included); after a friendly Ctrl-D main.py's power-up scene plays, its
+refresh is scheduled, and the clock runs ahead of the wall while the host waits (the 0.2 s
+drains): there it bounds main.py's work plus those waits counted several times over."""
 from __future__ import annotations
 
 import random
