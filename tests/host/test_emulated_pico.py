@@ -647,7 +647,7 @@ def test_a_brush_region_paints_on_the_chip_as_on_the_host(capsys, port):
 
 
 def test_full_screen_reference_plays_beside_the_pico_scene_texel_samples_1_refused_saying_why(
-        capsys, port, pico):
+        capsys, port):
     """Issue 30, as a teacher met it: after start('pico'), `push --reference
     4sin` ran out of memory (one 38,400-byte block; the largest free was
     34,362) and `push --texel-samples 1` said "needs 38432 bytes" with 197 KB
@@ -657,18 +657,7 @@ def test_full_screen_reference_plays_beside_the_pico_scene_texel_samples_1_refus
     saying that the generator plans all 19,200 texels first and what plays
     from a plan instead, and the reference plays on."""
     import texel
-    from support.repl import Raw
     want = texel.reference_u16("4sin", N)
-    # from a fresh heap, as after plugging in (the module's earlier tests leave it
-    # fragmented: start('pico') itself once found no 2 KB block there)
-    r = Raw(port, pico)
-    try:
-        r.raw()
-        r.soft_reset_raw()
-        r.s.write(b"\x02")
-        r.drain()
-    finally:
-        r.close()
     with texelpad.connect(port, timeout=120) as b:
         b.start("pico")
     code, out, err = run_cli(capsys, "push", "--port", port, "--reference", "4sin")

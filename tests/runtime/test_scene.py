@@ -433,11 +433,12 @@ def test_split_screen_plays_reference_and_texel():
     assert amps[:9600] == list(ref)
     assert amps[9600:] == [int(v) for v in tx]
     assert len(set(amps[9600:])) > 1000 and len(set(amps[:9600])) > 1000   # not a constant
-    # the reference half in one block while the heap has one (1 KB chunks
-    # only when it has not: scene._in_pieces, test_full_screens_fit_beside_split_screen)
-    bufs = sc.buffers()
-    assert [len(b) for b in bufs] == [9600]
-    assert all(isinstance(b, array) and b.typecode == "H" for b in bufs)
+    # the reference half is rendered into 1 KB chunks (scene._in_pieces: a
+    # Pico playing a scene has no 19-38 KB block to spare)
+    (ref_chunks,) = sc.buffers()
+    assert isinstance(ref_chunks, tuple) and [len(c) for c in ref_chunks] == [512] * 18 + [384]
+    assert all(isinstance(c, array) and c.typecode == "H" for c in ref_chunks)
+    assert sc.spans()[0][2] == S.K_CHUNK
     (t28, d28, L, g), = sc.plans()
     assert len(t28) == len(d28) == 192 and L == 50 and g == 16384
     # 9,600 samples + 192 texels * 8 bytes + 2 regions and a sentinel row of 4 int32
@@ -683,39 +684,15 @@ def test_memory_error_becomes_value_error(monkeypatch):
     def failing(code, init=()):
         if code == "H":
             calls.append(1)
-            if len(calls) >= fail_from:
-                raise MemoryError
-        return real(code, init)
-
-    monkeypatch.setattr(compat, "array", failing)
-    # an explicit engine renders both halves into buffers: the second block and
-    # then its 1 KB chunks fail
-    fail_from = 2
-    with pytest.raises(ValueError, match=r"^scene: out of memory while building \(needs 38448 bytes"):
-        S.build(SPLIT, D, engine="int")
-    assert len(calls) == 3
-
-
-def test_a_region_with_no_block_left_is_rendered_into_chunks(monkeypatch):
-    """The heap has no block for the texel half (its one allocation fails):
-    it is rendered into 1 KB chunks (K_CHUNK) and plays the same map."""
-    from texel import compat
-    real = compat.array
-    calls = []
-
-    def failing(code, init=()):
-        if code == "H":
-            calls.append(len(init) if isinstance(init, (bytes, bytearray)) else 0)
             if len(calls) == 2:
                 raise MemoryError
         return real(code, init)
 
-    whole = S.build(SPLIT, D, engine="int")
     monkeypatch.setattr(compat, "array", failing)
-    sc = S.build(SPLIT, D, engine="int")
-    assert [k for _, _, k, _ in sc.spans()] == [S.K_BUF, S.K_CHUNK]
-    assert [len(c) for c in sc.buffers()[1]] == [512] * 18 + [384]
-    assert [sc.amp(p) for p in range(0, 19200, 7)] == [whole.amp(p) for p in range(0, 19200, 7)]
+    # an explicit engine renders both halves into buffers: the second fails
+    with pytest.raises(ValueError, match=r"^scene: out of memory while building \(needs 38448 bytes"):
+        S.build(SPLIT, D, engine="int")
+    assert len(calls) == 2
 
 
 # --------------------------------------------------------------------------
@@ -1373,27 +1350,23 @@ print(json.dumps(out))
     for name, full in (("reference", FULL_REFERENCE), ("4sin", FULL_4SIN)):
         sc = S.build(S.validate(full, D), D)
         want[name] = sum(sc.amp(p) * (p % 7 + 1) for p in range(0, 19200, 5)) & 0xFFFFFFF
-    chunked: list = []
     for kb in (176, 180, 200):
         res = mpy.run_json(code, heapsize=f"{kb}k", path=tree / "lib")
         assert res["texel"]["nbytes"] == 8 * 384 + 32 and res["texel"]["plans"] == 1, (kb, res)
         for name in want:
             r = res[name]
             assert isinstance(r, dict), (kb, name, r)
-            # one block where the heap has one, else 1 KB chunks
-            assert (r["kinds"], r["largest"]) in (([S.K_CHUNK], 512), ([S.K_BUF], 19200)), (kb, name, r)
-            assert r["nbytes"] == 38432 and r["digest"] == want[name], (kb, name)   # CPython's map
-            chunked.append((kb, name)) if r["kinds"] == [S.K_CHUNK] else None
+            assert r["kinds"] == [S.K_CHUNK] and r["largest"] == 512 and r["nbytes"] == 38432, (kb, name, r)
+            assert r["digest"] == want[name], (kb, name)      # the same map as under CPython
         assert re.match(r"scene: out of memory while building \(needs 38432 bytes: .*\); region 0 renders "
                         r"19200 texels \(texel_samples 1\): the generator plans them all first, 24 bytes "
                         r"a texel \(460800 bytes\) besides its map; texel_samples 5 \.\. 65535 plays from "
                         r"the plan instead \(8 bytes a texel\)$", res["texel_samples 1"]), (kb, res)
-    assert len(chunked) >= 3, chunked       # where one 38.4 KB block found no room
-    # under CPython (no heap limit) it plays: the integer engine's map
+    # under CPython (no heap limit) it plays: the integer engine's map, in chunks
     sc = S.build(S.validate(FULL_TEXEL_1, D), D)
     want1 = texel.render_u16({"pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7, "texel_samples": 1,
                               "length_samples": 19200}, engine="int")
-    assert [sc.amp(p) for p in range(19200)] == list(want1)
+    assert sc.spans()[0][2] == S.K_CHUNK and [sc.amp(p) for p in range(19200)] == list(want1)
 
 
 def _bytecode_tree(tmp_path):

@@ -525,40 +525,14 @@ def _biggest_block(c, spans, engine=None):
     return big
 
 
-_kept = None                # the block _one_block found, for the region's own allocation
-
-
-def _one_block(n):
-    """One block of n uint16 values if the heap has it now (kept for the
-    region: the next u16_block takes it), else None."""
-    global _kept
-    try:
-        _kept = u16_one_block(n)
-    except MemoryError:
-        _kept = None
-    return _kept
-
-
-def _u16_block(n):
-    """The region's block: the one _one_block just found, else a new one."""
-    global _kept
-    b = _kept
-    _kept = None
-    if b is not None and len(b) == n:
-        return b
-    return u16_one_block(n)
-
-
 def _in_pieces(tex, n, engine):
-    """Whether a region rendered on the board may go into 1 KB chunks
-    (upload.Chunks, played as K_CHUNK) when the heap has no one block for it
-    (_one_block: while it has, one block, as before - the heap's layout the
-    other scenes and modules were measured with stays the same): a texel
-    region the integer engine renders (texels of 1-4 samples: no plan) and a
-    reference not in flash, longer than one chunk. A Pico playing a scene
-    has ~115 KB free but no 38,400-byte block (upload.py): measured on the
-    emulated Pico, `push --reference 4sin` after start('pico') ran out of
-    memory as one block (largest 34,362); in chunks it plays."""
+    """Whether a region rendered on the board goes into 1 KB chunks
+    (upload.Chunks, played as K_CHUNK) instead of one block: a texel region
+    the integer engine renders (texels of 1-4 samples: no plan) and a
+    reference not in flash, when longer than one chunk. A Pico playing a
+    scene has ~115 KB free but no 38,400-byte block (upload.py): measured on
+    the emulated Pico, `push --texel-samples 1` and `push --reference 4sin`
+    after start('pico') ran out of memory as one block (largest 34,362)."""
     if n <= CHUNK:
         return False
     kind = tex["kind"]
@@ -606,13 +580,11 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
                     raise ValueError("engine: %s is not available here (available: %s)"
                                      % (_got(engine), ", ".join(engines())))
                 break
-    global _kept
     sc = None
     try:
         sc = _make(c, spans, positions, dx_um, idle, engine, reuse)
     except MemoryError:
         pass
-    _kept = None                # a block found for a region that never took it: given back
     if sc is None:
         # whatever was allocated is unreachable now: give it back (memory_words collects)
         from ..compat import memory_words
@@ -739,7 +711,7 @@ def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
             table[j + 3] = len(bufs)
             bufs.append(rom)
             shared.append(k)
-        elif _in_pieces(tex, e - s, engine) and _one_block(e - s) is None:
+        elif _in_pieces(tex, e - s, engine):
             from .upload import Chunks
             table[j + 2] = K_CHUNK
             table[j + 3] = len(bufs)
@@ -752,7 +724,7 @@ def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
                 table[j + 2] = K_CHUNK
                 bufs.append(tex["u16"].chunks)  # the upload itself, exactly region-long
             else:
-                bufs.append(_u16_block(e - s))       # exactly region-long
+                bufs.append(u16_one_block(e - s))    # exactly region-long
     # 2. render into them
     for k, ch in painted:                   # the board got ~200 numbers, paints here
         from ..gen.brush import paint
