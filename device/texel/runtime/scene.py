@@ -597,15 +597,12 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
     return sc
 
 
-def planned(c, spans, engine=None, float_bytes=None):
-    """The texel region the generator must plan whole before rendering it
-    to a map (texels of 1-4 samples: no plan to play from) with the most
-    texels, as (region, texels, texel_samples, bytes a texel), or None.
-    Every texel is planned at once (gen/plan.py, plan_int.py: 4-byte t28 and
-    d28, and format 1's pitch and phase floats - float_bytes each, this
-    interpreter's by default - or format 2's log pitch): 19,200 texels of
-    texel_samples 1 hold 230 KB in format 2, more than a Pico's heap. The
-    host asks it before sending (link/board.py, with a board's 4)."""
+def _planned_words(c, spans, engine):
+    """Why a texel region rendered to a map needs more than its map: the
+    generator plans every texel before it renders (gen/plan.py, plan_int.py:
+    4-byte t28 and d28, and format 1's pitch and phase floats or format 2's
+    log pitch), all at once - 19,200 texels of texel_samples 1 hold 230 KB
+    in format 2, more than a Pico's heap. '' when no region does."""
     worst = None
     for k in range(len(c["regions"])):
         tex = c["regions"][k]["texture"]
@@ -616,31 +613,15 @@ def planned(c, spans, engine=None, float_bytes=None):
         count = (n + L - 1) // L
         if worst is None or count > worst[1]:
             worst = (k, count, L, tex["v"])
-    if worst is None:
-        return None
-    if float_bytes is None:
-        from ..compat import FLOAT_BITS
-        float_bytes = 8 if FLOAT_BITS > 24 else 4
+    if worst is None or worst[1] < 256:
+        return ""
+    from ..compat import FLOAT_BITS
     k, count, L, v = worst
-    return k, count, L, 12 if v == 2 else 8 + 2 * float_bytes
-
-
-def planned_words(p):
-    """What planned()'s answer p costs, in words for a refusal."""
-    k, count, L, each = p
-    return ("region %d renders %d texels (texel_samples %d): the generator plans them all "
+    each = 12 if v == 2 else 8 + 2 * (8 if FLOAT_BITS > 24 else 4)
+    return ("; region %d renders %d texels (texel_samples %d): the generator plans them all "
             "first, %d bytes a texel (%d bytes) besides its map; texel_samples %d .. %d plays "
             "from the plan instead (8 bytes a texel)" % (k, count, L, each, each * count,
                                                          5, PLAN_MAX_L))
-
-
-def _planned_words(c, spans, engine):
-    """'; ' + planned_words for an out-of-memory message, or '' (no region
-    plans before rendering, or too few texels to matter)."""
-    p = planned(c, spans, engine)
-    if p is None or p[1] < 256:
-        return ""
-    return "; " + planned_words(p)
 
 
 def _shared(reuse, tex, n):

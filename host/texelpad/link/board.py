@@ -177,7 +177,6 @@ class Board:
               progress: Callable[[int, int], None] | None = None,
               ) -> tuple[dict[str, Any], "CheckedScene"]:
         checked = checked_for(scene, st["display"])
-        refuse_what_cannot_fit(checked, st)
         return self._send("push", [checked.plain], 0, None, progress, st), checked
 
     def _send(self, func: str, args: list[Any], scene_at: int, kwargs: dict | None,
@@ -457,24 +456,6 @@ class CheckedScene:
         """Whether it was checked for this display (positions and dx_um)."""
         return (self.display["positions"] == display["positions"]
                 and self.display["dx_um"] == display["dx_um"])
-
-
-def refuse_what_cannot_fit(checked: CheckedScene, st: dict[str, Any]) -> None:
-    """Refuse before sending (ValueError) a scene the board cannot build
-    however its heap lies: a texel region of 1-4-sample texels has the
-    generator plan every texel at once (texel.runtime.scene.planned), and
-    when that alone is more than the board's whole free heap (status()
-    "mem_free", beside the scene playing) nothing can make it fit. Counted
-    with a board's 4-byte floats (a lower bound: format 1 on a 64-bit host
-    takes more). Whatever passes is still checked by the board, which sees
-    its own blocks (scene.build's out-of-memory message)."""
-    free = st.get("mem_free")
-    p = texel.runtime.scene.planned(checked.canonical, checked.spans, float_bytes=4)
-    if p is None or isinstance(free, bool) or not isinstance(free, int):
-        return
-    if p[1] * p[3] > free:
-        raise ValueError("scene: %s; the board has %d bytes free in all (refused before "
-                         "sending)" % (texel.runtime.scene.planned_words(p), free))
 
 
 def check_scene(scene: Any, display: dict[str, Any] | None = None) -> CheckedScene:
