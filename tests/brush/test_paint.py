@@ -281,7 +281,7 @@ def test_a_bad_brush_region_is_refused_by_key_path(bad, fragment):
     assert "regions[0].texture." + fragment in str(e.value)
 
 
-def test_a_brush_region_allocates_only_its_region(tmp_path):
+def test_a_brush_region_allocates_only_its_region():
     """On the unix port: building a scene with a 50.88 mm brush region keeps
     what a reference region of the same length keeps (its 2-byte-a-sample
     buffer and the scene's table) plus the scene's own copy of the brush -
@@ -322,13 +322,7 @@ print(json.dumps([ref_kept, kept_b, s > 0]))
     # working memory: a full-screen brush region (38,400 bytes) builds in a
     # 256 KB heap (the unix port's imports leave ~190 KB of it; the draws'
     # floats are garbage, collected as they go). The emulated Pico builds one
-    # too (tests/host/test_emulated_pico.py). From the compiled image, as a
-    # board loads it: compiling the modules from source leaves garbage that
-    # decides by chance whether the painter's tables find their blocks (a
-    # longer scene.py once left a largest block of 15 KB of 124 KB free).
-    from texelpad.deploy import image
-    tree = tmp_path / "image"
-    image.write_tree(image.build_image(image.TARGETS["unix"], include_main=False), tree)
+    # too (tests/host/test_emulated_pico.py).
     code = """
 import texel.runtime.scene as S
 d = {"positions": 19200, "dx_um": 5.3}
@@ -337,7 +331,7 @@ c = S.validate({"regions": [{"start_mm": 0, "end_mm": 101.76,
 sc = S.build(c, d)
 print(sc.amp(100) >= 0)
 """ % (b,)
-    assert mpy.run(code, heapsize="256k", path=tree / "lib").strip() == "True"
+    assert mpy.run(code, heapsize="256k").strip() == "True"
 
 
 @pytest.mark.parametrize("kt", [1.0, 1.5, 2.0, 3.0, 5.0])

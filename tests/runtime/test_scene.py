@@ -38,18 +38,6 @@ SMALL = {"positions": 2000, "dx_um": 5.3}          # 10.6 mm: quick builds for f
 
 # Helpers shared by CPython and the MicroPython scripts (exec'd in both), so
 # the validation table below is one text evaluated by both interpreters.
-def _values(b):
-    """A scene buffer's values: one array('H'), or a region kept in 1 KB
-    chunks (scene.K_CHUNK: a tuple of them)."""
-    if isinstance(b, tuple):
-        return [v for c in b for v in c]
-    return list(b)
-
-
-def _count(b):
-    return sum(len(c) for c in b) if isinstance(b, tuple) else len(b)
-
-
 HELPERS = r"""
 nan = float('nan')
 inf = float('inf')
@@ -433,12 +421,9 @@ def test_split_screen_plays_reference_and_texel():
     assert amps[:9600] == list(ref)
     assert amps[9600:] == [int(v) for v in tx]
     assert len(set(amps[9600:])) > 1000 and len(set(amps[:9600])) > 1000   # not a constant
-    # the reference half is rendered into 1 KB chunks (scene._in_pieces: a
-    # Pico playing a scene has no 19-38 KB block to spare)
-    (ref_chunks,) = sc.buffers()
-    assert isinstance(ref_chunks, tuple) and [len(c) for c in ref_chunks] == [512] * 18 + [384]
-    assert all(isinstance(c, array) and c.typecode == "H" for c in ref_chunks)
-    assert sc.spans()[0][2] == S.K_CHUNK
+    bufs = sc.buffers()
+    assert [len(b) for b in bufs] == [9600]
+    assert all(isinstance(b, array) and b.typecode == "H" for b in bufs)
     (t28, d28, L, g), = sc.plans()
     assert len(t28) == len(d28) == 192 and L == 50 and g == 16384
     # 9,600 samples + 192 texels * 8 bytes + 2 regions and a sentinel row of 4 int32
@@ -446,8 +431,7 @@ def test_split_screen_plays_reference_and_texel():
     assert sc.idle == 0
     # asking for an engine renders the map with it instead
     scn = S.build(S.validate(SPLIT, D), D, engine="numpy")
-    assert [_count(b) for b in scn.buffers()] == [9600, 9600] and scn.plans() == ()
-    assert isinstance(scn.buffers()[1], array)      # engine="numpy": one block (CPython's)
+    assert [len(b) for b in scn.buffers()] == [9600, 9600] and scn.plans() == ()
     txn = texel.render_u16(dict(TEXEL_RIGHT, length_samples=9600), engine="numpy")
     assert [scn.amp(p) for p in range(9600, 19200)] == [int(v) for v in txn]
     for p in (-1, -1000, 19200, 19201, 10 ** 6, 2 ** 30 - 2, -(2 ** 30)):
@@ -478,7 +462,7 @@ def test_texel_region_renders_with_its_own_length():
     assert (s, e) == (3774, 4396)
     want = texel.render_u16({"pitch_db": 10, "irregularity_db": -5, "seed": 3, "texel_samples": 40,
                              "length_samples": e - s}, engine="int")
-    assert _values(sc.buffers()[0]) == list(want)     # 623 values: 512 + 111 (K_CHUNK)
+    assert list(sc.buffers()[0]) == list(want)
     assert [sc.amp(p) for p in range(s, e)] == list(want)
     assert sc.amp(s - 1) == 0 and sc.amp(e) == 0
 
@@ -523,7 +507,7 @@ def test_gaps_and_constants():
     assert [sc.amp(p) for p in range(19200)] == want
     assert want[2000] == 16384
     assert sc.amp(-1) == 1234 and sc.amp(19200) == 1234 and sc.idle == 1234
-    assert [_count(b) for b in sc.buffers()] == [2000]       # only the reference holds samples
+    assert [len(b) for b in sc.buffers()] == [2000]          # only the reference holds samples
     assert sc.nbytes == 2 * 2000 + 5 * 16
     # the scene's own idle overrides the board's default
     sc2 = S.build(dict(GAPS, idle_amplitude=77), D, idle_default=1234)
@@ -613,14 +597,8 @@ def test_samples_stretch_full_screen_small_ints():
 
 FULL_REFERENCE = {"regions": [{"start_mm": 0, "end_mm": 101.76,
                                "texture": {"kind": "reference", "name": "pink"}}]}
-# Two values stretched over the screen: the one kind of region still rendered
-# into one region-long block (scene._fill_samples; a long map arrives as an
-# upload, played from its chunks)
-FULL_STRETCH = {"regions": [{"start_mm": 0, "end_mm": 101.76,
-                             "texture": {"kind": "samples", "u16": [0, 65535], "fit": "stretch"}}]}
 FULL_TEXEL = {"regions": [{"start_mm": 0, "end_mm": 101.76, "texture": {
     "kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7}}]}
-FULL_4SIN = {"regions": [{"start_mm": 0, "end_mm": 101.76, "texture": {"kind": "reference", "name": "4sin"}}]}
 
 
 def _sixteen_small():
@@ -641,9 +619,9 @@ def test_memory_per_scene():
                         ("16 small regions", SIXTEEN), ("gaps+constants", GAPS)):
         sc = S.build(scene, D)
         spans = [(s, e, k) for s, e, k, _ in sc.spans()]
-        want_buf = (sum(2 * (e - s) for s, e, k in spans if k in (S.K_BUF, S.K_CHUNK))
+        want_buf = (sum(2 * (e - s) for s, e, k in spans if k == S.K_BUF)
                     + sum(8 * len(pl[0]) for pl in sc.plans()))
-        assert sc.buffer_bytes == want_buf == (sum(2 * _count(b) for b in sc.buffers())
+        assert sc.buffer_bytes == want_buf == (sum(2 * len(b) for b in sc.buffers())
                                                + sum(8 * len(pl[0]) for pl in sc.plans()))
         assert sc.table_bytes == 16 * (len(spans) + 1)
         assert sc.nbytes == want_buf + sc.table_bytes == S.buffer_bytes(scene, D)
@@ -654,7 +632,7 @@ def test_memory_per_scene():
     # 16 regions of 5 mm (943 or 944 positions): 4 constants, 4 texel regions
     # played from their plans, 8 buffers (references and samples)
     sc = S.build(SIXTEEN, D)
-    lens = [e - s for s, e, k, _ in sc.spans() if k in (S.K_BUF, S.K_CHUNK)]
+    lens = [e - s for s, e, k, _ in sc.spans() if k == S.K_BUF]
     texels = [len(pl[0]) for pl in sc.plans()]
     assert len(lens) == 8 and set(lens) <= {943, 944} and len(texels) == 4
     assert figures["16 small regions"] == 2 * sum(lens) + 8 * sum(texels) + 17 * 16
@@ -824,8 +802,8 @@ def check_one(scene, display=SMALL):
     held = 0
     for s, e, kind, val in sc.spans():
         assert 0 <= s < e <= positions
-        if kind in (S.K_BUF, S.K_CHUNK):
-            assert _count(sc.buffers()[val]) == e - s
+        if kind == S.K_BUF:
+            assert len(sc.buffers()[val]) == e - s
             held += 2 * (e - s)
         elif kind == S.K_PLAN:
             t28, d28, L, g = sc.plans()[val]
@@ -1011,8 +989,7 @@ right = all(sc.amp(9600 + p) == tx[p] for p in range(9600))
 print(json.dumps({"left": left, "right": right, "nbytes": sc.nbytes, "engine": texel.default_engine(),
                   "validate_us": time.ticks_diff(t1, t0), "build_us": time.ticks_diff(t2, t1),
                   "out": [sc.amp(-1), sc.amp(19200), sc.amp(2 ** 30 - 2)],
-                  "lens": [sum(len(c) for c in b) if isinstance(b, tuple) else len(b)
-                           for b in sc.buffers()], "idle": sc.idle}))
+                  "lens": [len(b) for b in sc.buffers()], "idle": sc.idle}))
 """
     res = mpy.run_json(code)
     print("\nsplit screen on the unix port:", json.dumps(res))
@@ -1260,16 +1237,15 @@ print(json.dumps(res))
 
 def test_real_memory_error_under_micropython(tmp_path):
     """Real MemoryErrors: with the split screen playing, build a full-screen
-    map that needs one 38.4 KB block (samples stretched over the screen; a
-    texel plays from its 3 KB plan, a reference from 1 KB chunks, and both
-    fit - test_full_screens_fit_beside_split_screen) on heaps of
+    reference (a 38.4 KB map; a full-screen texel plays from its 3 KB plan
+    and always fits - test_full_texel_fits_beside_split_screen) on heaps of
     112..272 KB, the image compiled as a board loads it. build() never lets a
     MemoryError out (it becomes a ValueError) and the playing scene stays
     intact; on the small heaps, and on some larger ones by fragmentation, the
     second 38.4 KB buffer finds no room - and the message says why: the
     largest free block (found on the board, compat.largest_free_block) is
     smaller than the one block the region needs, whatever the free total."""
-    code = MEMORY_SCRIPT % {"full": FULL_STRETCH}
+    code = MEMORY_SCRIPT % {"full": FULL_REFERENCE}
     rows = {}
     # the compiled image, as a board loads it (compiling from source leaves garbage that
     # decides by chance which heaps still have a 19 KB block for the split screen)
@@ -1305,19 +1281,10 @@ def test_real_memory_error_under_micropython(tmp_path):
     assert sum(1 for r in rows.values() if r["oom"].startswith("scene: out of memory")) >= 3
 
 
-FULL_TEXEL_1 = {"regions": [{"start_mm": 0, "end_mm": 101.76, "texture": {
-    "kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7, "texel_samples": 1}}]}
-
-
-def test_full_screens_fit_beside_split_screen(tmp_path):
-    """Full screens built beside the playing split screen on a Pico-sized
-    heap: a texel from its plan (384 texels x 8 bytes); a reference into 1 KB
-    chunks - as one 38.4 KB block it often found no room (issue 30: `push
-    --reference 4sin` on a Pico ran out of memory with 115 KB free, the
-    largest block 34 KB) - playing exactly the map reference_u16 renders on
-    its own. texel_samples 1 (no plan: rendered, into chunks too) does not
-    fit such a heap: the generator plans all 19,200 texels first; the
-    refusal says so, and names what plays from a plan instead."""
+def test_full_texel_fits_beside_split_screen(tmp_path):
+    """A full-screen texel plays from its plan (384 texels x 8 bytes), so a
+    new one builds beside the playing split screen even on a Pico-sized
+    heap, where a second 38.4 KB map often finds no room."""
     # From the compiled image, as a board loads it: compiling the modules
     # from source leaves garbage that decides by chance (any line added to a
     # module moved it) whether a 19 KB block is left on a 176 KB heap.
@@ -1326,47 +1293,15 @@ def test_full_screens_fit_beside_split_screen(tmp_path):
     image.write_tree(image.build_image(image.TARGETS["unix"], include_main=False), tree)
     code = HELPERS + r"""
 import json, gc
-import texel
 from texel.runtime import scene as S
 old = S.build(S.validate(split(), D), D)
-out = {}
-for name, full in %(fulls)r:
-    gc.collect()
-    try:
-        new = S.build(S.validate(full, D), D)
-    except ValueError as e:
-        out[name] = str(e)
-        continue
-    out[name] = {"nbytes": new.nbytes, "plans": len(new.plans()), "kinds": [k for _, _, k, _ in new.spans()],
-                 "largest": max([len(c) for b in new.buffers() for c in (b if isinstance(b, tuple) else (b,))]
-                                or [0]),
-                 "digest": sum(new.amp(p) * (p %% 7 + 1) for p in range(0, 19200, 5)) & 0xFFFFFFF,
-                 "free": gc.mem_free()}
-    new = None
-print(json.dumps(out))
-""" % {"fulls": [("texel", FULL_TEXEL), ("reference", FULL_REFERENCE), ("4sin", FULL_4SIN),
-                 ("texel_samples 1", FULL_TEXEL_1)]}
-    want = {}
-    for name, full in (("reference", FULL_REFERENCE), ("4sin", FULL_4SIN)):
-        sc = S.build(S.validate(full, D), D)
-        want[name] = sum(sc.amp(p) * (p % 7 + 1) for p in range(0, 19200, 5)) & 0xFFFFFFF
+gc.collect()
+new = S.build(S.validate(%(full)r, D), D)
+print(json.dumps({"nbytes": new.nbytes, "plans": len(new.plans()), "free": gc.mem_free()}))
+""" % {"full": FULL_TEXEL}
     for kb in (176, 180, 200):
         res = mpy.run_json(code, heapsize=f"{kb}k", path=tree / "lib")
-        assert res["texel"]["nbytes"] == 8 * 384 + 32 and res["texel"]["plans"] == 1, (kb, res)
-        for name in want:
-            r = res[name]
-            assert isinstance(r, dict), (kb, name, r)
-            assert r["kinds"] == [S.K_CHUNK] and r["largest"] == 512 and r["nbytes"] == 38432, (kb, name, r)
-            assert r["digest"] == want[name], (kb, name)      # the same map as under CPython
-        assert re.match(r"scene: out of memory while building \(needs 38432 bytes: .*\); region 0 renders "
-                        r"19200 texels \(texel_samples 1\): the generator plans them all first, 24 bytes "
-                        r"a texel \(460800 bytes\) besides its map; texel_samples 5 \.\. 65535 plays from "
-                        r"the plan instead \(8 bytes a texel\)$", res["texel_samples 1"]), (kb, res)
-    # under CPython (no heap limit) it plays: the integer engine's map, in chunks
-    sc = S.build(S.validate(FULL_TEXEL_1, D), D)
-    want1 = texel.render_u16({"pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7, "texel_samples": 1,
-                              "length_samples": 19200}, engine="int")
-    assert sc.spans()[0][2] == S.K_CHUNK and [sc.amp(p) for p in range(19200)] == list(want1)
+        assert res["nbytes"] == 8 * 384 + 32 and res["plans"] == 1, (kb, res)
 
 
 def _bytecode_tree(tmp_path):

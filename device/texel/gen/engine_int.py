@@ -47,25 +47,9 @@ def gain_q14(gain):
     return int(gain * 16384 + 0.5)
 
 
-def _fill_parts(parts, a, b, t, d, tab, g):
-    """_fill over a map kept in pieces of w values each (all but the last:
-    runtime/upload.py Chunks, how a board keeps a full screen when its heap
-    has no 38,400-byte block): the phase runs on across the pieces."""
-    w = len(parts[0])
-    while a < b:
-        at = a % w
-        m = b - a if b - a < w - at else w - at
-        t = _fill(parts[a // w], at, at + m, t, d, tab, g)
-        a += m
-    return t
-
-
 def render_u16(plan, out=None):
-    """The map as uint16 into out: an array('H') (or None: a new one), or a
-    map in pieces (an object with .chunks, runtime/upload.py Chunks)."""
     n, L = plan.n, plan.L
     out = check_u16_out(out, n)
-    parts = getattr(out, "chunks", None)
     tab = sine_table.table()
     g = gain_q14(plan.gain)
     t28, d28 = plan.t28, plan.d28
@@ -74,10 +58,7 @@ def render_u16(plan, out=None):
         b = a + L
         if b > n:
             b = n
-        if parts is None:
-            _fill(out, a, b, t28[i], d28[i], tab, g)
-        else:
-            _fill_parts(parts, a, b, t28[i], d28[i], tab, g)
+        _fill(out, a, b, t28[i], d28[i], tab, g)
     return out
 
 

@@ -277,16 +277,10 @@ def _fill_noise(row, n, out, q16):
     with open(noise_path(), "rb") as f:
         f.seek(row * HALF_SCREEN * 2)
         if q16:
-            # straight into the caller's uint16 buffer, or into each of its
-            # pieces (runtime/upload.py Chunks): no temporary
-            i = 0
-            for part in getattr(out, "chunks", None) or (out,):
-                c = m - i if m - i < len(part) else len(part)
-                if c <= 0:
-                    break
-                if f.readinto(memoryview(part)[0:c]) != 2 * c:
-                    raise OSError("texel: %s is truncated" % NOISE_FILE)
-                i += c
+            # straight into the caller's uint16 buffer: no temporary
+            got = f.readinto(memoryview(out)[0:m])
+            if got != 2 * m:
+                raise OSError("texel: %s is truncated" % NOISE_FILE)
             if big:
                 _swap16(out, m)
         else:

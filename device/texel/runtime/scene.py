@@ -114,7 +114,6 @@ K_CHUNK = 3             # an uploaded map in 1 KB chunks (runtime/upload.py): va
                         # indexes the buffers, whose entry is a tuple of array('H')
 CHUNK_BITS = 9          # 512 values (1 KB) per chunk (upload.py and refresh_viper.py use these)
 CHUNK_MASK = 511
-CHUNK = 1 << CHUNK_BITS
 # A texel region is kept as its plan (t28, d28: 8 bytes per texel) and
 # evaluated at the finger's position, instead of rendered (2 bytes per
 # sample), when no engine is asked for and its texels are at most PLAN_MAX_L
@@ -519,26 +518,8 @@ def _biggest_block(c, spans, engine=None):
             continue                    # the firmware's map in flash
         if tex["kind"] == "samples" and getattr(tex["u16"], "CHUNKS", False):
             continue
-        if _in_pieces(tex, n, engine):
-            continue
         big = max(big, 2 * n)
     return big
-
-
-def _in_pieces(tex, n, engine):
-    """Whether a region rendered on the board goes into 1 KB chunks
-    (upload.Chunks, played as K_CHUNK) instead of one block: a texel region
-    the integer engine renders (texels of 1-4 samples: no plan) and a
-    reference not in flash, when longer than one chunk. A Pico playing a
-    scene has ~115 KB free but no 38,400-byte block (upload.py): measured on
-    the emulated Pico, `push --texel-samples 1` and `push --reference 4sin`
-    after start('pico') ran out of memory as one block (largest 34,362)."""
-    if n <= CHUNK:
-        return False
-    kind = tex["kind"]
-    if kind == "reference":
-        return True
-    return kind == "texel" and engine in (None, "int") and not _on_plan(tex, n, engine)
 
 
 def build(canonical, display, engine=None, idle_default=0, max_bytes=None, checked=None,
@@ -590,38 +571,10 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
         from ..compat import memory_words
         block = _biggest_block(c, spans, engine)
         raise ValueError("scene: out of memory while building (needs %d bytes: %d of sample "
-                         "buffers and plans + %d of region table; %s%s)%s"
+                         "buffers and plans + %d of region table; %s%s)"
                          % (need, nbuf, ntab, memory_words() or "the heap is full",
-                            ", and a region needs one block of %d" % block if block else "",
-                            _planned_words(c, spans, engine)))
+                            ", and a region needs one block of %d" % block if block else ""))
     return sc
-
-
-def _planned_words(c, spans, engine):
-    """Why a texel region rendered to a map needs more than its map: the
-    generator plans every texel before it renders (gen/plan.py, plan_int.py:
-    4-byte t28 and d28, and format 1's pitch and phase floats or format 2's
-    log pitch), all at once - 19,200 texels of texel_samples 1 hold 230 KB
-    in format 2, more than a Pico's heap. '' when no region does."""
-    worst = None
-    for k in range(len(c["regions"])):
-        tex = c["regions"][k]["texture"]
-        n = spans[k][1] - spans[k][0]
-        if tex["kind"] != "texel" or _on_plan(tex, n, engine):
-            continue
-        L = tex["texel_samples"]
-        count = (n + L - 1) // L
-        if worst is None or count > worst[1]:
-            worst = (k, count, L, tex["v"])
-    if worst is None or worst[1] < 256:
-        return ""
-    from ..compat import FLOAT_BITS
-    k, count, L, v = worst
-    each = 12 if v == 2 else 8 + 2 * (8 if FLOAT_BITS > 24 else 4)
-    return ("; region %d renders %d texels (texel_samples %d): the generator plans them all "
-            "first, %d bytes a texel (%d bytes) besides its map; texel_samples %d .. %d plays "
-            "from the plan instead (8 bytes a texel)" % (k, count, L, each, each * count,
-                                                         5, PLAN_MAX_L))
 
 
 def _shared(reuse, tex, n):
@@ -651,7 +604,6 @@ def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
     plans = []
     painted = []                            # (region, Chunks) of brush regions
     shared = []                             # regions playing the playing scene's buffer
-    pieces = []                             # (region, Chunks) rendered in 1 KB chunks
     for k in range(count):
         s, e = spans[k]
         j = STRIDE * k
@@ -692,12 +644,6 @@ def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
             table[j + 3] = len(bufs)
             bufs.append(rom)
             shared.append(k)
-        elif _in_pieces(tex, e - s, engine):
-            from .upload import Chunks
-            table[j + 2] = K_CHUNK
-            table[j + 3] = len(bufs)
-            pieces.append((k, Chunks(e - s)))
-            bufs.append(pieces[-1][1].chunks)
         else:
             table[j + 2] = K_BUF
             table[j + 3] = len(bufs)
@@ -713,15 +659,10 @@ def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
         paint(tex["brush"], tex["seed"], len(ch), ch)
     for k in range(count):
         j = STRIDE * k
-        buf = None
-        for kk, ch in pieces:
-            if kk == k:
-                buf = ch
-        if buf is None and (table[j + 2] != K_BUF or k in shared):
-            continue            # constants, plans, uploads, brushes and the playing scene's buffers as they are
+        if table[j + 2] != K_BUF or k in shared:   # constants, plans, uploads and the
+            continue                                # playing scene's buffers as they are
         n = table[j + 1] - table[j]
-        if buf is None:
-            buf = bufs[table[j + 3]]
+        buf = bufs[table[j + 3]]
         tex = regions[k]["texture"]
         kind = tex["kind"]
         if kind == "texel":

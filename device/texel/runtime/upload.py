@@ -11,7 +11,7 @@
 # still builds the split screen (compat grown by them, it did not).
 from array import array
 from ..compat import u16_one_block
-from .scene import MAX_SAMPLES, CHUNK_BITS, CHUNK_MASK, CHUNK   # CHUNK: 512 values
+from .scene import MAX_SAMPLES, CHUNK_BITS, CHUNK_MASK
 
 
 def u16_put_bytes(buf, offset, data):
@@ -58,6 +58,7 @@ def u16_bytes(buf, start, end):
 # under 4 KB, so 4 KB chunks for a second one failed and 1 KB chunks fit.
 # scene.amp reads chunk o >> CHUNK_BITS, value o & CHUNK_MASK (scene.K_CHUNK;
 # both refreshes, refresh.py and refresh_viper.py, read them).
+CHUNK = 1 << CHUNK_BITS             # 512 values
 
 
 class Chunks:

@@ -17,9 +17,7 @@ from .errors import CliError
 TEXEL_MEANING = {
     "pitch_db": ("DB", "central pitch, 10*log10(P / 1 cycle/mm)"),
     "irregularity_db": ("DB", "irregularity, 10*log10(sigma / 1 decade)"),
-    "texel_samples": ("N", "samples per texel (5.3 um each); a board plays 5 or more from the "
-                           "plan (8 bytes a texel), renders 1 .. 4 into a map after planning every "
-                           "texel at once (12-16 bytes each: a full screen of 1 fits no Pico)"),
+    "texel_samples": ("N", "samples per texel (5.3 um each)"),
     "length_samples": ("N", "map length in samples of 5.3 um"),
     "quant_db": ("DB", "quantize log pitch to this grid, dB (0 = off)"),
     "seed": ("N", "random seed"),
