@@ -644,3 +644,24 @@ def test_a_brush_region_paints_on_the_chip_as_on_the_host(capsys, port):
         st2 = b.status()
         assert st2["pushes"] == st["pushes"] and st2["scene"]["regions"][0]["kind"] == "brush"
         assert st2["refreshes"] > st["refreshes"] and st2["overruns"] == st["overruns"]
+
+
+def test_texel_samples_1_is_refused_before_sending_and_the_scene_plays_on(capsys, port):
+    """Issue 30, as a teacher met it: `push --texel-samples 1` said "out of memory while
+    building (needs 38432 bytes ... 197680 bytes free)". Its 19,200 texels are planned whole
+    first, 230,400 bytes against a Pico's ~200 KB heap: the host refuses it before sending,
+    saying so and what plays from a plan instead; the board plays on, untouched."""
+    _playing(port)
+    with texelpad.connect(port, timeout=60) as b:
+        st = b.status()
+    code, out, err = run_cli(capsys, "push", "--port", port, "--texel-samples", "1", *TEXEL)
+    _say(capsys, "\npush --texel-samples 1 on the Pico: exit %d: %s" % (code, err.strip()))
+    assert code != 0 and "refused before sending" in err, out + err
+    assert re.search(r"region 0 renders 19200 texels \(texel_samples 1\): the generator plans them "
+                     r"all first, 12 bytes a texel \(230400 bytes\) besides its map; texel_samples "
+                     r"5 \.\. 65535 plays from the plan instead \(8 bytes a texel\); the board has "
+                     r"\d+ bytes free in all", err), err
+    with texelpad.connect(port, timeout=60) as b:
+        st2 = b.status()
+    assert st2["scene"] == st["scene"] and st2["pushes"] == st["pushes"]
+    assert st2["refreshes"] > st["refreshes"] and st2["faults"] == 0

@@ -45,8 +45,8 @@ HOST_ONLY = {"texel/gen/plan_numpy.py", "texel/gen/engine_numpy.py"}
 MODULES = [p for p in ALL_MODULES if p.relative_to(PKG.parent).as_posix() not in HOST_ONLY]
 BOARD_JSONS = sorted((PKG / "boards.d").glob("*.json"))
 NATIVE = {"texel/gen/engine_int_viper.py", "texel/gen/plan_int_viper.py",
-          "texel/gen/brush_viper.py", "texel/runtime/refresh_viper.py",
-          "texel/runtime/scene_viper.py"}
+          "texel/gen/brush_viper.py", "texel/gen/reference_viper.py",
+          "texel/runtime/refresh_viper.py", "texel/runtime/scene_viper.py"}
 # each target's port: its image carries that hardware backend and those boards only
 PORT = {"rp2": "rp2", "pyboard": "stm32", "unix": "virtual", "circuitpython": "circuitpython"}
 BACKEND = {"rp2": "rp2", "stm32": "stm32", "virtual": "virtual", "circuitpython": "cpy"}

@@ -33,6 +33,7 @@ VIPER_FILES = mpy.viper_files()
 NATIVE_ONLY = {DEVICE / "texel" / "gen" / "engine_int_viper.py",
                DEVICE / "texel" / "gen" / "plan_int_viper.py",
                DEVICE / "texel" / "gen" / "brush_viper.py",
+               DEVICE / "texel" / "gen" / "reference_viper.py",
                DEVICE / "texel" / "runtime" / "refresh_viper.py",
                DEVICE / "texel" / "runtime" / "scene_viper.py"}
 

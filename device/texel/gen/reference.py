@@ -166,8 +166,32 @@ def _fill(name, n, out, q16):
         _fill_noise(_NOISE_ROWS.index(name), n, out, q16)
 
 
+# A board with viper and float32 renders the uint16 sums of sines in
+# machine-word ints (gen/reference_viper.py: within 1 u16 of the binary64 map,
+# as its float32 path is, and ~150x faster - a stock Pico's power-up 4sin);
+# binary64 interpreters keep the float path, which matches the CSV.
+_INT_SINES = None
+
+
+def _int_sines():
+    global _INT_SINES
+    if _INT_SINES is None:
+        from ..compat import FLOAT_BITS, native
+        _INT_SINES = (native("texel.gen.reference_viper", "fill") if FLOAT_BITS <= 24
+                      else None) or False
+    return _INT_SINES
+
+
 def _fill_sines(name, n, out, q16):
     steps = _SINES[name]
+    if q16 and _int_sines():
+        from array import array
+        from . import sine_table
+        from .reference_viper import CONSTANTS, steps_of
+        a0, ws, rq = CONSTANTS[name]
+        _INT_SINES(out, n, array("i", steps_of(steps)), array("i", bytes(8 * len(steps))),
+                   len(steps), sine_table.table(), a0, ws, rq)
+        return
     sin = math.sin
     k = _RAD_PER_SINE_UNIT
     two = name == "2sin"

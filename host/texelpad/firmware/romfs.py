@@ -92,7 +92,7 @@ def code_digest(target: image.Target | None = None) -> str:
 # word-aligned. tests/firmware/test_romfs.py checks the list is every viper
 # module. Their relative imports become absolute.
 RAM_MODULES = ("runtime/refresh_viper.py", "runtime/scene_viper.py", "gen/engine_int_viper.py",
-               "gen/plan_int_viper.py", "gen/brush_viper.py")
+               "gen/plan_int_viper.py", "gen/brush_viper.py", "gen/reference_viper.py")
 RAM_PACKAGE = "texel_ram"
 RAM_SHIM = b"""# texelpad firmware: this module's viper code runs from RAM, loaded from the ROMFS partition as
 # %(pkg)s.%(name)s (host/texelpad/firmware/romfs.py RAM_MODULES); its names are handed on here.

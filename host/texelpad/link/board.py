@@ -177,6 +177,7 @@ class Board:
               progress: Callable[[int, int], None] | None = None,
               ) -> tuple[dict[str, Any], "CheckedScene"]:
         checked = checked_for(scene, st["display"])
+        refuse_what_cannot_fit(checked, st)
         return self._send("push", [checked.plain], 0, None, progress, st), checked
 
     def _send(self, func: str, args: list[Any], scene_at: int, kwargs: dict | None,
@@ -456,6 +457,44 @@ class CheckedScene:
         """Whether it was checked for this display (positions and dx_um)."""
         return (self.display["positions"] == display["positions"]
                 and self.display["dx_um"] == display["dx_um"])
+
+
+# Bytes the generator holds per planned texel on a board (gen/plan_int.py:
+# t28 and d28, 4 bytes each; format 2 adds its 4-byte log pitch, format 1 its
+# pitch and phase as a board's float32 - a 64-bit unix port's floats take more,
+# so this is a lower bound there).
+PLAN_BYTES = {2: 12, 1: 16}
+
+
+def refuse_what_cannot_fit(checked: CheckedScene, st: dict[str, Any]) -> None:
+    """Refuse before sending (ValueError) a scene the board cannot build
+    however its heap lies: a texel region of 1-4-sample texels (or one texel
+    over the region) is rendered to a map, and the generator plans every
+    texel of it at once first (texel.runtime.scene._on_plan says which
+    regions play from a plan instead); when that plan alone is more than the
+    board's whole free heap (status "mem_free", beside the scene playing)
+    nothing can make it fit (issue 30: `push --texel-samples 1` on a Pico,
+    230,400 bytes of plan against ~200 KB). What passes is still checked by
+    the board, which sees its own blocks (scene.build's out-of-memory
+    message names the largest free one)."""
+    free = st.get("mem_free")
+    if isinstance(free, bool) or not isinstance(free, int):
+        return
+    regions = checked.canonical["regions"]
+    for k, (a, b) in enumerate(checked.spans):
+        tex = regions[k]["texture"]
+        if tex["kind"] != "texel" or texel.runtime.scene._on_plan(tex, b - a, None):
+            continue
+        size = tex["texel_samples"]
+        count = (b - a + size - 1) // size
+        each = PLAN_BYTES[tex["v"]]
+        if count * each > free:
+            raise ValueError(
+                "scene: region %d renders %d texels (texel_samples %d): the generator plans "
+                "them all first, %d bytes a texel (%d bytes) besides its map; texel_samples "
+                "5 .. %d plays from the plan instead (8 bytes a texel); the board has %d bytes "
+                "free in all (refused before sending)"
+                % (k, count, size, each, count * each, texel.runtime.scene.PLAN_MAX_L, free))
 
 
 def check_scene(scene: Any, display: dict[str, Any] | None = None) -> CheckedScene:
