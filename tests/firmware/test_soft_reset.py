@@ -119,23 +119,23 @@ def _soak(port: str, emu, board: str, hook: bool = False) -> list[str]:
     return log
 
 
-def _main_py(r: Raw) -> str:
-    """main.py's work on a fresh heap (deploy ends with a soft reset), timed by the board's own
-    clock: what a friendly Ctrl-D runs before the REPL answers (MicroPython's own reset aside).
-    Its split screen's 4sin is rendered by gen/reference_viper.py on a stock Pico (3.5 s by
-    the float path): the map it plays is CPython's within 1 u16."""
+def _main_py(r: Raw, run: str, what: str) -> str:
+    """The power-up's work (run: main.py's code) on a fresh heap, timed by the board's own clock:
+    what a friendly Ctrl-D runs before the REPL answers (MicroPython's own reset aside). Its
+    split screen's 4sin is the firmware's flash map, or rendered by gen/reference_viper.py on a
+    stock Pico (3.5 s by the float path): CPython's within 1 u16."""
     import texel
-    out = r.exec("import time\nt0 = time.ticks_ms()\nexec(open('/main.py').read())\n"
-                 "print(time.ticks_diff(time.ticks_ms(), t0))")
+    out = r.exec("import time\nt0 = time.ticks_ms()\n%s\n"
+                 "print(time.ticks_diff(time.ticks_ms(), t0))" % run)
     ms = int(out.split()[-1])
     got = ast.literal_eval(r.exec("import texel.app as _A\nprint(repr([_A._rt.refresh.scene.amp(p) "
                                   "for p in range(0, 9600, 41)]))").strip())
     want = texel.reference_u16("4sin", 9600)
     diff = [abs(a - want[p]) for a, p in zip(got, range(0, 9600, 41))]
     assert len(diff) == 235 and max(diff) <= 1 and diff.count(0) >= 0.8 * len(diff), diff
-    return ("main.py (import texel.app and the power-up scene) on a fresh heap: %d ms of board "
-            "time; its 4sin against CPython: %d of %d samples equal, worst %d u16"
-            % (ms, diff.count(0), len(diff), max(diff)))
+    return ("%s (import texel.app and the power-up scene) on a fresh heap: %d ms of board time; "
+            "its 4sin against CPython: %d of %d samples equal, worst %d u16"
+            % (what, ms, diff.count(0), len(diff), max(diff)))
 
 
 @pytest.fixture(scope="module")
@@ -145,9 +145,16 @@ def fw():
 
 def test_the_firmware_survives_soft_resets_and_ctrl_c(fw):
     with emulated_pico(firmware=fw.uf2) as emu:
+        r = Raw(emu.port, emu)
+        try:
+            r.raw()
+            r.soft_reset_raw()              # the frozen main.py ran at boot: a fresh heap
+            first = _main_py(r, "import texel.main", "texel.main (the frozen main.py's)")
+        finally:
+            r.close()
         _teacher_one_liner(emu.port, emu)
         log = _soak(emu.port, emu, "pico", hook=True)
-        print("\n".join(["firmware soak (seed %d):" % SEED] + log))
+        print("\n".join(["firmware soak (seed %d):" % SEED, first] + log))
         summary = emu.stop()            # (its error lines, if any, are in the summary)
     assert "EMULATOR ERROR" not in summary
 
@@ -160,7 +167,8 @@ def test_a_stock_pico_after_deploy_survives_soft_resets_and_ctrl_c(capsys):
         r = Raw(emu.port, emu)
         try:
             r.raw()
-            first = _main_py(r)
+            r.soft_reset_raw()              # a fresh heap, nothing playing
+            first = _main_py(r, "exec(open('/main.py').read())", "/main.py")
         finally:
             r.close()
         _teacher_one_liner(emu.port, emu)
