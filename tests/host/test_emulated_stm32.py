@@ -48,15 +48,15 @@ def _timers(r: Raw) -> dict:
     return {"tim7": t7, "tim7_irq": irq, "tim8": t8, "tim8_outputs": ccer}
 
 
-@pytest.mark.xfail(strict=False, reason=(
-    "flaky, cause not found yet: twice of four runs (once in CI) a round's code sent to the "
-    "raw REPL of the playing STM32 got no 'OK' within 60 s (nothing came back); the other "
-    "runs passed every round"))
 def test_the_stm32_survives_soft_resets_and_ctrl_c(romfs, capsys):
     rng = random.Random(SEED)
     with emulated_stm32(romfs) as emu:
         mp = str(Path(sys.executable).with_name("mpremote"))
-        r = Raw(emu.port, emu)
+        # raw-paste (mpremote's way): the emulated STM32's UART loses a burst of the plain raw
+        # REPL - 1,600 bytes at once left it answering nothing, idle or playing, while 6,000
+        # in raw-paste went through every time; this soak's rounds sent in plain mode failed
+        # in 3 of 5 runs, nothing coming back (no pin of a real pyboard: its REPL is USB)
+        r = Raw(emu.port, emu, paste=True)
         log, board_ms = [], []
         try:
             r.raw()

@@ -9,10 +9,13 @@ import time
 class Raw:
     """The board's REPL through its own port, byte by byte, as mpremote and Thonny drive it."""
 
-    def __init__(self, port: str, emu) -> None:
+    def __init__(self, port: str, emu, paste: bool = False) -> None:
+        """paste: send code in raw-paste mode (mpremote's way: the board grants a window of
+        bytes at a time), else all at once in the plain raw REPL (pyboard.py's older way)."""
         import serial
         self.s = serial.Serial(port, 115200, timeout=0.05)
         self.emu = emu
+        self.paste = paste
         self.buf = b""              # read past the last token: the next read_until's start
 
     def close(self) -> None:
@@ -43,8 +46,46 @@ class Raw:
         self.read_until(b"raw REPL; CTRL-B to exit\r\n>", 60)
 
     def start(self, code: str) -> None:
+        if self.paste:
+            self._paste(code.encode())
+            return
         self.s.write(code.encode() + b"\x04")
         self.read_until(b"OK", 60)
+
+    def _paste(self, data: bytes) -> None:
+        """Raw-paste mode as mpremote sends it (its pyboard.py raw_paste_write): Ctrl-E A Ctrl-A,
+        the board's "R\\x01" and window size, then no more bytes than it has granted (each
+        Ctrl-A it sends grants another window), Ctrl-D, and its Ctrl-D back."""
+        import struct
+        self.s.write(b"\x05A\x01")
+        self.read_until(b"R\x01", 60)
+        end = time.monotonic() + 60
+        while len(self.buf) < 2:
+            if time.monotonic() > end:
+                raise AssertionError("no raw-paste window size within 60 s")
+            self.buf += self.s.read(2 - len(self.buf))
+        window = remain = struct.unpack("<H", self.buf[:2])[0]
+        self.buf = self.buf[2:]
+        i = 0
+        while i < len(data):
+            while remain == 0 or self.s.in_waiting:
+                if time.monotonic() > end:
+                    raise AssertionError("raw paste: no window granted within 60 s (%d of %d "
+                                         "bytes sent)" % (i, len(data)))
+                c = self.s.read(1)
+                if c == b"\x01":
+                    remain += window
+                    end = time.monotonic() + 60
+                elif c == b"\x04":
+                    raise AssertionError("raw paste: the board ended it at byte %d" % i)
+                elif c:
+                    raise AssertionError("raw paste: unexpected %r from the board" % c)
+            piece = data[i:i + remain]
+            self.s.write(piece)
+            remain -= len(piece)
+            i += len(piece)
+        self.s.write(b"\x04")
+        self.read_until(b"\x04", 60)
 
     def result(self, seconds: float = 300) -> tuple[str, str]:
         buf = self.read_until(b"\x04>", seconds)

@@ -313,7 +313,10 @@ def load(name, search=None):
             continue
         try:
             try:
-                doc = json.load(f)
+                # loads(read()), not load(f): MicroPython's json.load reads a
+                # stream a byte at a time (~40 ms for a 2 KB board file on a
+                # stock Pico, inside main.py's power-up)
+                doc = json.loads(f.read())
             except ValueError as e:
                 raise ValueError("%s: not valid JSON (%s)" % (path, e))
         finally:
