@@ -7,7 +7,6 @@
 #   texel.engines()                                 -> engines usable here
 #   texel.reference(name, length_samples)           -> reference textures
 from .gen.params import validate, FORMAT_VERSION, FORMAT_LATEST, DX_MM, NYQUIST_CPMM  # noqa: F401 (the API above)
-from .gen.plan import Plan
 from . import compat
 
 __version__ = "0.1.0"
@@ -76,6 +75,10 @@ def make_plan(params, draws=None):
                              "format 2 draws from its seed")
         from .gen.plan_int import PlanInt
         return PlanInt(p)
+    # imported here, not at the top: a board playing format 2 never loads the
+    # float plan (on a stock Pico a .mpy is copied into RAM, and its load is
+    # part of main.py's power-up)
+    from .gen.plan import Plan
     return Plan(p, draws)
 
 

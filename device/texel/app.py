@@ -138,12 +138,14 @@ def board_display(board_name):
     return {"positions": d["positions"], "dx_um": d["dx_um"]}
 
 
-def start(board_name, scene=None, realtime=False, fast=None, **hw_opts):
+def start(board_name, scene=None, realtime=False, fast=None, report=True, **hw_opts):
     """Start the display on board `board_name` (a file in boards/) playing
     `scene` (default: the study's split screen). Stops a running display
     first - but only once everything that can be checked was (the board
     file, that it fits this firmware, the scene), and if the new start still
-    fails, the display that played is started again. Returns status().
+    fails, the display that played is started again. Returns status(), or
+    None with report=False (main.py: status's full collection is ~30 ms of
+    a stock Pico's power-up, which a friendly Ctrl-D waits for).
 
     fast: the fused viper refresh (refresh_viper.py) - default on wherever
     the port has viper and the sensor is a linear ADC; on an RP2040 its IRQ
@@ -178,7 +180,7 @@ def start(board_name, scene=None, realtime=False, fast=None, **hw_opts):
             except Exception:
                 pass
         raise ValueError("board %r did not start (%s); %s" % (board["name"], why, now))
-    return status()
+    return status() if report else None
 
 
 def _start(board, canonical, realtime, fast, hw_opts):

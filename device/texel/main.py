@@ -61,7 +61,8 @@ def main():
             print("texelpad: could not check the refresh interrupt:", repr(e))
     try:
         import texel.app
-        st = texel.app.start(board, cfg.get("scene"))
+        texel.app.start(board, cfg.get("scene"), report=False)
+        st = texel.app.status(False)    # no full collection: the REPL answers sooner
         print("texelpad: playing on %s (%s refreshes/s)" % (st.get("board"), st.get("refresh_hz")))
         if st.get("refresh_mode") == "loop":      # no timer IRQ: this loop is the display
             texel.app.run_loop()

@@ -621,7 +621,9 @@ def _memory_script(p: dict) -> str:
 import micropython, hashlib
 gc.collect(); a_start = gc.mem_alloc()
 import texel
-from texel.gen import engine_int, sine_table
+# (gen.plan, format 1's float plan, is imported by make_plan at its first use:
+# counted with the imports, so "plan" below is the plan's own bytes)
+from texel.gen import engine_int, sine_table, plan
 gc.collect(); a_import = gc.mem_alloc()
 P = {p!r}
 t0 = time.ticks_us()
