@@ -15,6 +15,7 @@ lists them with their latest results (bench/results/).
 """
 
 import math
+from contextlib import contextmanager
 
 
 def jsonable(x):
@@ -33,3 +34,30 @@ def jsonable(x):
     if isinstance(x, (np.integer, np.bool_)):
         return x.item()
     return x
+
+
+@contextmanager
+def deployed_pico(say, res):
+    """A stock emulated Pico (../shared/instruments/rp2emu) with texelpad
+    deployed, booted and stopped around the block: yields its port. Raises
+    SystemExit when this machine cannot run it; on the way out puts the
+    emulator's summary in res["emulator_summary"] and the block's wall time
+    (boot and deploy included) in res["wall_s"]."""
+    import time
+    from texelpad.deploy.install import deploy
+    from texelpad.link.board import connect
+    from texelpad.sim.emulated import EmulatedPico, why_not
+    why = why_not()
+    if why:
+        raise SystemExit("the emulated Pico cannot run here: %s" % why)
+    t_wall = time.monotonic()
+    emu = EmulatedPico()
+    try:
+        say("booting the emulated RP2040")
+        emu.start()
+        with connect(emu.port, check=False, import_image=False, timeout=60) as b:
+            deploy(b, progress=lambda m: say("deploy: " + m))
+        yield emu.port
+    finally:
+        res["emulator_summary"] = emu.stop().strip()
+        res["wall_s"] = round(time.monotonic() - t_wall, 1)

@@ -16,12 +16,12 @@ import argparse
 import base64
 import json
 import sys
-import time
 from typing import Any
 
 import numpy as np
 
 import texel
+from bench import deployed_pico
 
 NAMES = ("2sin", "3sin", "4sin")
 N = 9600
@@ -56,21 +56,10 @@ MAIN_PY = ("import time\nt0 = time.ticks_us()\nexec(open('/main.py').read())\n"
 
 
 def run(say) -> dict[str, Any]:
-    from texelpad.deploy.install import deploy
     from texelpad.link.board import connect
-    from texelpad.sim.emulated import EmulatedPico, why_not
-    why = why_not()
-    if why:
-        raise SystemExit("the emulated Pico cannot run here: %s" % why)
     res: dict[str, Any] = {"chip": "rp2040 (rp2emu)", "samples": N, "rows": []}
-    t_wall = time.monotonic()
-    emu = EmulatedPico()
-    try:
-        say("booting the emulated RP2040")
-        emu.start()
-        with connect(emu.port, check=False, import_image=False, timeout=60) as b:
-            deploy(b, progress=lambda m: say("deploy: " + m))
-        with connect(emu.port, timeout=120) as b:
+    with deployed_pico(say, res) as port:
+        with connect(port, timeout=120) as b:
             b.link.exec(BOARD_CODE, timeout=60)
             res["firmware"] = b.status().get("firmware")
             for name in NAMES:
@@ -87,13 +76,10 @@ def run(say) -> dict[str, Any]:
                         row.update(worst_u16=int(d.max()), off=int((d > 0).sum()))
                     res["rows"].append(row)
                     say("%s %s: %s us" % (name, path, us))
-        with connect(emu.port, timeout=120) as b:
+        with connect(port, timeout=120) as b:
             b.link.soft_reset()
             res["main_py_us"] = b.link.eval(MAIN_PY, timeout=600)
             say("main.py: %d us" % res["main_py_us"])
-    finally:
-        res["emulator_summary"] = emu.stop().strip()
-    res["wall_s"] = round(time.monotonic() - t_wall, 1)
     return res
 
 

@@ -28,11 +28,11 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import time
 from typing import Any
 
 from texel.gen.lognormal import to_db
 
+from bench import deployed_pico
 from texelpad.study import scenes as S
 from texelpad.study.mapping import slider_values
 
@@ -72,21 +72,10 @@ def cases() -> list[tuple[str, dict[str, Any]]]:
 
 
 def run(reps: int, say) -> dict[str, Any]:
-    from texelpad.deploy.install import deploy
     from texelpad.link.board import connect
-    from texelpad.sim.emulated import EmulatedPico, why_not
-    why = why_not()
-    if why:
-        raise SystemExit("the emulated Pico cannot run here: %s" % why)
     res: dict[str, Any] = {"chip": "rp2040 (rp2emu)", "reps": reps, "plans": [], "pushes": []}
-    t_wall = time.monotonic()
-    emu = EmulatedPico()
-    try:
-        say("booting the emulated RP2040")
-        emu.start()
-        with connect(emu.port, check=False, import_image=False, timeout=60) as b:
-            deploy(b, progress=lambda m: say("deploy: " + m))
-        with connect(emu.port, timeout=120) as b:
+    with deployed_pico(say, res) as port:
+        with connect(port, timeout=120) as b:
             st = b.start("pico")
             res["firmware"] = st.get("firmware")
             b.link.exec(BOARD_CODE, timeout=60)
@@ -104,9 +93,6 @@ def run(reps: int, say) -> dict[str, Any]:
                 lp = b.link.eval("print(repr(texel.app.status()['last_push']))")
                 res["pushes"].append({"case": name, "last_push": lp})
                 say("push %s: %r" % (name, lp))
-    finally:
-        res["emulator_summary"] = emu.stop().strip()
-    res["wall_s"] = round(time.monotonic() - t_wall, 1)
     return res
 
 

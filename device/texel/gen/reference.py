@@ -184,13 +184,14 @@ def _int_sines():
 
 def _fill_sines(name, n, out, q16):
     steps = _SINES[name]
-    if q16 and _int_sines():
+    fill = _int_sines() if q16 else False
+    if fill:
         from array import array
         from . import sine_table
         from .reference_viper import CONSTANTS, steps_of
         a0, ws, rq = CONSTANTS[name]
-        _INT_SINES(out, n, array("i", steps_of(steps)), array("i", bytes(8 * len(steps))),
-                   len(steps), sine_table.table(), a0, ws, rq)
+        fill(out, n, array("i", steps_of(steps)), array("i", bytes(8 * len(steps))),
+             len(steps), sine_table.table(), a0, ws, rq)
         return
     sin = math.sin
     k = _RAD_PER_SINE_UNIT

@@ -3,7 +3,8 @@
 # float path costs a stock Pico 3.5 s for a half-screen 4sin (38,400 float
 # sines and their heap floats), all of it inside main.py's power-up scene,
 # so a friendly Ctrl-D left the REPL waiting for it (issue 30: the REPL
-# answers within 1 s of board time); this takes ~20 ms there.
+# answers within 1 s of board time); this takes 110 ms there
+# (bench/results/reference_sines.txt).
 #
 # Per sine and sample: the exact integer phase p (1e-5 cycle units, as the
 # float path) indexes gen/sine_table.py's Q16 (sin+1)/2 at 1024 points a turn
