@@ -41,6 +41,7 @@ import fuzzlib
 import texel
 from texel.gen import params as P
 from texel.runtime import scene as S
+from texel.runtime.kinds import samples as KS
 from texelpad.link.board import host_check
 
 FUZZ_TARGET = "scenes"
@@ -120,8 +121,8 @@ def texture(draw, n_positions: int):
         m = draw(st.integers(1, 40))
     else:                       # odd and large sizes (a full screen now and then)
         m = draw(st.sampled_from([1, 2, 3, n_positions - 1, n_positions, n_positions + 1,
-                                  1999, 2000, 2001, 4097, S.MAX_SAMPLES]))
-    m = max(1, min(m, S.MAX_SAMPLES))
+                                  1999, 2000, 2001, 4097, KS.MAX_SAMPLES]))
+    m = max(1, min(m, KS.MAX_SAMPLES))
     a, b = draw(st.integers(0, 65535)), draw(st.integers(0, 65535))
     if key == "u16":
         vals = [(a * i + b) % 65536 for i in range(m)]
@@ -314,8 +315,8 @@ def mutate(draw, root):
         if isinstance(seq, (list, tuple)) and seq:
             how = _idx(draw, 4)
             if how == 0:
-                m = draw(st.sampled_from([0, 1, 2, 3, 7, 1999, 2001, S.MAX_SAMPLES,
-                                          S.MAX_SAMPLES + 1, 30000]))
+                m = draw(st.sampled_from([0, 1, 2, 3, 7, 1999, 2001, KS.MAX_SAMPLES,
+                                          KS.MAX_SAMPLES + 1, 30000]))
                 t[key] = [seq[i % len(seq)] for i in range(m)]
             elif how == 1:
                 t["u16" if key == "values" else "values"] = list(seq)      # the other key too

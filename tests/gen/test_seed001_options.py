@@ -35,6 +35,7 @@ from texel.gen import plan_numpy as PN
 from texel.gen.params import IRREG_DB_MIN
 from texel.gen.plan_int_tables import table
 from texel.runtime import scene as S
+from texel.runtime.kinds import texel as KT
 from texelpad import toolchain
 
 from support import mpy
@@ -140,7 +141,7 @@ def test_options_only_in_the_canonical_dict_when_set():
     d = {"positions": 19200, "dx_um": 5.3}
     tex = dict(base, kind="texel")
     plain = S.validate({"regions": [{"start_mm": 0, "end_mm": 50, "texture": tex}]}, d)
-    assert set(plain["regions"][0]["texture"]) == {"kind"} | set(S.TEXEL_KEYS)
+    assert set(plain["regions"][0]["texture"]) == {"kind"} | set(KT.TEXEL_KEYS)
     opt = S.validate({"regions": [{"start_mm": 0, "end_mm": 50,
                                    "texture": dict(tex, phase="reset", min_cpmm=2)}]}, d)
     assert opt["regions"][0]["texture"] == dict(plain["regions"][0]["texture"], phase="reset",
@@ -406,6 +407,7 @@ from texel.gen import plan_int as P
 from texel.gen import plan as P1
 from texel.gen import lognormal
 from texel.runtime import scene as S
+from texel.runtime.kinds import texel as KT, samples as KS
 out = %(out)r
 cases = %(cases)r
 fcases = %(fcases)r
@@ -474,7 +476,7 @@ def _check(info: dict, tmp_path, float_rel: float) -> None:
         assert (tmp_path / (name + ".map")).read_bytes() == m.tobytes(), name
         assert info["counts"][name] == [pl.redrawn, pl.at_min, pl.above_nyquist], name
         # a region plays from its plan (K_PLAN) when its texels are shorter
-        # than it (scene._on_plan); else from the int engine's map
+        # than it (kinds.texel.on_plan); else from the int engine's map
         L, n = p["texel_samples"], min(p["length_samples"], 3000)
         assert info["scene"][name] == [1 if 4 < L < n else 0, True], name
     assert info["counts"]["at-min"][:2] == [20, 20] and info["counts"]["wide"][0] > 0

@@ -20,6 +20,7 @@ import time
 import pytest
 
 import texel.runtime.scene as scene_mod
+from texel.runtime.kinds import samples as KS
 import texelpad
 from texelpad.cli.scene_files import shipped_scenes
 from texelpad.link import protocol
@@ -32,7 +33,7 @@ from support.pico import emulated_pico, group_members, pico, processes_mentionin
 pytestmark = [pytest.mark.instruments, pytest.mark.slow]
 
 FULL = 101.76                     # mm: 19,200 positions of 5.3 um
-N = scene_mod.MAX_SAMPLES         # 19,200
+N = KS.MAX_SAMPLES         # 19,200
 TEXEL = ("--pitch-db", "6", "--irregularity-db", "-9")
 # board files of other firmware, put on the Pico as a user's /boards/NAME.json
 # (the rp2 image ships only its own port's: pico, pico_bridge)
@@ -322,7 +323,7 @@ def _remove_board_files(b, names: list[str]) -> None:
 # --- c: a full-size samples upload --------------------------------------------------------
 
 def test_full_size_upload_plays_and_reads_back(port):
-    """19,200 uint16 values (texel.runtime.scene.MAX_SAMPLES) cross as
+    """19,200 uint16 values (texel.runtime.kinds.samples.MAX_SAMPLES) cross as
     base64 pieces (protocol.split_uploads, texel.app.upload_*) while the
     timer IRQ plays the texel scene; the board plays them and reads them back
     exactly."""

@@ -60,7 +60,7 @@ def test_device_tree_and_native_files():
     assert 'native("texel.gen.plan_int_viper", "texels") or texels_py' in src
     src = (DEVICE / "texel" / "gen" / "brush.py").read_text()
     assert 'if native("texel.gen.brush_viper", "frames") is None:' in src
-    src = (DEVICE / "texel" / "runtime" / "scene.py").read_text()
+    src = (DEVICE / "texel" / "runtime" / "kinds" / "samples.py").read_text()
     assert 'native("texel.runtime.scene_viper", "fill") or False' in src
     src = (DEVICE / "texel" / "compat.py").read_text()
     assert "except (ImportError, SyntaxError, MemoryError, AttributeError)" in src

@@ -1,6 +1,6 @@
 """Long samples regions cross the link as data, in pieces (texel.app.upload_*,
 texelpad.link.protocol.split_uploads), at the documented size (19,200 values,
-texel.runtime.scene.MAX_SAMPLES); Ctrl-C during a push changes nothing (or
+texel.runtime.kinds.samples.MAX_SAMPLES); Ctrl-C during a push changes nothing (or
 says exactly what changed); a board file for other firmware is refused before
 the playing display is touched, and a start that fails in the hardware puts
 back what played. All on the real virtual board (the MicroPython unix port on

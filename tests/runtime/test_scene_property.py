@@ -80,6 +80,7 @@ from support import mpy
 import texel
 from texel.gen import params as P
 from texel.runtime import scene as S
+from texel.runtime.kinds import texel as KT, samples as KS
 
 BOARD = json.loads((mpy.ROOT / "device" / "texel" / "boards.d" / "virtual.json").read_text(encoding="utf-8"))
 D = {"positions": 19200, "dx_um": 5.3}          # the virtual board's display (checked below)
@@ -217,8 +218,8 @@ TEXEL_BAD = {
     "v": bad_int(1, 2),         # 1 and 2 are the texture formats (docs/generator.md)
     "band_limit_cpmm": bad_float(0.01, NYQ, none_ok=True),
 }
-assert sorted(TEXEL_VALID) == sorted(S.TEXEL_KEYS) == sorted(TEXEL_BAD)
-OPTIONAL_TEXEL = [k for k in S.TEXEL_KEYS if k not in ("pitch_db", "irregularity_db")]
+assert sorted(TEXEL_VALID) == sorted(KT.TEXEL_KEYS) == sorted(TEXEL_BAD)
+OPTIONAL_TEXEL = [k for k in KT.TEXEL_KEYS if k not in ("pitch_db", "irregularity_db")]
 BAD_MM = bad_float(0.0, TOTAL_MM, refused_above=TOTAL_MM + 0.01)   # up to half a position past the end is accepted
 BAD_U16 = bad_int(0, S.U16_MAX)
 BAD_VALUE = bad_float(0.0, 1.0)
@@ -260,7 +261,7 @@ def valid_texture(draw, kind=None):
     key = _choice(draw, ["values", "u16"])
     size = _idx(draw, 20)
     if size == 0:                                   # rare: a large upload, up to a full screen
-        m = draw(st.one_of(st.just(S.MAX_SAMPLES), st.integers(1000, S.MAX_SAMPLES)))
+        m = draw(st.one_of(st.just(KS.MAX_SAMPLES), st.integers(1000, KS.MAX_SAMPLES)))
         seq = draw(_big_upload(key, m))
     elif key == "u16":
         seq = draw(st.lists(st.integers(0, S.U16_MAX), min_size=1, max_size=30))
@@ -473,7 +474,7 @@ def c_kind_bad(draw, scene, spans):
 def c_texture_unknown_key(draw, scene, spans):
     k = _idx(draw, len(spans))
     tex = _regions(scene)[k]["texture"]
-    _unknown_keys(draw, tex, S.TEXTURE_KEYS[tex["kind"]])
+    _unknown_keys(draw, tex, S.kinds.get(tex["kind"]).KEYS)
     if tex["kind"] == "texel" and "length_samples" in tex:
         return scene, "regions[%d].texture.length_samples" % k
     return scene, "regions[%d].texture" % k
@@ -534,7 +535,7 @@ def c_samples_neither_or_both(draw, scene, spans):
 
 def c_samples_fit(draw, scene, spans):
     tex, path = _texture_of(draw, scene, spans, "samples")
-    tex["fit"] = draw(_not_in(S.FITS, _one_of(_any_scalar, st.sampled_from(["Tile", "zoom", "tile\n"]))))
+    tex["fit"] = draw(_not_in(KS.FITS, _one_of(_any_scalar, st.sampled_from(["Tile", "zoom", "tile\n"]))))
     return scene, path + ".fit"
 
 
@@ -549,8 +550,8 @@ def c_samples_size(draw, scene, spans):
     """An empty upload, or an oversized one (> 19,200 values)."""
     tex, path = _texture_of(draw, scene, spans, "samples")
     key = _upload_key(tex)
-    m = draw(_one_of(st.just(0), st.sampled_from([S.MAX_SAMPLES + 1, 20000, 65536, 100000]),
-                     st.integers(S.MAX_SAMPLES + 1, 30000)))
+    m = draw(_one_of(st.just(0), st.sampled_from([KS.MAX_SAMPLES + 1, 20000, 65536, 100000]),
+                     st.integers(KS.MAX_SAMPLES + 1, 30000)))
     if m > 0 and _idx(draw, 2):
         seq = draw(_big_upload(key, m))
     else:
@@ -578,7 +579,7 @@ CORRUPTIONS = {f.__name__[2:]: f for f in (
     c_rounds_empty, c_overlap_same_span, c_overlap_extend, c_texture_junk, c_texture_no_kind,
     c_kind_bad, c_texture_unknown_key, c_texel_missing, c_reference_name, c_constant_level,
     c_samples_neither_or_both, c_samples_fit, c_samples_container, c_samples_size, c_samples_element)}
-for _k in S.TEXEL_KEYS:
+for _k in KT.TEXEL_KEYS:
     CORRUPTIONS["texel_" + _k] = functools.partial(_texel_key_bad, key=_k)
 LABELS = ["valid"] + sorted(CORRUPTIONS)
 assert len(CORRUPTIONS) == 34
@@ -594,7 +595,7 @@ def cases(draw, label):
     return label, bad, path
 
 
-def _full_house(upload=S.MAX_SAMPLES):
+def _full_house(upload=KS.MAX_SAMPLES):
     """16 touching regions over the whole display, every kind, two uploads
     of `upload` values each (the first as u16, the second as values)."""
     w = POSITIONS // S.MAX_REGIONS
@@ -613,7 +614,7 @@ def _full_house(upload=S.MAX_SAMPLES):
 
 EXPLICIT = [
     ("valid", _full_house(), None),
-    ("samples_size", _full_house(S.MAX_SAMPLES + 1), "regions[11].texture.values"),   # reversed order
+    ("samples_size", _full_house(KS.MAX_SAMPLES + 1), "regions[11].texture.values"),   # reversed order
     ("regions_count", dict(_full_house(1), regions=_full_house(1)["regions"] + [
         {"start_mm": 0, "end_mm": 1, "texture": {"kind": "constant", "level": 0}}]), "regions"),
 ]
@@ -698,10 +699,10 @@ def check_case(label, scene, path):
         assert type(r["start_mm"]) is float and type(r["end_mm"]) is float
         t = r["texture"]
         if t["kind"] == "texel":
-            assert set(t) == {"kind"} | set(S.TEXEL_KEYS)
+            assert set(t) == {"kind"} | set(KT.TEXEL_KEYS)
         elif t["kind"] == "samples":
-            assert type(t["u16"]) is tuple and t["fit"] in S.FITS
-            assert 1 <= len(t["u16"]) <= S.MAX_SAMPLES
+            assert type(t["u16"]) is tuple and t["fit"] in KS.FITS
+            assert 1 <= len(t["u16"]) <= KS.MAX_SAMPLES
             assert all(type(x) is int and 0 <= x <= 65535 for x in t["u16"])
     assert ("idle_amplitude" in c) == ("idle_amplitude" in scene)
     # no mutable container of the input is held by the canonical form
@@ -814,7 +815,7 @@ TEXEL_BOUND_MAX_TEXELS = 4000       # reference + bound per texel region up to t
 
 
 def _texel_params(tex, n):
-    p = {k: tex[k] for k in S.TEXEL_KEYS}
+    p = {k: tex[k] for k in KT.TEXEL_KEYS}
     p["length_samples"] = n
     return p
 
@@ -1012,6 +1013,7 @@ CPY_STRETCH = r"""
 import gc
 from array import array
 from texel.runtime import scene as S
+from texel.runtime.kinds import texel as KT, samples as KS
 vals = (0, 65535, 3, 40000)
 out = []
 for n in (1000, 32769, 40000, 200000):
@@ -1019,7 +1021,7 @@ for n in (1000, 32769, 40000, 200000):
     gc.collect()
     gc.disable()
     a = gc.mem_alloc()
-    S._fill_samples(vals, 'stretch', n, buf)
+    KS.fill_samples(vals, 'stretch', n, buf)
     b = gc.mem_alloc()
     gc.enable()
     out.append(b - a)
@@ -1040,7 +1042,7 @@ def test_long_stretch_stays_small_ints_on_a_32_bit_port():
     want = []
     for n in (1000, 32769, 40000, 200000):
         buf = array("H", bytes(2 * n))
-        S._fill_samples((0, 65535, 3, 40000), "stretch", n, buf)
+        KS.fill_samples((0, 65535, 3, 40000), "stretch", n, buf)
         want += [0, sum(buf[i] * (i % 7 + 1) for i in range(0, n, 97)) % 1000003]
     assert got[1::2] == want[1::2]
     assert max(got[0::2]) < 256, got            # no per-position allocation
@@ -1056,6 +1058,7 @@ MP_BUILD = r"""
 import json, gc
 from array import array
 from texel.runtime import scene as S
+from texel.runtime.kinds import texel as KT, samples as KS
 f = open(%(src)r)
 while True:
     line = f.readline()
@@ -1219,6 +1222,7 @@ MP_VALIDATE = r"""
 import json, gc, struct, binascii
 from array import array
 from texel.runtime import scene as S
+from texel.runtime.kinds import texel as KT, samples as KS
 D = %(D)r
 def enc(v):
     # floats as their IEEE-754 bits: no decimal text in between
@@ -1367,6 +1371,7 @@ import json, gc
 from array import array
 import texel.app as app
 from texel.runtime import scene as S
+from texel.runtime.kinds import texel as KT, samples as KS
 app.start("virtual")
 app.finger([(0, 30.0)])                       # a finger resting at 30 mm
 valid = eval(open(%(valid)r).read())

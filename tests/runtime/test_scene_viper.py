@@ -21,13 +21,14 @@ CODE = """
 import json
 from array import array
 from texel.runtime import scene, scene_viper
+from texel.runtime.kinds import samples as KS
 out = []
 for vals, fit, n in %r:
     a = array('H', bytes(2 * n)); b = array('H', bytes(2 * n))
     assert scene_viper.fill(tuple(vals), fit, n, a)
-    scene._fast_fill = False                    # the Python loop
-    scene._fill_samples(tuple(vals), fit, n, b)
-    scene._fast_fill = None
+    KS._fast_fill = False                    # the Python loop
+    KS.fill_samples(tuple(vals), fit, n, b)
+    KS._fast_fill = None
     out.append(list(a) == list(b))
 print(json.dumps(out))
 """

@@ -93,7 +93,7 @@ def test_the_strip_is_what_the_board_plays(lab):
     # position 4,717, 25.0001 mm)
     assert [(g["start_mm"], g["end_mm"]) for g in a["regions"]] == \
         [(on_grid(r["start_mm"]), on_grid(r["end_mm"])) for r in SCENE["regions"]]
-    assert [g["label"] for g in a["regions"]][0] == "4sin"
+    assert [g["label"] for g in a["regions"]][0] == "reference 4sin"    # kinds.label_of
     # the host's uint16 rendering (the board's own build and amp) before 8 bits
     u16, _ = strip_mod.render(canonical, DISPLAY, 3000)
     assert np.array_equal(strip_mod.to_u8(u16), u8)
@@ -152,7 +152,7 @@ def test_a_strip_is_rendered_once_per_scene_and_new_scenes_show(lab):
     c = r.json()
     assert c["scene_id"] != a["scene_id"] and cache.renders == n + 1
     assert c["regions"] == [{"start_mm": 0.0, "end_mm": 101.76,
-                             "label": "texel 10.0 dB pitch, -30.0 dB irregularity"}]
+                             "label": "texel 10.0/-30.0 dB, seed 3"}]
     tex = lab.lab.owner.scene_source()["regions"][0]["texture"]
     assert (tex["pitch_db"], tex["irregularity_db"], tex["seed"], tex["v"]) == (10.0, -30.0, 3, 2)
     assert lab.get("/api/strip").json() == c

@@ -1,6 +1,6 @@
 # The checks the device's validators share: gen/params.py (texel parameters),
-# gen/brush.py (brushes), runtime/scene.py (scenes) and runtime/boards.py
-# (board files). Written once here, so every one of them words a number, a
+# gen/brush.py (brushes), runtime/scene.py and runtime/kinds/ (scenes and
+# their region kinds) and runtime/boards.py (board files). Written once here, so every one of them words a number, a
 # range and a key path alike, and a board holds the code once. In gen/ because
 # gen never imports runtime (docs/architecture.md); runtime imports gen.
 # MicroPython, CircuitPython and CPython; no f-strings. Only for building
@@ -75,3 +75,114 @@ def not_a_word(path, v, words):
     else:
         got = type(v).__name__
     fail(path, "expected one of %s, got %s" % (", ".join([repr(w) for w in words]), got))
+
+
+# --- bounded words for untrusted values (scenes, region kinds, the link) --------
+_SHOW = 40                  # characters of a string shown in a message (qstr)
+
+
+def got(v):
+    """A bounded description of an untrusted value: type and value, or type
+    and size for containers; never a repr of unbounded size."""
+    if v is None or isinstance(v, (bool, float)):
+        return "%s %r" % (type(v).__name__, v)
+    if isinstance(v, int):              # beyond +-2^62 by name only
+        return "int %r" % v if -BIG < v < BIG else show(v)
+    if isinstance(v, str):
+        return "str " + qstr(v)
+    if isinstance(v, (list, tuple)):
+        return "%s of %d items" % (type(v).__name__, len(v))
+    if isinstance(v, dict):
+        return "dict of %d keys" % len(v)
+    return type(v).__name__
+
+
+def qstr(s):
+    """A string quoted like repr() for printable ASCII, but every other
+    character escaped (\\xNN, \\uNNNN, \\UNNNNNNNN) on every port - CPython's
+    repr shows printable non-ASCII as is, MicroPython's escapes it - and cut
+    to _SHOW characters: messages stay short, ASCII and identical."""
+    cut = s[:_SHOW]
+    q = '"' if ("'" in cut and '"' not in cut) else "'"
+    out = [q]
+    for c in cut:
+        o = ord(c)
+        if c == q or c == "\\":
+            out.append("\\" + c)
+        elif c == "\n":
+            out.append("\\n")
+        elif c == "\r":
+            out.append("\\r")
+        elif c == "\t":
+            out.append("\\t")
+        elif 32 <= o < 127:
+            out.append(c)
+        elif o < 256:
+            out.append("\\x%02x" % o)
+        elif o < 65536:
+            out.append("\\u%04x" % o)
+        else:
+            out.append("\\U%08x" % o)
+    out.append(q)
+    if len(s) > _SHOW:
+        out.append("... (%d chars)" % len(s))
+    return "".join(out)
+
+
+def plain_str(s):
+    # short printable ASCII: repr() is the same on every port
+    if len(s) > _SHOW:
+        return False
+    for c in s:
+        if not 32 <= ord(c) < 127:
+            return False
+    return True
+
+
+def key_shown(k):
+    return qstr(k) if isinstance(k, str) else got(k)
+
+
+def check_keys(path, d, allowed, options=()):
+    """Refuse keys not in `allowed` or `options`; with several, name the
+    smallest shown form (dict order differs between CPython and MicroPython).
+    The message lists `allowed`, then `options` (the texel options:
+    docs/generator.md)."""
+    bad = None
+    for k in d:
+        if not (isinstance(k, str) and (k in allowed or k in options)):
+            s = key_shown(k)
+            if bad is None or s < bad:
+                bad = s
+    if bad is not None:
+        fail(path, "unknown key %s (allowed: %s)" % (bad, ", ".join(tuple(allowed) + tuple(options))))
+
+
+def need_dict(path, v, what):
+    if not isinstance(v, dict):
+        fail(path, "expected %s, got %s" % (what, got(v)))
+    return v
+
+
+def num(path, v, lo, hi):
+    """A finite number (int accepted, bool refused) in [lo, hi] -> float."""
+    if not is_num(v):
+        expected(path, "a number", lo, hi, got(v))
+    if isinstance(v, int):
+        if v < lo or v > hi:            # exact int/float comparison: no overflow
+            out_of_range(path, v, lo, hi)
+        return float(v)
+    if not finite(v):
+        not_finite(path, v, lo, hi)
+    if v < lo or v > hi:
+        out_of_range(path, v, lo, hi)
+    return float(v)
+
+
+def int_in(path, v, lo, hi):
+    """An int (bool refused) in [lo, hi]."""
+    if not is_int(v):
+        expected(path, "an int", lo, hi, got(v))
+    if v < lo or v > hi:
+        out_of_range(path, v, lo, hi)
+    return v

@@ -554,9 +554,12 @@ class FastRefresh(Refresh):
     pos = _state(S_POS1, 1)
 
 
-from .scene import CHUNK_BITS as _CB, CHUNK_MASK as _CM
-if _CB != 9 or _CM != 511:
+from . import kinds as _k
+if _k.CHUNK_BITS != 9 or _k.CHUNK_MASK != 511:
     raise ImportError("refresh_viper: scene chunk size differs from the literals in refresh()")
+if (_k.K_CONST, _k.K_BUF, _k.K_PLAN, _k.K_CHUNK) != (0, 1, 2, 3):
+    raise ImportError("refresh_viper: the region table's codes (runtime/kinds/__init__.py) "
+                      "differ from the literals in refresh()")
 if TELEMETRY_SLOTS != _SLOTS:
     raise ImportError("refresh_viper: telemetry ring size differs from refresh.py")
 

@@ -1,4 +1,4 @@
-# The samples regions' fill in viper (runtime/scene.py _fill_samples, which
+# The samples regions' fill in viper (runtime/kinds/samples.py fill_samples, which
 # falls back to its Python loop where this module does not load: no native
 # emitter, CircuitPython). Integers only, the same arithmetic as the Python
 # loop, value for value: a stretched full-screen map took 646 ms in Python
@@ -9,7 +9,7 @@ from array import array
 
 
 def fill(vals, fit, n, buf):
-    """scene._fill_samples' work in viper where it can be (vals a tuple of
+    """samples.fill_samples' work in viper where it can be (vals a tuple of
     ints, buf an array('H'), a stretch over at most 32,769 positions): True
     when done, False to leave it to the Python loop."""
     m = len(vals)

@@ -11,7 +11,8 @@
 # still builds the split screen (compat grown by them, it did not).
 from array import array
 from ..compat import u16_one_block
-from .scene import MAX_SAMPLES, CHUNK_BITS, CHUNK_MASK
+from .kinds import CHUNK_BITS, CHUNK_MASK
+from .kinds.samples import MAX_SAMPLES
 
 
 def u16_put_bytes(buf, offset, data):

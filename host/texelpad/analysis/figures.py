@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 import texel
+from texel.runtime import kinds
 
 from .spectrum import pitch_normal_pdf, spectrum
 
@@ -147,17 +148,10 @@ def _unwrap_us(t: np.ndarray) -> np.ndarray:
 
 
 def _label(k: int, tex: dict, short: bool) -> str:
-    """'R2 texel 6.3 dB / −12.9 dB / seed 7' (short: 'R2 T 6.3/−12.9/7')."""
-    kind = tex["kind"]
-    if kind == "reference":
-        s = tex["name"] if short else "reference " + tex["name"]
-    elif kind == "texel":
-        s = (("T %.3g/%.3g/%d" if short else "texel %.3g dB / %.3g dB / seed %d")
-             % (tex["pitch_db"], tex["irregularity_db"], tex["seed"]))
-    elif kind == "constant":
-        s = "const %.3g" % tex["level"]
-    else:
-        s = "samples %d %s" % (len(tex["u16"]), tex["fit"])
+    """'R2 texel pitch 6.3 dB, irregularity -12.9 dB, seed 7, format 2' (short:
+    'R2 texel 6.3/-12.9 dB, seed 7'): the kind's own words (texel/runtime/kinds/)."""
+    d = dict(kinds.get(tex["kind"]).describe(tex), kind=tex["kind"])
+    s = kinds.label(d) if short else kinds.words(d)
     return ("R%d " % (k + 1) + s).replace("-", "\u2212")
 
 

@@ -142,7 +142,7 @@ def run(pushes: int = 200, deploy: bool = True,
 def _upload(b: Any, display: dict[str, Any], say: Callable[[str], None],
             repeats: int = 5) -> dict[str, Any]:
     """A full-screen samples map (display positions of uint16, 19,200 on the
-    TPaD: texel.runtime.scene.MAX_SAMPLES) pushed as an upload, `repeats`
+    TPaD: texel.runtime.kinds.samples.MAX_SAMPLES) pushed as an upload, `repeats`
     times: seconds and bytes per push, and the board's worst refresh over
     them (the refresh keeps running in real time meanwhile)."""
     import random

@@ -12,6 +12,8 @@ import time
 from typing import Any
 
 from ..link.transport import DeviceError
+from texel.runtime.kinds import label as kind_label, words as kind_words
+
 from .connection import add_port_flags, connected_board, refused_scene, running_board
 from .errors import EXIT_FAIL, EXIT_OK, CliError, to_stderr
 from .parsing import positive_float
@@ -26,18 +28,7 @@ def describe_scene(desc: dict[str, Any] | None) -> str:
         return "nothing (the board plays its idle level)"
     lines = ["  %s" % desc["name"]] if desc.get("name") else []
     for r in desc["regions"]:
-        what = r["kind"]
-        if what == "texel":
-            what = "texel pitch %s dB, irregularity %s dB, seed %s, format %s" % (
-                r["pitch_db"], r["irregularity_db"], r["seed"], r.get("v", 1))
-        elif what == "reference":
-            what = "reference %s" % r["name"]
-        elif what == "constant":
-            what = "constant %.4f" % (r["amplitude"] / 65535)
-        elif what == "brush":
-            what = "brush, seed %s" % r["seed"]
-        else:
-            what = "samples (%d values, %s)" % (r["values"], r["fit"])
+        what = kind_words(r)            # the kind's own words (texel/runtime/kinds/)
         lines.append("  %7.2f .. %7.2f mm  %-62s %s, %d B" % (
             r["start_mm"], r["end_mm"], what, r["mode"], r["bytes"]))
     flash = sum(1 for r in desc["regions"] if r["mode"] == "flash")
@@ -266,11 +257,7 @@ def scene_line(desc: dict[str, Any] | None) -> str:
         return repr(desc["name"])
     parts = []
     for r in desc["regions"]:
-        k = r["kind"]
-        parts.append("texel %s dB" % r["pitch_db"] if k == "texel" else
-                     "reference %s" % r["name"] if k == "reference" else
-                     "constant %.4f" % (r["amplitude"] / 65535) if k == "constant" else
-                     "samples")
+        parts.append(kind_label(r))
     more = len(parts) - 3
     return ", ".join(parts[:3]) + (" and %d more region%s" % (more, "s" * (more > 1))
                                    if more > 0 else "")

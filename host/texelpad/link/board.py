@@ -24,6 +24,7 @@ from typing import Any, Callable, Iterator
 import texel
 import texel.app
 import texel.runtime.scene
+from texel.runtime.kinds import texel as kind_texel
 from texel.runtime.refresh import TELEMETRY_SLOTS   # the most one telemetry read returns
 from texel.gen.params import FORMAT_NEW
 
@@ -470,7 +471,7 @@ def refuse_what_cannot_fit(checked: CheckedScene, st: dict[str, Any]) -> None:
     """Refuse before sending (ValueError) a scene the board cannot build
     however its heap lies: a texel region of 1-4-sample texels (or one texel
     over the region) is rendered to a map, and the generator plans every
-    texel of it at once first (texel.runtime.scene._on_plan says which
+    texel of it at once first (texel.runtime.kinds.texel.on_plan says which
     regions play from a plan instead); when that plan alone is more than the
     board's whole free heap (status "mem_free", beside the scene playing)
     nothing can make it fit (issue 30: `push --texel-samples 1` on a Pico,
@@ -483,7 +484,7 @@ def refuse_what_cannot_fit(checked: CheckedScene, st: dict[str, Any]) -> None:
     regions = checked.canonical["regions"]
     for k, (a, b) in enumerate(checked.spans):
         tex = regions[k]["texture"]
-        if tex["kind"] != "texel" or texel.runtime.scene._on_plan(tex, b - a, None):
+        if tex["kind"] != "texel" or kind_texel.on_plan(tex, b - a, None):
             continue
         size = tex["texel_samples"]
         count = (b - a + size - 1) // size
@@ -494,7 +495,7 @@ def refuse_what_cannot_fit(checked: CheckedScene, st: dict[str, Any]) -> None:
                 "them all first, %d bytes a texel (%d bytes) besides its map; texel_samples "
                 "5 .. %d plays from the plan instead (8 bytes a texel); the board has %d bytes "
                 "free in all (refused before sending)"
-                % (k, count, size, each, count * each, texel.runtime.scene.PLAN_MAX_L, free))
+                % (k, count, size, each, count * each, kind_texel.PLAN_MAX_L, free))
 
 
 def check_scene(scene: Any, display: dict[str, Any] | None = None) -> CheckedScene:

@@ -129,8 +129,8 @@ def _join(path: str, key: str) -> str:
     100,000 characters in a key must not make the message)."""
     if key.isascii() and key.isidentifier() and len(key) <= 40:
         return "%s.%s" % (path, key) if path else key
-    from texel.runtime.scene import _qstr
-    return "%s[%s]" % (path or "value", _qstr(key))
+    from texel.gen.check import qstr
+    return "%s[%s]" % (path or "value", qstr(key))
 
 
 def _show_key(k: Any) -> str:
@@ -219,7 +219,7 @@ def split_uploads(scene: dict[str, Any]) -> tuple[dict[str, Any], list[tuple[int
     """A checked plain scene -> (the scene with every long samples region's
     values taken out ("u16": None), [(region index, its uint16 values)]).
     "values" (0..1) become uint16 here exactly as the board's validation
-    makes them (round(v * 65535), half up; texel.runtime.scene._samples) -
+    makes them (round(v * 65535), half up; texel.runtime.kinds.samples.check) -
     in float64, where a float32 board would round a few differently."""
     regions = list(scene["regions"])
     out: list[tuple[int, list[int]]] = []

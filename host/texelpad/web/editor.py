@@ -94,6 +94,7 @@ from starlette.routing import Route
 
 import texel
 import texel.runtime.scene as _scene
+from texel.runtime import kinds
 from texel.gen import brush as B
 from texel.gen import params
 
@@ -319,18 +320,12 @@ def label_of(tex: dict[str, Any], memory: Memory | None = None,
     """A board texture in a few words (the strip's labels, the region list);
     dx_um: the display's position (a texel's length in mm)."""
     kind = tex["kind"]
-    if kind == "texel":
+    if kind == "texel":         # the editor's form gives a texel's length in mm: so does its label
         return "texel %.1f/%.1f dB, %.3g mm, seed %d" % (
             tex["pitch_db"], tex["irregularity_db"], tex["texel_samples"] * dx_um / 1000.0,
             tex["seed"])
-    if kind == "reference":
-        return "reference " + tex["name"]
-    if kind == "constant":
-        return "constant %.2f" % tex["level"]
-    if kind == "brush":
-        known = memory.source(tex) if memory is not None else None
-        return known[1] if known else "brush, seed %d" % tex["seed"]
-    return "samples (%d values, %s)" % (len(tex["u16"]), tex["fit"])
+    known = memory.source(tex) if memory is not None and kind == "brush" else None
+    return known[1] if known else kinds.label_of(tex)       # the kind's own words
 
 
 def resolve(tex: Any, path: str, folder: Path, memory: Memory,
@@ -382,7 +377,7 @@ def resolve(tex: Any, path: str, folder: Path, memory: Memory,
         except ValueError as e:
             raise Refused(str(e)) from None
         return board, editor or board, label
-    if kind in ("texel", "reference", "constant"):
+    if kind in ("texel", "reference", "constant") or kind in forms():
         board = dict(tex)
         if kind == "texel" and "v" not in board:
             board["v"] = 2          # format 2: the same texture on every board (web/strip.py)
@@ -390,8 +385,28 @@ def resolve(tex: Any, path: str, folder: Path, memory: Memory,
     if kind == "samples":
         raise Refused("%s.kind: the editor paints brushes, texel textures, references and "
                       "constants; upload a map with texelpad push --scene" % path)
-    raise Refused("%s.kind: expected one of texel, reference, constant, brush, got %s"
-                  % (path, _shown(kind)))
+    raise Refused("%s.kind: expected one of %s, got %s"
+                  % (path, ", ".join(("texel", "reference", "constant", "brush") + tuple(forms())),
+                     _shown(kind)))
+
+
+# the editor's own forms: brush (files and designs), texel (mm), reference, constant
+HAND_MADE = ("brush", "texel", "reference", "constant")
+
+
+def forms() -> dict[str, list[dict[str, Any]]]:
+    """Every other region kind whose module describes its form (FIELDS:
+    texel/runtime/kinds/__init__.py), as the page builds it: a new kind is
+    in the editor without a line here or in editor.js."""
+    out = {}
+    for name in kinds.NAMES:
+        fields = getattr(kinds.get(name), "FIELDS", None)
+        if name in HAND_MADE or not fields:
+            continue
+        out[name] = [dict({"key": key, "type": t, "default": default, "label": label},
+                          **({"words": list(lo)} if t == "word" else {"min": lo, "max": hi}))
+                     for key, t, lo, hi, default, label in fields]
+    return out
 
 
 def check_one(i: int, start: float, end: float, board: dict[str, Any],
@@ -652,7 +667,8 @@ class Editor:
                 "display": {"positions": display["positions"], "dx_um": display["dx_um"],
                             "length_mm": round(display["positions"] * display["dx_um"]
                                                / 1000.0, 6)},
-                "max_regions": _scene.MAX_REGIONS}
+                "max_regions": _scene.MAX_REGIONS,
+                "forms": forms()}
 
     def scene(self) -> dict[str, Any]:
         """The playing scene in the editor's form, its scene_id and strip."""

@@ -40,6 +40,7 @@ from starlette.routing import Route
 
 import texel
 import texel.runtime.scene as _scene
+from texel.runtime.kinds import label_of
 
 from ..link.board import full_screen_texel
 from .api import Refused, body_of, handle, keys
@@ -89,26 +90,12 @@ def to_u8(u16: np.ndarray) -> np.ndarray:
     return ((u16.astype(np.uint32) + 128) // 257).astype(np.uint8)
 
 
-def _label(tex: dict[str, Any]) -> str:
-    kind = tex["kind"]
-    if kind == "texel":
-        return "texel %.1f dB pitch, %.1f dB irregularity" % (tex["pitch_db"],
-                                                              tex["irregularity_db"])
-    if kind == "reference":
-        return tex["name"]
-    if kind == "constant":
-        return "constant %.2f" % tex["level"]
-    if kind == "brush":
-        return "brush, seed %d" % tex["seed"]
-    return "samples (%d, %s)" % (len(tex["u16"]), tex["fit"])
-
-
 def regions_of(spans: list[tuple[int, int, dict]], display: dict[str, Any]) -> list[dict]:
     """[{start_mm, end_mm, label}]: each region where the board plays it (its
     positions as build() rounded them: scene.to_position, halves up)."""
     dx = display["dx_um"]
     return [{"start_mm": round(s * dx / 1000.0, 4), "end_mm": round(e * dx / 1000.0, 4),
-             "label": _label(tex)} for s, e, tex in spans]
+             "label": label_of(tex)} for s, e, tex in spans]
 
 
 class StripCache:

@@ -51,7 +51,39 @@ function texture() {
             seed: seedOf("texel-seed")};
   }
   if (kind === "reference") return {kind: "reference", name: $("reference").value};
-  return {kind: "constant", level: num("const-level")};
+  if (kind === "constant") return {kind: "constant", level: num("const-level")};
+  // a kind the palette describes (its module's FIELDS: texel/runtime/kinds/)
+  const t = {kind};
+  for (const f of editor.palette.forms[kind]) {
+    const id = "g-" + kind + "-" + f.key;
+    t[f.key] = f.type === "word" ? $(id).value : num(id);
+  }
+  return t;
+}
+
+// a form for each kind the palette describes by its fields, built from them
+function addForms(forms) {
+  for (const [kind, fields] of Object.entries(forms)) {
+    $("kind").appendChild(el("option", {value: kind}, "a " + kind));
+    const fs = el("fieldset", {id: "f-" + kind, hidden: ""});
+    fs.appendChild(el("legend", {}, kind));
+    for (const f of fields) {
+      const id = "g-" + kind + "-" + f.key;
+      let input;
+      if (f.type === "word") {
+        input = el("select", {id});
+        for (const w of f.words) input.appendChild(el("option", {value: w}, w));
+      } else {
+        input = el("input", {id, type: "number", min: f.min, max: f.max,
+                             step: f.type === "int" ? 1 : "any"});
+      }
+      input.value = f.default;
+      const lab = el("label", {}, f.label + " ");
+      lab.appendChild(input);
+      fs.appendChild(lab);
+    }
+    $("f-constant").after(fs);
+  }
 }
 
 function design() {
@@ -171,8 +203,8 @@ function selectSpan(s, e) {
 
 // --- the form ---------------------------------------------------------------------------
 function showKind() {
-  for (const k of ["brush", "texel", "reference", "constant"]) {
-    $("f-" + k).hidden = $("kind").value !== k;
+  for (const o of $("kind").options) {
+    $("f-" + o.value).hidden = $("kind").value !== o.value;
   }
 }
 
@@ -288,6 +320,7 @@ async function main() {
   for (const name of Object.keys(p.shapes)) $("shape").appendChild(el("option", {value: name}, name));
   $("shape").value = "pink";
   for (const name of p.references) $("reference").appendChild(el("option", {value: name}, name));
+  addForms(p.forms);
   fillBrushes(p.brushes);
   $("folder").textContent = "(in " + p.brush_folder + ")";
   setLimits(p);

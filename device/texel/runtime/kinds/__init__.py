@@ -1,0 +1,72 @@
+# Region kinds: what a scene's region can play, one module per kind
+# (docs/architecture.md, "A new region kind"). runtime/scene.py keeps the
+# region table, the build and the swap; everything a kind decides is here.
+#
+# A kind's module (kinds/constant.py is the smallest) holds:
+#   NAME                          its "kind" word (= the module's name)
+#   KEYS, OPTIONS                 the texture keys it allows ("kind" first)
+#   SHARED                        True when what it plays depends on the texture
+#                                 and the region's length alone: a rebuilt scene
+#                                 reuses the playing scene's buffer (scene._shared)
+#   check(path, tex, n)           -> the canonical texture; ValueError "<path>...: ..."
+#                                 (n: the region's positions)
+#   need(tex, n, engine)          -> bytes the region holds (buffers, plans)
+#   block(tex, n, engine)         -> bytes of its largest single block (0: none)
+#   store(tex, n, engine)         -> (how, value, target): how it plays (the codes
+#                                 below), the table value or the buffer, and what
+#                                 fill() writes into after every region has its
+#                                 memory (None: nothing to write)
+#   fill(tex, n, target, engine, dx_um)
+#   describe(tex)                 -> its fields of status()'s region dict (literals)
+#   words(d), label(d)            a region of status() (or describe(tex) with "kind")
+#                                 in a line, and in a few words (host labels)
+#   FIELDS (optional)             the editor's form: (key, "number"|"int"|"word",
+#                                 lo or words, hi, default, label) per key
+#
+# The registry is this tuple: a board's frozen package cannot be listed, so
+# the names are written out; tests/runtime/test_kinds.py checks that it and the
+# modules in this folder agree. Order: messages list the kinds in it.
+NAMES = ("texel", "reference", "constant", "samples", "brush")
+
+# How a region plays: the "kind" column of the region table (scene.py) - not
+# the texture's kind but where amp() finds its value. refresh_viper.py uses the
+# numbers as literals and checks them against these at import.
+K_CONST = 0             # the row's value is the amplitude
+K_BUF = 1               # the value indexes the buffers: an array('H') (or a map in flash)
+K_PLAN = 2              # a texel region played from its integer plan, sample by sample
+K_CHUNK = 3             # the value indexes the buffers: a tuple of array('H') chunks
+CHUNK_BITS = 9          # 512 values (1 KB) per chunk (upload.py and refresh_viper.py use these)
+CHUNK_MASK = 511
+
+_mods = {}
+
+
+def get(name):
+    """The module of kind `name` (one of NAMES), imported at its first use:
+    a board holds the code of the kinds its scenes play, not of all."""
+    m = _mods.get(name)
+    if m is None:
+        if name not in NAMES:
+            raise ValueError("kind: unknown kind %r (one of: %s)" % (name, ", ".join(NAMES)))
+        m = __import__(__name__ + "." + name, None, None, ("NAME",), 0)
+        _mods[name] = m
+    return m
+
+
+def words(d):
+    """A region of status() (or {"kind": ..., **describe(tex)}) in a line; a
+    kind this code does not know (a board's newer image) by its name."""
+    return get(d["kind"]).words(d) if d.get("kind") in NAMES else str(d.get("kind"))
+
+
+def label(d):
+    """The same in a few words (strips, figures, lists)."""
+    return get(d["kind"]).label(d) if d.get("kind") in NAMES else str(d.get("kind"))
+
+
+def label_of(tex):
+    """A canonical texture in a few words."""
+    m = get(tex["kind"])
+    d = m.describe(tex)
+    d["kind"] = tex["kind"]
+    return m.label(d)

@@ -1,0 +1,68 @@
+# Region kind "reference": one of the lab's nine reference textures (seed 001;
+# gen/reference.py, texel.reference_names()), rendered region-long. In the
+# texelpad firmware its map may already be in flash (gen/reference.py
+# flash_u16): then it plays in place, no RAM, no render.
+from ...compat import u16_one_block
+from ...gen.check import fail, got, qstr, check_keys
+from . import K_BUF
+
+NAME = "reference"
+KEYS = ("kind", "name")
+OPTIONS = ()
+SHARED = True               # its map depends on the name and the length alone
+
+_flash_u16 = None           # gen.reference.flash_u16, imported at the first reference region
+
+
+def check(path, tex, n):
+    from ... import reference_names
+    check_keys(path, tex, KEYS)
+    if "name" not in tex:
+        fail(path, "missing required key 'name' (one of: %s)" % ", ".join(reference_names()))
+    name = tex["name"]
+    known = reference_names()
+    if not isinstance(name, str) or name not in known:
+        fail(path + ".name", "unknown reference texture %s (known: %s)"
+             % (qstr(name) if isinstance(name, str) else got(name), ", ".join(known)))
+    return {"kind": "reference", "name": name}
+
+
+def flash(name, n):
+    """The reference's map in flash (texelpad firmware), or None."""
+    global _flash_u16
+    if _flash_u16 is None:
+        from ...gen.reference import flash_u16
+        _flash_u16 = flash_u16
+    return _flash_u16(name, n)
+
+
+def need(tex, n, engine):
+    return 2 * n
+
+
+def block(tex, n, engine):
+    return 0 if flash(tex["name"], n) is not None else 2 * n
+
+
+def store(tex, n, engine):
+    rom = flash(tex["name"], n)
+    if rom is not None:
+        return K_BUF, rom, None             # the firmware's map, played in place
+    buf = u16_one_block(n)
+    return K_BUF, buf, buf
+
+
+def fill(tex, n, buf, engine, dx_um):
+    from ... import reference_u16
+    reference_u16(tex["name"], n, buf)
+
+
+def describe(tex):
+    return {"name": tex["name"]}
+
+
+def words(d):
+    return "reference %s" % d["name"]
+
+
+label = words

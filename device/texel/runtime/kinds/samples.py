@@ -1,0 +1,165 @@
+# Region kind "samples": a map the host made (an upload). Exactly one of
+# "values" (numbers 0..1) or "u16" (ints 0..65535; or an Upload (runtime/
+# upload.py) the host filled through texel.app.upload_* - large data crosses
+# the link as data, not as a literal the board compiles), 1..MAX_SAMPLES of
+# them, and "fit":
+#   "tile" (default): value k plays at region position k mod m - one value
+#       per display position (5.3 um), so the spatial frequencies the host
+#       designed are the ones felt;
+#   "stretch": the m values are spread over the whole region by linear
+#       interpolation, first value at the region's first position, last value
+#       at its last (no filtering when m > region length: shrinking picks
+#       interpolated points).
+# Canonical: {"kind": "samples", "u16": tuple of ints (or the upload's Chunks,
+# as they are), "fit": ...}; "values" become round(v * 65535), half up; a
+# tuple is kept as it is, a list is copied once.
+from ...compat import u16_one_block
+from ...gen.check import fail, got, num, int_in, check_keys
+from . import K_BUF, K_CHUNK
+
+NAME = "samples"
+KEYS = ("kind", "values", "u16", "fit")
+OPTIONS = ()
+SHARED = False              # the playing scene's upload is kept by plays_as_is instead
+MAX_SAMPLES = 19200         # values per samples region (one full TPaD screen)
+U16_MAX = 65535
+FITS = ("tile", "stretch")
+
+
+def check(path, tex, n):
+    check_keys(path, tex, KEYS)
+    has_v = "values" in tex
+    has_u = "u16" in tex
+    if has_v == has_u:
+        fail(path, "give exactly one of 'values' (numbers 0..1) or 'u16' "
+             "(ints 0..65535), %d at most" % MAX_SAMPLES)
+    fit = tex.get("fit", "tile")
+    if not isinstance(fit, str) or fit not in FITS:
+        fail(path + ".fit", "expected one of %s, got %s" % (", ".join(FITS), got(fit)))
+    key = "u16" if has_u else "values"
+    seq = tex[key]
+    p = path + "." + key
+    if has_u and getattr(seq, "UPLOAD", False):     # texel.runtime.upload.Upload
+        if seq.filled != len(seq.buf):
+            fail(p, "the upload is incomplete (%d of %d values arrived)"
+                 % (seq.filled, len(seq.buf)))
+        seq = seq.buf
+    if has_u and getattr(seq, "CHUNKS", False):     # upload.Chunks: uint16 by construction
+        return {"kind": "samples", "u16": seq, "fit": fit}
+    if not isinstance(seq, (list, tuple)):
+        fail(p, "expected a list of %s, got %s"
+             % ("ints in [0, 65535]" if has_u else "numbers in [0.0, 1.0]", got(seq)))
+    m = len(seq)
+    if m < 1 or m > MAX_SAMPLES:
+        fail(p, "%d values; allowed 1 .. %d" % (m, MAX_SAMPLES))
+    # check every element before anything is converted (index in the path)
+    if has_u:
+        for i in range(m):
+            x = seq[i]
+            if isinstance(x, bool) or not isinstance(x, int) or x < 0 or x > U16_MAX:
+                int_in("%s[%d]" % (p, i), x, 0, U16_MAX)
+        # a tuple is immutable: the canonical form may share it
+        vals = seq if type(seq) is tuple else tuple(seq)
+    else:
+        for i in range(m):
+            x = seq[i]
+            if (isinstance(x, bool) or not isinstance(x, (int, float))
+                    or not (0.0 <= x <= 1.0)):      # also catches nan
+                num("%s[%d]" % (p, i), x, 0.0, 1.0)
+        vals = tuple(int(x * 65535.0 + 0.5) for x in seq)
+    return {"kind": "samples", "u16": vals, "fit": fit}
+
+
+_fast_fill = None           # scene_viper.fill, or False where it does not load
+
+
+def fill_samples(vals, fit, n, buf):
+    global _fast_fill
+    if _fast_fill is None:
+        from ...compat import native
+        _fast_fill = native("texel.runtime.scene_viper", "fill") or False
+    if _fast_fill and _fast_fill(vals, fit, n, buf):
+        return
+    m = len(vals)
+    if fit == "tile" or m == 1 or n == 1:
+        # tile: position i plays vals[i mod m] (stretch of one value or onto one
+        # position: the first value)
+        k = 0
+        for i in range(n):
+            buf[i] = vals[k]
+            k += 1
+            if k == m:
+                k = 0
+        return
+    # stretch: position i sits at x = i*(m-1)/(n-1) in value units, k its
+    # integer part, r/(n-1) its fraction; linear interpolation with the
+    # fraction rounded to a 14-bit weight w = round(r*2^14/(n-1)), so every
+    # intermediate stays a small int on boards (|b-a|*w <= 65535*2^14 < 2^30).
+    # floor(r*2^15/(n-1)) is one division while r*2^15 < 2^30 (regions up to
+    # 32,768 positions); a longer region (a display may have up to 2^20
+    # positions) takes it in two exact steps, 2^9 then 2^6, each below 2^30
+    # because r < n-1 < 2^20: r << 15 there was a heap bigint per position on
+    # 32-bit ports (694 KB of garbage for a 40,000-position stretch on the
+    # CircuitPython build, an OverflowError where a port has no long ints)
+    # for the very same weights. Error <= 2.5 LSB (weight rounding 65535/2^15
+    # + result rounding 0.5).
+    den = n - 1
+    step = m - 1
+    small = den <= 32768
+    k = 0                         # i*(m-1) = k*(n-1) + r
+    r = 0
+    for i in range(n):
+        a = vals[k]
+        if r == 0:
+            buf[i] = a
+        else:
+            if small:
+                w = ((r << 15) // den + 1) >> 1
+            else:
+                x = r << 9
+                q = x // den
+                w = (((q << 6) + (((x - q * den) << 6) // den)) + 1) >> 1
+            buf[i] = a + (((vals[k + 1] - a) * w + 8192) >> 14)
+        r += step
+        if r >= den:
+            k += r // den
+            r = r % den
+
+
+def plays_as_is(tex, n):
+    """An uploaded samples map (upload.Chunks) that tiles a region of exactly
+    its length is played from its own chunks: no second copy (38,400 bytes
+    for a full TPaD screen), and no block larger than 1 KB. Nothing ever
+    writes to it after the upload."""
+    return (tex["fit"] == "tile" and getattr(tex["u16"], "CHUNKS", False)
+            and len(tex["u16"]) == n)
+
+
+def need(tex, n, engine):
+    return 2 * n
+
+
+def block(tex, n, engine):
+    return 0 if getattr(tex["u16"], "CHUNKS", False) else 2 * n
+
+
+def store(tex, n, engine):
+    if plays_as_is(tex, n):
+        return K_CHUNK, tex["u16"].chunks, None     # the upload itself, exactly region-long
+    buf = u16_one_block(n)
+    return K_BUF, buf, buf
+
+
+def fill(tex, n, buf, engine, dx_um):
+    fill_samples(tex["u16"], tex["fit"], n, buf)
+
+
+def describe(tex):
+    return {"values": len(tex["u16"]), "fit": tex["fit"]}
+
+
+def words(d):
+    return "samples (%d values, %s)" % (d["values"], d["fit"])
+
+
+label = words
