@@ -23,7 +23,8 @@ SMALLEST = {"texel": {"kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9
             "reference": {"kind": "reference", "name": "4sin"},
             "constant": {"kind": "constant", "level": 0.25},
             "samples": {"kind": "samples", "values": [0.0, 0.5, 1.0]},
-            "brush": None}                      # tests/brush/ (190 numbers)
+            "brush": None,                      # tests/brush/ (190 numbers)
+            "bump": {"kind": "bump"}}
 
 
 def test_the_names_are_the_modules():

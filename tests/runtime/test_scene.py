@@ -78,7 +78,7 @@ TEXEL_RIGHT = {"pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7}
 
 TEXEL_ALLOWED = ("kind, pitch_db, irregularity_db, texel_samples, quant_db, seed, gain, v, "
                  "band_limit_cpmm, min_cpmm, phase")
-KINDS = "texel, reference, constant, samples, brush"
+KINDS = "texel, reference, constant, samples, brush, bump"
 REF_NAMES = ", ".join(texel.reference_names())
 
 # (id, scene expression, display expression or None (= D), exact message)

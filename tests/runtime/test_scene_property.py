@@ -258,6 +258,14 @@ def valid_texture(draw, kind=None):
         return {"kind": "reference", "name": draw(st.sampled_from(NAMES))}
     if kind == "constant":
         return {"kind": "constant", "level": draw(st.one_of(_finite(0.0, 1.0), st.sampled_from([0, 1])))}
+    if kind == "bump":                              # every key optional (kinds/bump.py)
+        t = {"kind": "bump"}
+        for k, strat in (("shape", st.sampled_from(["gaussian", "cosine", "edge"])),
+                         ("width_mm", _finite(0.01, 60.0)), ("height", _finite(0.0, 1.0)),
+                         ("at", _finite(0.0, 1.0)), ("level", _finite(0.0, 1.0))):
+            if draw(st.booleans()):
+                t[k] = draw(strat)
+        return t
     key = _choice(draw, ["values", "u16"])
     size = _idx(draw, 20)
     if size == 0:                                   # rare: a large upload, up to a full screen
@@ -867,6 +875,10 @@ def check_build(c, display):
             assert kind == S.K_CONST and (seg == int(tex["level"] * 65535.0 + 0.5)).all()
         elif t == "reference":
             assert (seg == np.asarray(texel.reference_u16(tex["name"], n))).all(), tex["name"]
+        elif t == "bump":                       # between full friction at its slope and level
+            top = int(tex["level"] * 65535.0 + 0.5)
+            low = int(tex["level"] * (1.0 - tex["height"]) * 65535.0) - 1
+            assert kind == S.K_CHUNK and low <= seg.min() and seg.max() <= top
         elif t == "samples":
             u16 = tex["u16"]
             if tex["fit"] == "tile":

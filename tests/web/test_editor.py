@@ -152,6 +152,25 @@ def test_each_kind_is_painted_and_plays_as_answered(lab):
 
 
 @pytest.mark.vboard
+def test_a_kind_the_editor_has_no_form_of_comes_with_its_fields_and_plays(lab):
+    """A region kind beyond the editor's hand-made forms (kinds/bump.py):
+    the palette carries its module's FIELDS, a painted one plays as the
+    board's canonical texture, labelled in the kind's own words."""
+    p = lab.get("/api/editor/palette").json()
+    assert [f["key"] for f in p["forms"]["bump"]] == ["shape", "width_mm", "height", "at", "level"]
+    assert p["forms"]["bump"][0]["words"] == ["gaussian", "cosine", "edge"]
+    assert "constant" not in p["forms"] and "texel" not in p["forms"]
+    a = paint(lab, [region(10, 30, {"kind": "bump", "shape": "cosine", "width_mm": 5})])
+    (r,) = lab.get("/api/scene").json()["scene"]["regions"]
+    assert r["texture"] == {"kind": "bump", "shape": "cosine", "width_mm": 5.0, "height": 1.0,
+                            "at": 0.5, "level": 1.0}
+    assert a["regions"][0]["label"] == "bump cosine 5 mm, height 1"
+    bad = lab.post("/api/editor/scene", json={"regions": [
+        region(10, 30, {"kind": "bump", "width_mm": 0})]})
+    assert bad.status_code == 400 and "width_mm: 0 is out of range" in bad.json()["error"]
+    assert lab.get("/api/scene").json()["scene"]["regions"][0]["texture"] == r["texture"]
+
+
 def test_a_brush_from_a_file_and_from_a_design_is_what_the_board_paints(lab):
     owner = lab.lab.owner
     doc = D.design("brown", 0.08, 0.45, name="rough")
@@ -588,6 +607,19 @@ def test_a_drag_on_the_strip_and_a_designed_brush_play_on_the_board(tmp_path):
             assert _get(url + "api/scene")["scene"] == two
             page.click("#paint")
             pushed(5)
+            # a kind whose form the page built from its module's FIELDS (kinds/bump.py)
+            drag(0.1, 0.3)
+            page.select_option("#kind", "bump")
+            page.select_option("#g-bump-shape", "edge")
+            page.fill("#g-bump-width_mm", "3")
+            page.click("#paint")
+            pushed(6)
+            bumps = [x for x in _get(url + "api/scene")["scene"]["regions"]
+                     if x["texture"]["kind"] == "bump"]
+            assert len(bumps) == 1 and bumps[0]["texture"]["shape"] == "edge" \
+                and bumps[0]["texture"]["width_mm"] == 3.0, bumps
+            assert any("bump edge 3 mm, height 1" in t
+                       for t in page.locator("#regions tbody tr").all_inner_texts())
             assert errors == []
             shot = os.environ.get("TEXELPAD_EDITOR_SCREENSHOT")
             page.screenshot(path=shot or str(tmp_path / "editor.png"), full_page=True)

@@ -18,6 +18,7 @@
 #   constant   "level": friction reduction 0..1 (no buffer: one table entry)
 #   samples    a map the host made ("values" 0..1 or "u16"; "fit" tile/stretch)
 #   brush      a Tactile Paintbrush stroke, painted on the board
+#   bump       a virtual bump or edge felt through friction (lateral-force illusion)
 # Every other kind and every key a kind does not name is refused.
 #
 # Canonical form (what validate returns; validate(canonical) == canonical):

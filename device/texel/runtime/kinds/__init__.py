@@ -2,7 +2,8 @@
 # (docs/architecture.md, "A new region kind"). runtime/scene.py keeps the
 # region table, the build and the swap; everything a kind decides is here.
 #
-# A kind's module (kinds/constant.py is the smallest) holds:
+# A kind's module (kinds/constant.py is the smallest; kinds/bump.py the
+# newest) holds:
 #   NAME                          its "kind" word (= the module's name)
 #   KEYS, OPTIONS                 the texture keys it allows ("kind" first)
 #   SHARED                        True when what it plays depends on the texture
@@ -26,7 +27,7 @@
 # The registry is this tuple: a board's frozen package cannot be listed, so
 # the names are written out; tests/runtime/test_kinds.py checks that it and the
 # modules in this folder agree. Order: messages list the kinds in it.
-NAMES = ("texel", "reference", "constant", "samples", "brush")
+NAMES = ("texel", "reference", "constant", "samples", "brush", "bump")
 
 # How a region plays: the "kind" column of the region table (scene.py) - not
 # the texture's kind but where amp() finds its value. refresh_viper.py uses the
