@@ -6,7 +6,7 @@ device package, so a board can install it without texelpad:
     mpremote mip install github:OWNER/REPO          # from a GitHub copy of it
 
 Both install the `texel` package as source .py files under the board's /lib
-(the same layout `texelpad deploy` writes, see host/texelpad/deploy/image.py).
+(the same layout `texelpad deploy` writes, see host/texelpad/image.py).
 tests/host/test_image.py checks the committed file against what this writes, so
 run it after adding, removing or renaming a device file or a board.
 """
@@ -16,7 +16,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "host"), str(ROOT / "device")]   # works without an install too
 
-from texelpad.deploy.image import write_package_json  # noqa: E402
+from texelpad.image import write_package_json  # noqa: E402
 
 
 def main():

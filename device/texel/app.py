@@ -1,30 +1,34 @@
-# The one entry point, the same on every board and the one the host calls
-# over the REPL:
-#   texel.app.start(board_name, scene=None)  -> status dict
+# The user API, the same on every board (docs/device-api.md; what a person
+# types at the REPL or through mpremote, and what texelpad.link calls):
+#   texel.app.start(board=None, scene=None)  -> status dict (board: a board
+#                                               file's name; None: this board's own)
 #   texel.app.push(scene)                    -> status dict (raises ValueError,
 #                                               and the old scene keeps playing)
+#   texel.app.full_screen(texture)           -> a scene: texture over the whole display
 #   texel.app.status()                       -> dict
-#   texel.app.upload_begin/upload_write/take_upload: long samples regions
-#                                               as data, not code (below)
 #   texel.app.stream(rate_hz=125)            -> divider (refreshes per sample; 0 stops)
 #   texel.app.telemetry()                    -> ([(t_us, position, amplitude), ...], lost)
 #   texel.app.stop()
+#   texel.app.run_loop(seconds=None)         CircuitPython: the paced loop (below)
+# What the host's link calls besides (uploads, JSON scenes, base64 maps, the
+# virtual board's time and finger) is texel.wire; the contract's version is
+# texel.protocol.PROTOCOL.
 # On rp2/stm32 start() returns at once with the refresh running in a hard
 # timer IRQ, so the REPL stays free. On the virtual board time is stepped:
-# texel.app.advance(ms) runs the refresh (or start(..., realtime=True)).
+# texel.wire.advance(ms) runs the refresh (or start(..., realtime=True)).
 # CircuitPython has no timer IRQ (refresh mode "loop", also selectable on
 # other ports): start() returns without a timer and run_loop() runs a paced
 # loop that measures and reports its own rate.
 import gc
 import sys
 from . import __version__, compat
+from .protocol import PROTOCOL
 from .runtime import boards as _boards
 from .runtime import scene as _scene
 from .runtime.duty import DutyLaw
 from .runtime.refresh import Refresh
 from .runtime.sensor import make_sensor
 
-PROTOCOL = 1          # host <-> device contract version (the host checks it)
 
 # The study's split screen (docs/background.md §5): a reference texture left, a texel
 # rendering right. Played when start() gets no scene. Its texel texture is
@@ -61,21 +65,7 @@ class _Runtime:
         self.loop = None            # the loop mode's last figures
 
 
-def _backend(port):
-    """The hardware class of a port, imported (ImportError when this board's
-    image or firmware does not have it: deploy installs only the board's own
-    backend, and a backend imports its port's modules)."""
-    if port == "rp2":
-        from .hw.rp2 import Hw
-    elif port == "stm32":
-        from .hw.stm32 import Hw
-    elif port == "circuitpython":
-        from .hw.cpy import Hw
-    elif port == "virtual":
-        from .hw.virtual import VirtualHw as Hw
-    else:
-        raise ImportError("no backend for port %r" % port)
-    return Hw
+_backend = compat.backend      # port -> its hardware class (compat.PORT_TABLE)
 
 
 def _fits(board):
@@ -130,17 +120,46 @@ def _checked_board(board_name):
     return board
 
 
-def board_display(board_name):
-    """The display of board file `board_name` if start() would take it
-    ({"positions", "dx_um"}), else ValueError in start()'s words: what a
-    power-up scene is checked against."""
-    d = _checked_board(board_name)["display"]
-    return {"positions": d["positions"], "dx_um": d["dx_um"]}
+def default_board(config=True):
+    """The board file start() plays when given none: /texelpad.json's
+    "board" (what `texelpad scene boot` wrote; config=False skips it), else
+    the texelpad firmware's own (/rom/firmware.json), else the port's
+    (compat.PORT_TABLE) - the board main.py starts at power-up."""
+    import json
+    for path in ((CONFIG, "/rom/firmware.json") if config else ("/rom/firmware.json",)):
+        try:
+            with open(path) as f:
+                v = json.loads(f.read()).get("board")
+            if isinstance(v, str) and v:
+                return v
+        except (OSError, ValueError, AttributeError):
+            pass
+    return compat.default_board()
 
 
-def start(board_name, scene=None, realtime=False, fast=None, report=True, **hw_opts):
-    """Start the display on board `board_name` (a file in boards/) playing
-    `scene` (default: the study's split screen). Stops a running display
+# The power-up file (`texelpad scene boot` writes it). The unix port (the
+# virtual board) has the host's filesystem: its "/" is its flash folder, the
+# working directory, so the path is relative there (the rule of
+# texelpad.deploy.install.on_board).
+CONFIG = "texelpad.json" if sys.platform in compat.UNIX_PLATFORMS else "/texelpad.json"
+
+
+def full_screen(texture):
+    """A scene of one region, `texture` over the whole display of the board
+    playing (or of the default board when nothing plays):
+        app.push(app.full_screen({"kind": "bump", "width_mm": 8}))"""
+    if _rt is not None:
+        d = _rt.board["display"]
+    else:
+        d = _boards.load(default_board())["display"]
+    return {"regions": [{"start_mm": 0, "end_mm": d["positions"] * d["dx_um"] / 1000.0,
+                         "texture": texture}]}
+
+
+def start(board_name=None, scene=None, realtime=False, fast=None, report=True, **hw_opts):
+    """Start the display on board `board_name` (a file in boards/; None:
+    this board's own, default_board()) playing `scene` (default: the
+    study's split screen). Stops a running display
     first - but only once everything that can be checked was (the board
     file, that it fits this firmware, the scene), and if the new start still
     fails, the display that played is started again. Returns status(), or
@@ -150,7 +169,7 @@ def start(board_name, scene=None, realtime=False, fast=None, report=True, **hw_o
     fast: the fused viper refresh (refresh_viper.py) - default on wherever
     the port has viper and the sensor is a linear ADC; on an RP2040 its IRQ
     then reads the ADC and writes the PWM compare register itself."""
-    board = _checked_board(board_name)
+    board = _checked_board(default_board() if board_name is None else board_name)
     # build the scene before touching the hardware: a bad scene changes nothing
     canonical = _scene.validate(DEFAULT_SCENE if scene is None else scene, board["display"])
     prev = None
@@ -298,7 +317,7 @@ def push(scene):
 
 def _running():
     if _rt is None:
-        raise ValueError("texel.app is not running: call texel.app.start(board_name) first")
+        raise ValueError("texel.app is not running: call texel.app.start() first")
     return _rt
 
 
@@ -338,175 +357,6 @@ def status(collect=True):
     return st
 
 
-def scene_source(inline_max=None):
-    """The canonical dict of the scene playing (None when stopped): what the
-    host needs to redraw it. A samples region longer than inline_max values
-    comes back as its count (an int) instead of the values: the host reads
-    those with samples_b64() in pieces (a 19,200-value repr would need some
-    120 KB of the board's heap at once). inline_max None: everything inline."""
-    rt = _rt
-    if rt is None or rt.refresh.scene is None:
-        return None
-    src = rt.refresh.scene.source
-    out = {}
-    for k in src:
-        out[k] = src[k]
-    regs = []
-    for r in src["regions"]:
-        tex = r["texture"]
-        if tex["kind"] == "samples":
-            vals = tex["u16"]
-            n = len(vals)
-            if inline_max is not None and n > inline_max:
-                u16 = n                 # its count: the host reads it with samples_b64
-            elif isinstance(vals, tuple):
-                u16 = vals
-            else:                       # an upload's chunks, inline
-                u16 = tuple([vals[i] for i in range(n)])
-            if u16 is not vals:
-                r = {"start_mm": r["start_mm"], "end_mm": r["end_mm"],
-                     "texture": {"kind": "samples", "fit": tex["fit"], "u16": u16}}
-        regs.append(r)
-    out["regions"] = regs
-    return out
-
-
-def samples_b64(region, offset, count):
-    """Values offset .. offset+count of the playing scene's samples region
-    `region` (its index in the canonical order), as base64 of little-endian
-    uint16: the read side of upload_write."""
-    import binascii
-    rt = _running()
-    sc = rt.refresh.scene
-    regs = sc.source["regions"] if sc is not None else ()
-    if not (isinstance(region, int) and 0 <= region < len(regs)) \
-            or regs[region]["texture"]["kind"] != "samples":
-        raise ValueError("samples_b64: region %r is not a samples region of the scene playing"
-                         % (region,))
-    vals = regs[region]["texture"]["u16"]
-    n = len(vals)
-    if not (isinstance(offset, int) and isinstance(count, int) and 0 <= offset <= n
-            and 0 <= count <= UPLOAD_PIECE_MAX):
-        raise ValueError("samples_b64: offset %r, count %r outside 0 .. %d (at most %d per piece)"
-                         % (offset, count, n, UPLOAD_PIECE_MAX))
-    end = min(n, offset + count)
-    if not isinstance(vals, tuple):     # an upload (upload.Chunks): its own bytes
-        return binascii.b2a_base64(vals.bytes_of(offset, end)).strip().decode()
-    b = bytearray(2 * (end - offset))
-    for i in range(offset, end):
-        v = vals[i]
-        j = 2 * (i - offset)
-        b[j] = v & 0xFF
-        b[j + 1] = v >> 8
-    return binascii.b2a_base64(b).strip().decode()
-
-
-# --- uploads ---------------------------------------------------------------------------
-# Large sample data crosses the link as data: the host stages each long
-# samples region with upload_begin, sends it in pieces of base64 text
-# (upload_write: one short call each, so the board never compiles a literal
-# of thousands of numbers - a 9,000-int list literal overflowed the
-# bytecode emitter - and the refresh is never held up for long), then
-# pushes the scene with take_upload(slot) in place of the values. Nothing
-# plays until that push, which validates the upload like any scene: an
-# interrupted upload changes nothing (the next upload_begin frees it).
-# values per piece: 1 KB of data, ~1.4 KB of base64 - a few small blocks on
-# the board's heap per piece (the code, the text, the bytes, one array).
-# Measured on the emulated Pico: 2,048 failed with ~75 KB free but
-# fragmented, and 1,024 (a 2.7 KB text) during a second full-screen upload.
-UPLOAD_PIECE_MAX = 512
-_uploads = []
-
-
-STAGED = ("push", "start")     # what staged() calls
-
-
-def staged(func, text, fill=(), args=(), scene_at=0, kwargs=None):
-    """The host's push/start in one call (texelpad.link.protocol.staged_call):
-    the scene arrives as JSON text (parsed here by the C json module), the
-    samples region i takes upload slot k for each (i, k) in fill, then
-    func(*args with the scene at scene_at, **kwargs). Returns ('ok', its
-    value) or ('err', the ValueError's text). One statement for the board to
-    compile instead of eight: 7-11 ms less per push on an RP2040
-    (bench/firmware.py)."""
-    if func not in STAGED:
-        return ("err", "staged: %r is not one of %s" % (func, STAGED))
-    try:
-        import json
-        s = json.loads(text)
-        if fill:
-            g = s["regions"]
-            for i, k in fill:
-                g[i]["texture"]["u16"] = take_upload(k)
-        a = list(args)
-        a.insert(scene_at, s)
-        f = push if func == "push" else start
-        return ("ok", f(*a, **(kwargs or {})))
-    except ValueError as e:
-        return ("err", str(e))
-
-
-def upload_begin(sizes):
-    """Stage one upload per entry of `sizes` (values each, 1 .. MAX_SAMPLES),
-    freeing any earlier one. Returns the number of slots."""
-    global _uploads
-    _uploads = []
-    gc.collect()
-    if not isinstance(sizes, (list, tuple)) or not 1 <= len(sizes) <= _scene.MAX_REGIONS:
-        raise ValueError("upload_begin: expected a list of 1 .. %d sizes" % _scene.MAX_REGIONS)
-    from .runtime.upload import Upload
-    try:
-        ups = [Upload(n) for n in sizes]
-    except MemoryError:
-        gc.collect()
-        raise ValueError("not enough memory on the board to receive %d sample values (%s) "
-                         "beside the scene playing, which keeps playing; to make room, "
-                         "play a small scene first (texelpad push --constant 0)"
-                         % (sum(sizes), compat.memory_words() or "the heap is full"))
-    _uploads = ups
-    return len(ups)
-
-
-def upload_write(slot, offset, b64):
-    """The next piece of upload `slot`: base64 text of little-endian uint16
-    values starting at value `offset`. Returns the values arrived so far."""
-    import binascii
-    if not (isinstance(slot, int) and 0 <= slot < len(_uploads)):
-        raise ValueError("upload_write: no upload %r (upload_begin first)" % (slot,))
-    if not isinstance(b64, str) or len(b64) > 4 * UPLOAD_PIECE_MAX // 3 * 2 + 8:
-        raise ValueError("upload_write: a piece is base64 text of at most %d values"
-                         % UPLOAD_PIECE_MAX)
-    full = ("not enough memory on the board for the next piece of the upload (%s); the "
-            "current scene keeps playing")
-    try:
-        data = binascii.a2b_base64(b64)
-    except ValueError:
-        raise ValueError("upload_write: the piece is not base64")
-    except MemoryError:
-        raise ValueError(full % (compat.memory_words() or "the heap is full"))
-    try:
-        return _uploads[slot].write(offset, data)
-    except MemoryError:
-        raise ValueError(full % (compat.memory_words() or "the heap is full"))
-
-
-def take_upload(slot):
-    """Upload `slot`, handed over for a scene's samples region (and no longer
-    staged). Validation refuses it unless every value arrived."""
-    if not (isinstance(slot, int) and 0 <= slot < len(_uploads)) or _uploads[slot] is None:
-        raise ValueError("take_upload: no upload %r" % (slot,))
-    up = _uploads[slot]
-    _uploads[slot] = None
-    return up
-
-
-def upload_discard():
-    """Free whatever is staged (an interrupted upload)."""
-    global _uploads
-    _uploads = []
-    gc.collect()
-
-
 def stream(rate_hz=125):
     """Start telemetry: the refresh itself records (t_us, position,
     amplitude) every hz // rate_hz refreshes into a 256-sample ring, so the
@@ -534,43 +384,12 @@ def telemetry():
     return out, lost
 
 
-def telemetry_b64():
-    """telemetry() for the host: (count, base64 text, lost), the text the
-    count's int32 times (us), int32 positions and uint16 amplitudes one
-    after the other, little-endian - copied at C speed and ~half the bytes
-    of the repr of the same samples (runtime/refresh.py telemetry_packed_since)."""
-    import binascii
-    rt = _running()
-    t, p, m, n, rt.tel_tail, lost = rt.refresh.telemetry_packed_since(rt.tel_tail)
-    return n, binascii.b2a_base64(t + p + m).decode().strip(), lost
-
-
-def advance(ms):
-    """Virtual board only: run `ms` milliseconds of stepped time."""
-    rt = _running()
-    if not hasattr(rt.hw, "advance"):
-        raise ValueError("advance(): only the virtual board has stepped time")
-    return rt.hw.advance(int(ms * 1000))
-
-
-def finger(keyframes):
-    """Virtual board only: script the finger, [(t_ms, position_mm or None)],
-    relative to now. Returns now (the board's ticks_us), so the host can line
-    the script up with telemetry."""
-    rt = _running()
-    if not hasattr(rt.hw, "set_finger"):
-        raise ValueError("finger(): only the virtual board has a scripted finger")
-    dx = rt.board["display"]["dx_um"] / 1000.0
-    return rt.hw.set_finger([(int(t * 1000), None if p is None else int(p / dx + 0.5))
-                             for t, p in keyframes])
-
-
 def stop():
     """Stop the refresh and leave the carrier in its safe off state."""
     global _rt
     rt = _rt
     if rt is None:
-        if sys.platform == "rp2":
+        if compat.PORT == "rp2":
             # nothing runs here: disarm a refresh interrupt that a soft reset
             # without stop() may have left (hw/rp2.py clear_stale_tick)
             try:

@@ -16,6 +16,75 @@ try:
 except ImportError:
     _mp = None
 
+# --- the port table: every fact about a port, in one place --------------------
+# (docs/architecture.md "A new board port"). Per port:
+#   platform   the sys.platform its MicroPython reports (None: told apart otherwise)
+#   backend    (module in hw/, class): the hardware backend a board file of the port plays through
+#   probe      what a development host (CPython, the unix port) must import to run a
+#              board file of the port against a test's stand-ins: a module, or
+#              module.attribute (the unix port has a machine module, without freq)
+#   arch       mpy-cross -march of its native code (None: no native emitter, or a .mpy
+#              format of its own: it gets the sources - CircuitPython)
+#   board      the board file start() plays when given none (main.py's default too)
+#   modes      refresh modes its board files may name, the default first
+#   rom        the texelpad firmware exists for it: package data and tables in its
+#              ROMFS partition (rom.py), read in place
+#   chip       what messages call it
+# Everything else (which pins, which timer) is the board file's (runtime/boards.py).
+PORT_TABLE = {
+    "rp2": {"platform": "rp2", "backend": ("rp2", "Hw"), "probe": "machine.freq", "arch": "armv6m",
+            "board": "pico", "modes": ("timer_irq", "core1_viper", "loop"), "rom": True,
+            "chip": "an RP2040 (MicroPython rp2 port)"},
+    "stm32": {"platform": "pyboard", "backend": ("stm32", "Hw"), "probe": "pyb",
+              "arch": "armv7emsp", "board": "pyboard", "modes": ("timer_irq", "loop"),
+              "rom": False, "chip": "an STM32 (MicroPython stm32 port, sys.platform 'pyboard')"},
+    "circuitpython": {"platform": None, "backend": ("cpy", "Hw"), "probe": "pwmio", "arch": None,
+                      "board": "pico_cpy", "modes": ("loop",), "rom": False,
+                      "chip": "CircuitPython"},
+    "virtual": {"platform": None, "backend": ("virtual", "VirtualHw"), "probe": None,
+                "arch": "x64", "board": "virtual", "modes": ("stepped",), "rom": False,
+                "chip": "any firmware (the virtual board)"},
+}
+PORTS = ("rp2", "stm32", "circuitpython", "virtual")     # PORT_TABLE's keys, in this order
+# sys.platform of the MicroPython unix port (where the virtual board runs): no
+# port of its own - a development host - but the virtual board's image
+UNIX_PLATFORMS = ("linux", "darwin", "win32")
+
+
+def port_of(impl, platform):
+    """The port of an interpreter by its sys.implementation.name and
+    sys.platform: "rp2", "stm32", "circuitpython", or None (a development
+    host: CPython, the unix port - where the virtual board plays)."""
+    if impl == "circuitpython":
+        return "circuitpython"
+    for name in PORTS:
+        if PORT_TABLE[name]["platform"] == platform:
+            return name
+    return None
+
+
+PORT = port_of(IMPL, sys.platform)      # this interpreter's port, or None
+ROM = PORT is not None and PORT_TABLE[PORT]["rom"]     # the firmware's data may be in ROMFS
+
+
+def default_board():
+    """The board file start() plays when given no name: the port's own, the
+    virtual board's on a development host."""
+    return PORT_TABLE[PORT or "virtual"]["board"]
+
+
+def backend(port):
+    """The hardware class of a port, imported (ImportError when this board's
+    image or firmware does not have it: deploy installs only the board's own
+    backend, and a backend imports its port's modules)."""
+    row = PORT_TABLE.get(port)
+    if row is None:
+        raise ImportError("no backend for port %r" % (port,))
+    mod, cls = row["backend"]
+    pkg = __name__[:__name__.rfind(".")]          # "texel"
+    return getattr(__import__(pkg + ".hw." + mod, None, None, (cls,)), cls)
+
+
 # Float precision of the running interpreter: 53 bits (CPython, unix port) or
 # 24 bits (rp2/stm32 MicroPython builds use float32; CircuitPython is 30-bit).
 def _mantissa_bits():

@@ -3,7 +3,7 @@
 # maps, package data) and constants frozen into the firmware (the sine and plan tables). Kept
 # out of compat.py so that images without flash data import nothing more; every function
 # falls back to what other runtimes do (None, the path as it is, an array).
-import sys
+from .compat import ROM             # the texelpad firmware's port: data in ROMFS (compat.PORT_TABLE)
 
 
 def rom_view(path, typecode, n):
@@ -49,7 +49,7 @@ FROZEN_DATA = "/rom/lib/"
 def data_beside(module_file):
     """The path a package data file beside module_file is read at: the
     module's own when it is a file, the ROMFS's copy for a frozen module."""
-    if sys.platform != "rp2" or module_file.startswith("/"):
+    if not ROM or module_file.startswith("/"):
         return module_file              # not the firmware's chip, or a real file's path
     try:
         import os
@@ -76,7 +76,7 @@ def const_table(module_file, name, raw, typecode):
     module_file, the module that holds raw: texelpad.firmware.romfs puts
     it there, aligned) as a rom_view - no RAM - where there is one; else
     array(typecode, raw), as on every other image."""
-    if sys.platform == "rp2":
+    if ROM:
         v = rom_view(path_beside(module_file, name), typecode,
                      len(raw) // (2 if typecode == "H" else 4))
         if v is not None:

@@ -113,7 +113,7 @@ def test_every_viper_module_runs_from_ram_not_from_the_freeze():
     constants as if it started on 4, so no native code may be frozen (the
     firmware stopped booting when one function moved 2 bytes)."""
     import re
-    from texelpad.deploy import image
+    from texelpad import image
     deco = re.compile(r"^\s*@micropython\.viper\s*$", re.M)
     viper = {p.relative_to(image.PACKAGE_DIR).as_posix()
              for p in image.PACKAGE_DIR.rglob("*.py") if deco.search(p.read_text())}

@@ -545,6 +545,7 @@ class World:
         import mpremote.transport_serial as mts
         import texel.app
         import texel.compat
+        import texel.wire
         import texelpad.cli.board
         import texelpad.link.board
         import texelpad.link.transport as tr
@@ -572,7 +573,7 @@ class World:
                     (serial, "serial_for_url", world.serial), (tr, "_DeadlineSerial", Tracked),
                     (tr, "time", t), (mts, "time", t), (texelpad.link.board, "time", t),
                     (texelpad.cli.board, "time", t), (texel.app, "start", start_stepped),
-                    (texel.app, "gc", quick_gc),
+                    (texel.app, "gc", quick_gc), (texel.wire, "gc", quick_gc),
                     (texel.compat, "heap_free", lambda: None)]:     # (status(): a gc too)
                 stack.enter_context(mock.patch.object(target, name, value))
             yield

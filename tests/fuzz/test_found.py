@@ -56,7 +56,8 @@ def test_answers_of_the_wrong_shape_are_link_errors():
                   (("x", "0.1"), "micropython", (1, 28, 0), 6, "rp2")):
         with pytest.raises(NotTexelpad, match="handshake"):
             Board(_stub_link(""), hello)
-    hello = ((1, "0.1.0"), "micropython", (1, 28, 0), 6, "rp2")
+    from texelpad.link.protocol import PROTOCOL
+    hello = ((PROTOCOL, "0.1.0"), "micropython", (1, 28, 0), 6, "rp2")
     for status in ("5.0", "{'running': True}", "None",
                    "{'running': True, 'display': {'positions': -1, 'dx_um': 5.3}}"):
         b = Board(_stub_link("('ok', %s)" % status), hello)

@@ -42,13 +42,13 @@ TEXEL = {"regions": [{"start_mm": 0, "end_mm": 50.88, "texture": {
     "kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7, "v": 2}}]}
 REQUESTS = {
     "push": "app.push(%r)" % (TEXEL,),
-    "upload": "import binascii\napp.upload_begin([2400])\n"
-              "for i in range(0, 2400, 200): app.upload_write(0, i, "
+    "upload": "import binascii\nwire.upload_begin([2400])\n"
+              "for i in range(0, 2400, 200): wire.upload_write(0, i, "
               "binascii.b2a_base64(bytes(400)).decode().strip())\n"
               "app.push({'regions': [{'start_mm': 0, 'end_mm': 101.76, 'texture': "
-              "{'kind': 'samples', 'fit': 'tile', 'u16': app.take_upload(0)}}]})",
+              "{'kind': 'samples', 'fit': 'tile', 'u16': wire.take_upload(0)}}]})",
     "telemetry": "import time\napp.stream(500)\n"
-                 "for _ in range(30): app.telemetry_b64(); time.sleep_ms(20)",
+                 "for _ in range(30): wire.telemetry_b64(); time.sleep_ms(20)",
     "start": "app.start('pico', %r)" % (TEXEL,),
     "stop": "app.stop()",
     "idle": "import time; time.sleep_ms(1500)",
@@ -114,7 +114,7 @@ def test_control_bytes_at_any_moment_never_fault_or_hang_the_board(board, what, 
     desc = lambda: "%s, after %.2f s: %s" % (what, delay, " ".join(       # noqa: E731
         "^%s+%dms" % (k, 50 * g) for k, g in keys))
     with fuzzlib.case(FUZZ_TARGET, desc) as stats:
-        r.start("import texel.app as app\n" + REQUESTS[what])
+        r.start("import texel.app as app, texel.wire as wire\n" + REQUESTS[what])
         time.sleep(delay)
         for k, gap in keys:
             r.s.write(BYTES[k])

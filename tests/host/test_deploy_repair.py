@@ -14,7 +14,7 @@ import pytest
 
 import texelpad
 from texelpad.cli.deploy import next_step
-from texelpad.deploy import image
+from texelpad import image
 from texelpad.deploy.install import DeployFailed, deploy
 from texelpad.link import protocol
 from texelpad.sim.virtual import VirtualBoard

@@ -61,9 +61,9 @@ def test_the_docs_examples_are_the_ones_this_test_runs():
         ("hardware/README.md", 'mpremote exec "from machine import ADC; import time; a = ADC'),
         ("hardware/README.md", "mpremote cp hardware/sweep.py :sweep.py"),
         ("hardware/README.md", 'mpremote exec "import sweep; sweep.run(\'pico\', pickup_pin=27'),
+        ("docs/device-api.md", 'mpremote exec "import texel.app as a; print(a.start(None, a.'),
         ("docs/firmware.md", "mpremote fs cp -r : backup/"),
         ("docs/host.md", "mpremote mip install ./package.json"),
-        ("docs/runtime.md", 'mpremote exec "import texel.app as a; print(a.start(\'pico\', '),
     ]
 
 

@@ -310,7 +310,7 @@ def test_cli_push_board_of_other_firmware_is_one_line_exit_2(capsys, port):
 
 
 def _put_board_files(b, names: list[str]) -> None:
-    from texelpad.deploy.image import BOARDS_DIR
+    from texelpad.image import BOARDS_DIR
     b.link.exec("import os\ntry:\n os.mkdir('/boards')\nexcept OSError:\n pass")
     for n in names:
         b.link.write_file("/boards/%s.json" % n, (BOARDS_DIR / ("%s.json" % n)).read_bytes())
@@ -439,7 +439,7 @@ def test_demo_on_the_chip_reads_telemetry_at_a_rate_its_link_keeps_up_with(capsy
     """`texelpad demo --port` on the emulated Pico (issue 30: it lost 2,731 of 3,302
     samples). Two causes, both ours: the board copied its ring sample by sample in
     Python (40..140 ms of board time for 256 samples; now sliced at C speed,
-    texel.app.telemetry_b64), and a read over this link comes every ~0.2 s of board
+    texel.wire.telemetry_b64), and a read over this link comes every ~0.2 s of board
     time while the ring lasts 123 ms at 2,083 Hz (demo.fitting_rate now lowers the
     rate and says so). Figures printed; none asserted (a timing)."""
     _playing(port)

@@ -1,4 +1,4 @@
-"""The device image (texelpad.deploy.image): which target a device is, the files
+"""The device image (texelpad.image): which target a device is, the files
 `texelpad deploy` writes, mip's package.json, and both installed layouts
 running for real under the MicroPython unix port:
 
@@ -29,8 +29,8 @@ import pytest
 from support import mpy
 import texelpad
 from texelpad import toolchain
-from texelpad.deploy import image as image
-from texelpad.deploy.image import TARGETS, ImageError, target_for
+from texelpad import image as image
+from texelpad.image import TARGETS, ImageError, target_for
 from texelpad.sim.virtual import VirtualBoard
 
 ROOT = mpy.ROOT
@@ -448,9 +448,9 @@ def test_write_package_json_elsewhere_keeps_urls_resolvable(tmp_path):
 # --- the layout, run by the unix port ----------------------------------------------
 
 RUN = """
-import sys, texel, texel.app as app, texel.runtime.boards as boards, texel.gen.engine_int as ei
+import sys, texel, texel.app as app, texel.wire as wire, texel.runtime.boards as boards, texel.gen.engine_int as ei
 st = app.start('virtual')
-app.advance(10)
+wire.advance(10)
 print(repr({'refreshes': app.status()['refreshes'], 'refresh': st.get('refresh'),
             'boards_file': boards.__file__, 'app_file': app.__file__, 'viper': ei.VIPER,
             'names': boards.names(), 'path': sys.path,

@@ -188,11 +188,11 @@ def test_board_without_the_image(tmp_path):
 
 def test_image_older_than_host(vb, monkeypatch):
     monkeypatch.setattr(board_mod, "HOST_IMAGE_VERSION", "0.2.0")
-    with pytest.raises(ImageTooOld, match=r"texel 0.1.0 \(protocol 1\).*run texelpad deploy"):
+    with pytest.raises(ImageTooOld, match=r"texel 0.1.0 \(protocol 2\).*run texelpad deploy"):
         texelpad.connect(vb.port)
     monkeypatch.setattr(board_mod, "HOST_IMAGE_VERSION", "0.1.0")
-    monkeypatch.setattr(board_mod, "PROTOCOL", 2)
-    with pytest.raises(ImageTooOld, match="protocol 1"):
+    monkeypatch.setattr(board_mod, "PROTOCOL", 3)
+    with pytest.raises(ImageTooOld, match="protocol 2"):
         texelpad.connect(vb.port)
 
 

@@ -30,12 +30,13 @@ LIFT_DEBOUNCE = 3
 SWIPE = r"""
 import json
 import texel.app as app
+import texel.wire as wire
 st0 = app.start("virtual", fast=%(fast)s)
 rt = app._rt
 hw = rt.hw
 law = rt.law
 # touch at 5 mm, swipe to 95 mm at 100 mm/s, hold 50 ms, lift at 960 ms
-app.finger([(0, 5.0), (900, 95.0), (950, 95.0), (960, None)])
+wire.finger([(0, 5.0), (900, 95.0), (950, 95.0), (960, None)])
 hw.clear_record()
 app.stream(rate_hz=8333)              # telemetry at every refresh
 sc = rt.refresh.scene
@@ -44,7 +45,7 @@ exact_n = 0
 tel_lost = 0
 t = 0
 while t < 1100:
-    app.advance(20)                   # 166 refreshes < the 256-slot ring
+    wire.advance(20)                   # 166 refreshes < the 256-slot ring
     t += 20
     samples, lost = app.telemetry()
     tel_lost += lost
@@ -131,7 +132,7 @@ def test_duty_never_exceeds_cap(swipe):
 
 def test_status_reports_scene_and_versions(swipe):
     st = swipe["start"]
-    assert st["protocol"] == 1 and st["running"] is True
+    assert st["protocol"] == 2 and st["running"] is True
     regs = st["scene"]["regions"]
     assert [r["kind"] for r in regs] == ["reference", "texel"]
     # the reference half as a 9,600-sample uint16 map, the texel half as its
@@ -145,12 +146,13 @@ def test_status_reports_scene_and_versions(swipe):
 SWAP = r"""
 import json
 import texel.app as app
+import texel.wire as wire
 app.start("virtual")
 rt = app._rt
 hw = rt.hw
 law = rt.law
-app.finger([(0, 20.0), (2000, 80.0)])          # 30 mm/s across both halves
-app.advance(100)
+wire.finger([(0, 20.0), (2000, 80.0)])          # 30 mm/s across both halves
+wire.advance(100)
 old = rt.refresh.scene
 before = app.status()["scene"]
 errors = []
@@ -167,7 +169,7 @@ for bad in ({"regions": [{"start_mm": 0, "end_mm": 50, "texture": {"kind": "texe
         errors.append(str(e))
 same = rt.refresh.scene is old and app.status()["scene"] == before
 hw.clear_record()
-app.advance(100)
+wire.advance(100)
 still_old = 0
 for i in range(hw.nrec):
     p = hw.finger.at(hw.rec_t[i])
@@ -177,7 +179,7 @@ n_old = hw.nrec
 new = {"regions": [{"start_mm": 0, "end_mm": 101.76, "texture": {"kind": "constant", "level": 0.25}}]}
 st = app.push(new)
 hw.clear_record()
-app.advance(100)
+wire.advance(100)
 new_duty = law.duty(rt.refresh.scene.amp(0))
 all_new = all(hw.rec_d[i] == new_duty for i in range(hw.nrec))
 print(json.dumps({"errors": errors, "same": same, "still_old": still_old, "n_old": n_old,
@@ -234,12 +236,13 @@ print(json.dumps(out))
 HEAP = r"""
 import json, micropython
 import texel.app as app
+import texel.wire as wire
 app.start("virtual", fast=%(fast)s)
 rt = app._rt
 hw = rt.hw
-app.finger([(0, 10.0), (1000, 90.0), (1100, None), (1200, 30.0)])
+wire.finger([(0, 10.0), (1000, 90.0), (1100, None), (1200, 30.0)])
 app.stream(rate_hz=125)
-app.advance(1)                        # first refresh outside the lock
+wire.advance(1)                        # first refresh outside the lock
 
 
 def locked(us):
@@ -292,6 +295,7 @@ def test_start_with_bad_scene_changes_nothing():
     code = r"""
 import json
 import texel.app as app
+import texel.wire as wire
 try:
     app.start("virtual", {"regions": [{"start_mm": 0, "end_mm": 10, "texture": {"kind": "nope"}}]})
     r = "started"
@@ -308,6 +312,7 @@ def test_unknown_board_is_a_clear_error():
     code = r"""
 import json
 import texel.app as app
+import texel.wire as wire
 try:
     app.start("no_such_board")
     r = "started"
@@ -322,6 +327,7 @@ print(json.dumps(r))
 PICO = r"""
 import json, machine
 import texel.app as app
+import texel.wire as wire
 machine.script_adc(26, [32000])                 # finger resting mid-strip
 st = app.start("pico")
 tim = machine.TIMERS[-1]
@@ -358,6 +364,7 @@ def test_pico_start_runs_in_hard_timer_irq_on_fakes():
 CPY = r"""
 import json
 import texel.app as app
+import texel.wire as wire
 st = app.start("pico_cpy")
 loop = app.run_loop(seconds=0.2)
 st2 = app.status()
@@ -385,6 +392,7 @@ def test_circuitpython_paced_loop_reports_its_rate():
 MODES = r"""
 import json
 import texel.app as app
+import texel.wire as wire
 from texel.runtime import boards
 b = boards.load("pico")
 res = {}
@@ -425,6 +433,7 @@ def test_refresh_modes(tmp_path):
 INTERRUPTED_START = r"""
 import json, machine
 import texel.app as app
+import texel.wire as wire
 import texel.runtime.scene as scene_mod
 machine.script_adc(26, [32000])
 build = scene_mod.build
@@ -496,7 +505,7 @@ print(json.dumps(out))
 
 @pytest.mark.parametrize("runtime", [None, pytest.param("circuitpython", marks=pytest.mark.instruments)])
 def test_packed_telemetry_is_the_samples_telemetry_since_gives(runtime):
-    """Refresh.telemetry_packed_since (what the host reads, texel.app.telemetry_b64: the
+    """Refresh.telemetry_packed_since (what the host reads, texel.wire.telemetry_b64: the
     ring copied by slicing, at C speed) gives exactly telemetry_since's samples, new
     tail and lost count: inside the ring, across its wrap, lapped (lost counted), empty,
     and across the counters' 2^30 wrap - on the MicroPython unix port, CircuitPython

@@ -1249,7 +1249,7 @@ def test_real_memory_error_under_micropython(tmp_path):
     rows = {}
     # the compiled image, as a board loads it (compiling from source leaves garbage that
     # decides by chance which heaps still have a 19 KB block for the split screen)
-    from texelpad.deploy import image
+    from texelpad import image
     tree = tmp_path / "image"
     image.write_tree(image.build_image(image.TARGETS["unix"], include_main=False), tree)
     for kb in range(112, 273, 8):
@@ -1288,7 +1288,7 @@ def test_full_texel_fits_beside_split_screen(tmp_path):
     # From the compiled image, as a board loads it: compiling the modules
     # from source leaves garbage that decides by chance (any line added to a
     # module moved it) whether a 19 KB block is left on a 176 KB heap.
-    from texelpad.deploy import image
+    from texelpad import image
     tree = tmp_path / "image"
     image.write_tree(image.build_image(image.TARGETS["unix"], include_main=False), tree)
     code = HELPERS + r"""

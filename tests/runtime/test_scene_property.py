@@ -1382,13 +1382,14 @@ MP_PUSH = r"""
 import json, gc
 from array import array
 import texel.app as app
+import texel.wire as wire
 from texel.runtime import scene as S
 from texel.runtime.kinds import texel as KT, samples as KS
 app.start("virtual")
-app.finger([(0, 30.0)])                       # a finger resting at 30 mm
+wire.finger([(0, 30.0)])                       # a finger resting at 30 mm
 valid = eval(open(%(valid)r).read())
 app.push(valid)
-app.advance(10)
+wire.advance(10)
 rt = app._rt
 playing = rt.refresh.scene
 canonical = S.validate(valid, rt.board["display"])
@@ -1414,7 +1415,7 @@ while True:
 f.close()
 gc.collect()
 st1 = app.status()
-app.advance(10)
+wire.advance(10)
 st2 = app.status()
 out["before"] = st0
 out["after"] = st1

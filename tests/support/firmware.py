@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from texelpad.deploy.image import cache_root
+from texelpad.image import cache_root
 
 
 def why_not_build() -> str | None:

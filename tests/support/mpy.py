@@ -79,7 +79,7 @@ def mpy_cross(src: str | os.PathLike, out: str | os.PathLike, march: str | None 
 
 
 # which device files hold viper/native code: the image builder's own rule
-from texelpad.deploy.image import holds_native_code  # noqa: E402
+from texelpad.image import holds_native_code  # noqa: E402
 
 
 def viper_files() -> set[Path]:

@@ -137,13 +137,13 @@ SOAK_WORK = ("push", "upload", "telemetry", "idle")
 
 def soak_code(what: str) -> str:
     """The board code of one soak round's work (SOAK_WORK), texel.app imported as app."""
-    return "import texel.app as app\n" + {
+    return "import texel.app as app, texel.wire as wire\n" + {
         "push": "app.push(%r)" % (SOAK_TEXEL,),
-        "upload": "import binascii\napp.upload_begin([2400])\n"
-                  "for i in range(0, 2400, 200): app.upload_write(0, i, "
+        "upload": "import binascii\nwire.upload_begin([2400])\n"
+                  "for i in range(0, 2400, 200): wire.upload_write(0, i, "
                   "binascii.b2a_base64(bytes(400)).decode().strip())\n"
                   "app.push({'regions': [{'start_mm': 0, 'end_mm': 101.76, 'texture': "
-                  "{'kind': 'samples', 'fit': 'tile', 'u16': app.take_upload(0)}}]})",
+                  "{'kind': 'samples', 'fit': 'tile', 'u16': wire.take_upload(0)}}]})",
         "telemetry": "import time\napp.stream(125)\n"
                      "for _ in range(40): app.telemetry(); time.sleep_ms(20)",
         "idle": "import time; time.sleep_ms(3000)"}[what]

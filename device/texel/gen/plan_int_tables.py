@@ -7,7 +7,7 @@
 #   NORM    1025 values  -Phi^-1(u) in Q24 at 32 points per octave of u
 # 6,148 bytes. A literal, not computed: computing them needs float64 and an
 # accurate inverse normal, and the point is that every runtime has the same ints.
-import sys
+from ..compat import ROM            # the texelpad firmware's port (compat.PORT_TABLE)
 
 EXP_HI = 0          # offsets into table()
 EXP_MID = 256
@@ -219,7 +219,7 @@ def table():
     target (x86, ARM Cortex-M) is little-endian)."""
     global _table
     if _table is None:
-        if sys.platform == "rp2":       # the texelpad firmware's copy in flash: no RAM
+        if ROM:                         # the texelpad firmware's copy in flash: no RAM
             from ..rom import const_table
             _table = const_table(__file__, "plan_int_tables.i32", _RAW, "i")
         else:

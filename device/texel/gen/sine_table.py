@@ -6,7 +6,7 @@
 # The values are a literal (tools/gen_sine_table.py writes it; a test checks
 # it against the formula): computing 1,025 float sines would cost a board
 # ~150 ms at its first render.
-import sys
+from ..compat import ROM            # the texelpad firmware's port (compat.PORT_TABLE)
 
 BITS = 10
 SIZE = 1 << BITS
@@ -86,7 +86,7 @@ def table():
     array('H'); little-endian literal: every target is)."""
     global _table
     if _table is None:
-        if sys.platform == "rp2":       # the texelpad firmware's copy in flash: no RAM
+        if ROM:                         # the texelpad firmware's copy in flash: no RAM
             from ..rom import const_table
             _table = const_table(__file__, "sine_table.u16", _RAW, "H")
         else:

@@ -49,18 +49,18 @@ CPU_HZ_MIN = 1000000
 CPU_HZ_MAX = 1000000000                 # < 2^30: a small int on every port
 U16_MAX = 65535                         # amplitudes and read_u16 raw units
 
-PORTS = ("rp2", "stm32", "circuitpython", "virtual")
+from ..compat import PORT_TABLE, PORTS, port_of
 DRIVES = ("single", "bridge")
 SENSOR_KINDS = ("adc_linear", "adc_ratio")
 MODES = ("timer_irq", "core1_viper", "loop", "stepped")
-# The refresh modes each port can run (see docs/runtime.md, refresh/hw/*):
-# CircuitPython has no IRQs, threads or viper; the virtual board steps time.
-PORT_MODES = {"rp2": ("timer_irq", "core1_viper", "loop"),
-              "stm32": ("timer_irq", "loop"),
-              "circuitpython": ("loop",),
-              "virtual": ("stepped",)}
-DEFAULT_MODE = {"rp2": "timer_irq", "stm32": "timer_irq",
-                "circuitpython": "loop", "virtual": "stepped"}
+# The refresh modes each port can run, its default first (compat.PORT_TABLE;
+# docs/runtime.md, refresh/hw/*): CircuitPython has no IRQs, threads or viper;
+# the virtual board steps time.
+PORT_MODES = {}
+DEFAULT_MODE = {}
+for _p in PORTS:
+    PORT_MODES[_p] = PORT_TABLE[_p]["modes"]
+    DEFAULT_MODE[_p] = PORT_TABLE[_p]["modes"][0]
 
 # Keys in a fixed order (MicroPython dicts are unordered): the order keys are
 # checked in, so which bad key is named first is the same on every port.
@@ -241,19 +241,20 @@ def names(search=None):
 # implementation name). Any other platform (the unix port, CPython) is a
 # development host: there a board file fits only if its backend's modules
 # import (a test puts stand-in machine/pyb/pwmio modules on the path) - or it is "virtual".
-PLATFORM_PORT = {"rp2": "rp2", "pyboard": "stm32"}
-PORT_CHIP = {"rp2": "an RP2040 (MicroPython rp2 port)", "stm32": "an STM32 (MicroPython stm32 port, "
-             "sys.platform 'pyboard')", "circuitpython": "CircuitPython",
-             "virtual": "any firmware (the virtual board)"}
+# (compat.PORT_TABLE's platform and chip columns.)
+PLATFORM_PORT = {}
+PORT_CHIP = {}
+for _p in PORTS:
+    if PORT_TABLE[_p]["platform"]:
+        PLATFORM_PORT[PORT_TABLE[_p]["platform"]] = _p
+    PORT_CHIP[_p] = PORT_TABLE[_p]["chip"]
 
 
 def firmware_port():
     """The port this firmware is (rp2, stm32, circuitpython), or None on a
     development host (unix port, CPython)."""
     import sys
-    if sys.implementation.name == "circuitpython":
-        return "circuitpython"
-    return PLATFORM_PORT.get(sys.platform)
+    return port_of(sys.implementation.name, sys.platform)
 
 
 def fits(board):
@@ -271,14 +272,12 @@ def fits(board):
             return None
         return ("board file %r is for %s, but this board runs %s (%s)"
                 % (board["name"], PORT_CHIP[port], fw, PORT_CHIP[here]))
-    try:                                # a development host: the backend's modules?
-        if port == "rp2":
-            import machine
-            machine.freq
-        elif port == "stm32":
-            import pyb  # noqa: F401 (only: does it import)
-        else:
-            import pwmio  # noqa: F401
+    probe = PORT_TABLE[port]["probe"]   # a development host: the backend's modules?
+    mod, _, attr = probe.partition(".")
+    try:
+        m = __import__(mod)
+        if attr:
+            getattr(m, attr)
     except (ImportError, AttributeError) as e:
         return ("board file %r is for %s, but this is %s (%s)"
                 % (board["name"], PORT_CHIP[port], fw, e))

@@ -1,5 +1,5 @@
 # Uploads: long samples regions arriving over the link as data (base64
-# pieces, texel.app.upload_*), not as a literal the board compiles. In its
+# pieces, texel.wire.upload_*), not as a literal the board compiles. In its
 # own module so the scene code every board imports stays small (the unix
 # port's heap test, tests/runtime/test_scene.py, builds the split screen on
 # a 176 KB heap); imported only when an upload begins.
@@ -116,7 +116,7 @@ class Chunks:
 
 
 class Upload:
-    """n uint16 samples arriving in pieces over the link (texel.app.upload_*):
+    """n uint16 samples arriving in pieces over the link (texel.wire.upload_*):
     chunks filled in order, then handed to validate() as a samples region's
     "u16" (which becomes the Chunks); validate refuses it until every value
     has arrived."""

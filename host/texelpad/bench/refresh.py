@@ -627,7 +627,7 @@ def _refresh_section(res: RefreshBenchResult) -> tuple[list[str], list[str]]:
     notes.append("refresh: the callback app.start gives the board (hw.cb), called as the "
                  "timer would, %d refreshes per batch timed with time.ticks_us, minus the "
                  "same loop without the call; median/worst/best = the batches' per-refresh "
-                 "averages. The finger (app.finger keyframes, ms: mm) %s repeats: a swipe "
+                 "averages. The finger (texel.wire.finger keyframes, ms: mm) %s repeats: a swipe "
                  "5 -> 95 mm -> 5 mm at 100 mm/s over both halves, lifted %.1f %% of the "
                  "time. '- ADC' = median minus the virtual ADC's median (finger script and "
                  "calibration, which a board replaces by its ADC read). 1-call worst = the "

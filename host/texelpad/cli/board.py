@@ -211,7 +211,7 @@ def format_status(st: dict[str, Any]) -> str:
 
 
 STEPPED = ("the virtual board's time is stepped (texel.app.start('virtual') without "
-           "realtime=True): no refresh runs unless app.advance(ms) runs it; start it in real "
+           "realtime=True): no refresh runs unless texel.wire.advance(ms) runs it; start it in real "
            "time with app.start('virtual', realtime=True) (texelpad virtual and texelpad push "
            "--board virtual do)")
 

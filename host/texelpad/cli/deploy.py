@@ -38,7 +38,7 @@ def add_deploy(p: argparse.ArgumentParser) -> None:
 
 def cmd_deploy(args: argparse.Namespace) -> int:
     from ..deploy.install import deploy
-    from ..deploy.image import ImageError
+    from ..image import ImageError
     bar = ProgressBar()
     with connected_board(args, check=False, import_image=False) as b:
         try:

@@ -27,7 +27,7 @@ import time
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from . import image
+from .. import image
 from ..link import protocol
 from ..link.board import UNIX_PLATFORMS, on_board_path
 from ..link.transport import LinkError, LinkTimeout

@@ -65,7 +65,7 @@ def firmware_info(board: Any) -> dict | None:
 def _board_json(board: Any, name: str) -> bytes:
     """The board file to carry: the shipped one of that name, else the one the
     partition holds now (a maker's own board, from `texelpad firmware --board-dir`)."""
-    from . import image
+    from .. import image
     shipped = image.BOARDS_DIR / (name + ".json")
     if shipped.is_file():
         return shipped.read_bytes()
@@ -110,7 +110,28 @@ def deploy_romfs(board: Any, info: dict, force: bool = False, dry_run: bool = Fa
         say("stopping the display on %s while the partition is written" % st["board"])
         board.stop()
     report["playing"] = was[0] if was else None
-    link = board.link
+    _write_partition(board.link, img, say, bar)
+    report["written"] = len(files)
+    report["bytes_written"] = len(img)
+    say("soft reset of %s: the new partition mounts at /rom" % board.port)
+    board.link.soft_reset()
+    got = firmware_info(board)
+    if not got or got.get("image_sha256") != want:
+        raise LinkError("the ROMFS partition did not read back as written (%r): run texelpad "
+                        "deploy again" % (got,))
+    if was is not None:
+        say("starting %s again with the scene it played" % was[0])
+        board.restart(was[0], was[1], False)
+        report["restarted"] = was[0]
+    report["playing"] = report["restarted"]
+    report["seconds"] = time.perf_counter() - t0
+    return report
+
+
+def _write_partition(link: Any, img: bytes, say: Callable[[str], None],
+                     bar: Callable[[int, int, str], None] | None) -> None:
+    """Erase what img needs of the ROMFS partition and write img there, then
+    read its head back (LinkError when it did not take)."""
     # nothing of texelpad may run from here on: its code is in the flash being rewritten
     link.exec(protocol.PURGE + "import vfs\ntry:\n vfs.umount('/rom')\nexcept OSError:\n pass\n")
     # the partition as rp2's block device (rp2.Flash: vfs.rom_ioctl(2, 0) on this port; the
@@ -140,18 +161,3 @@ def deploy_romfs(board: Any, info: dict, force: bool = False, dry_run: bool = Fa
     head = link.eval("print(repr(bytes(memoryview(_d)[:%d])))" % min(len(img), 64))
     if head != img[:len(head)]:
         raise LinkError("the ROMFS partition did not take the image (it reads %r)" % head[:16])
-    report["written"] = len(files)
-    report["bytes_written"] = len(img)
-    say("soft reset of %s: the new partition mounts at /rom" % board.port)
-    link.soft_reset()
-    got = firmware_info(board)
-    if not got or got.get("image_sha256") != want:
-        raise LinkError("the ROMFS partition did not read back as written (%r): run texelpad "
-                        "deploy again" % (got,))
-    if was is not None:
-        say("starting %s again with the scene it played" % was[0])
-        board.restart(was[0], was[1], False)
-        report["restarted"] = was[0]
-    report["playing"] = report["restarted"]
-    report["seconds"] = time.perf_counter() - t0
-    return report

@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import Callable, Iterator
 
 from .. import __version__, toolchain
-from ..deploy import image
+from .. import image
 from . import romfs
 
 MICROPYTHON_VERSION = "1.28.0"

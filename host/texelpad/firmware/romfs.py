@@ -3,7 +3,7 @@
 The firmware (boards/<name>/, built by texelpad.firmware.build) is stock
 MicroPython v1.28 + ulab with a ROMFS partition; texelpad itself lives in that
 partition as the same image `texelpad deploy` writes to a stock board's
-littlefs (texelpad.deploy.image: armv6m .mpy, package data, shipped boards),
+littlefs (texelpad.image: armv6m .mpy, package data, shipped boards),
 laid out as lib/texel/... so that it mounts as /rom/lib/texel (sys.path on the
 rp2 port: '', '.frozen', '/rom', '/rom/lib', '/lib'). MicroPython runs
 bytecode from a ROMFS in place and gives a memoryview of a ROMFS file's bytes
@@ -19,7 +19,7 @@ from __future__ import annotations
 import struct
 from typing import Iterable, Mapping
 
-from ..deploy import image
+from .. import image
 
 # UF2 (Microsoft's USB flashing format, what the RP2040 boot ROM takes):
 # 512-byte blocks, 256 payload bytes each for the RP2040.

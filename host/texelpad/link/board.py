@@ -22,8 +22,8 @@ from dataclasses import dataclass
 from typing import Any, Callable, Iterator
 
 import texel
-import texel.app
 import texel.runtime.scene
+from texel.compat import UNIX_PLATFORMS
 from texel.runtime.kinds import texel as kind_texel
 from texel.runtime.refresh import TELEMETRY_SLOTS   # the most one telemetry read returns
 from texel.gen.params import FORMAT_NEW
@@ -129,7 +129,13 @@ class Board:
         self.link.close()
 
     def _app(self, func: str, *args: Any, timeout: float | None = None, **kwargs: Any) -> Any:
+        """texel.app.func(...): the board's user API."""
         return self.link.call(protocol.APP, func, *args, timeout=timeout, **kwargs)
+
+    def _wire(self, func: str, *args: Any, timeout: float | None = None, **kwargs: Any) -> Any:
+        """texel.wire.func(...): what only the link calls (uploads, base64 data, the
+        virtual board's finger)."""
+        return self.link.call(protocol.WIRE, func, *args, timeout=timeout, **kwargs)
 
     # --- the device entry points ---------------------------------------------
     def status(self) -> dict[str, Any]:
@@ -201,7 +207,7 @@ class Board:
             if uploads:
                 self._upload([u for _, u in uploads], progress)
             ans = self.link.eval(protocol.staged_call(
-                protocol.APP, func, args, scene_at, {i: k for k, (i, _) in enumerate(uploads)},
+                protocol.WIRE, func, args, scene_at, {i: k for k, (i, _) in enumerate(uploads)},
                 kwargs), timeout)
             return check_status(self.port, answer(self.port, ans, func + "()"))
         except KeyboardInterrupt:
@@ -220,11 +226,11 @@ class Board:
 
     def _upload(self, values: list[list[int]],
                 progress: Callable[[int, int], None] | None) -> None:
-        """Stage each list of uint16 values on the board (texel.app.upload_*),
+        """Stage each list of uint16 values on the board (texel.wire.upload_*),
         in pieces of protocol.UPLOAD_PIECE values; progress(bytes done, total)."""
         import base64
         from array import array
-        self._app("upload_begin", [len(v) for v in values])
+        self._wire("upload_begin", [len(v) for v in values])
         total = 2 * sum(len(v) for v in values)
         done = 0
         if progress:
@@ -234,7 +240,7 @@ class Board:
                 part = array("H", vals[o:o + protocol.UPLOAD_PIECE])
                 if sys.byteorder == "big":
                     part.byteswap()
-                self._app("upload_write", slot, o, base64.b64encode(part.tobytes()).decode())
+                self._wire("upload_write", slot, o, base64.b64encode(part.tobytes()).decode())
                 done += 2 * len(part)
                 if progress:
                     progress(done, total)
@@ -247,7 +253,7 @@ class Board:
         the count are two steps on the board; either shows it)."""
         try:
             self.link.resync()
-            self._app("upload_discard")
+            self._wire("upload_discard")
             st = self.status()
         except LinkError as e:
             return Interrupted("interrupted; the board did not answer afterwards (%s), so what "
@@ -301,7 +307,7 @@ class Board:
         or play it again); long samples regions are read in pieces."""
         import base64
         from array import array
-        src = self._app("scene_source", protocol.INLINE_SAMPLES_MAX)
+        src = self._wire("scene_source", protocol.INLINE_SAMPLES_MAX)
         if src is None:
             return None
         if not (type(src) is dict and type(src.get("regions")) is list
@@ -314,7 +320,7 @@ class Board:
                 n = tex["u16"]
                 vals = array("H")
                 while len(vals) < n:
-                    piece = self._app("samples_b64", i, len(vals), protocol.UPLOAD_PIECE)
+                    piece = self._wire("samples_b64", i, len(vals), protocol.UPLOAD_PIECE)
                     try:
                         data = base64.b64decode(piece, validate=True)
                     except (TypeError, ValueError):
@@ -338,12 +344,12 @@ class Board:
 
     def telemetry(self) -> tuple[list[tuple[int, int, int]], int]:
         """The samples since the last call, (t_us, position, amplitude), and how
-        many the ring lapped: texel.app.telemetry_b64 (the ring copied at C speed,
+        many the ring lapped: texel.wire.telemetry_b64 (the ring copied at C speed,
         base64 of little-endian int32 times, int32 positions, uint16 amplitudes)."""
         import base64
         import binascii
         from array import array
-        ans = self._app("telemetry_b64")
+        ans = self._wire("telemetry_b64")
         if not (type(ans) in (tuple, list) and len(ans) == 3 and _is_int(ans[0])
                 and 0 <= ans[0] <= TELEMETRY_SLOTS and type(ans[1]) is str and _is_int(ans[2])
                 and ans[2] >= 0):
@@ -406,7 +412,7 @@ class Board:
     def finger(self, keyframes: list[tuple[float, float | None]]) -> int:
         """Script the virtual board's finger: [(t_ms, position_mm or None)],
         relative to now; returns the board's ticks_us the script starts at."""
-        return self._app("finger", [(float(t), None if p is None else float(p)) for t, p in keyframes])
+        return self._wire("finger", [(float(t), None if p is None else float(p)) for t, p in keyframes])
 
     # --- the generator on the board ----------------------------------------------
     def render_u16(self, params: dict[str, Any], engine: str | None = None) -> Any:
@@ -590,9 +596,9 @@ def full_screen(texture: dict[str, Any], display: dict[str, Any]) -> dict[str, A
 # from this file at power-up when it is there; `texelpad deploy` leaves it
 # alone (it is not an image file).
 BOOT_FILE = "/texelpad.json"
-# The unix port's sys.platform values: the virtual board, a host process
-# whose "/" is its flash folder (texel/main.py follows the same rule)
-UNIX_PLATFORMS = ("linux", "darwin", "win32")
+# The unix port's sys.platform values (texel.compat.UNIX_PLATFORMS): the virtual
+# board, a host process whose "/" is its flash folder (texel.app.CONFIG follows
+# the same rule)
 
 
 def on_board_path(board: Board, path: str) -> str:
@@ -613,7 +619,7 @@ def board_display(board: Board, name: str) -> dict[str, Any]:
     name = protocol.plain(name)
     if not isinstance(name, str):
         raise ValueError("board name: %s is not a string" % type(name).__name__)
-    d = board._app("board_display", name)
+    d = board._wire("board_display", name)
     if not (type(d) is dict and _is_int(d.get("positions")) and d["positions"] > 0
             and _is_num(d.get("dx_um")) and d["dx_um"] > 0):
         raise _bad(board.port, "board_display()", d)

@@ -3,8 +3,9 @@ all follow: code the host writes itself around `repr()` literals of plain
 data; user text is never pasted into code (`literal()` refuses anything
 that is not plain data, NaN and inf included: their repr is not a literal).
 
-The board side of the contract is texel.app (PROTOCOL, checked at the
-handshake); the requests here import texel modules and call them.
+The board side of the contract is texel.app (the user API) and texel.wire
+(what only the link calls), versioned by texel.protocol.PROTOCOL (checked at
+the handshake); the requests here import texel modules and call them.
 """
 from __future__ import annotations
 
@@ -14,10 +15,11 @@ import math
 import sys
 from typing import Any, Sequence
 
-import texel.app
+import texel.protocol          # the contract alone: no display runtime on the host
 
-PROTOCOL = texel.app.PROTOCOL        # the contract this host speaks
-APP = "texel.app"
+PROTOCOL = texel.protocol.PROTOCOL   # the contract this host speaks
+APP = "texel.app"                    # the user API: start, push, status, stop, ...
+WIRE = "texel.wire"                  # uploads, JSON scenes, base64 data, the virtual finger
 
 # Largest literal one call may send (bytes of code). An uploaded samples region
 # of 19,200 values is ~400 KB as floats, ~120 KB as u16 ints; this bounds what
@@ -173,7 +175,11 @@ def _from_numpy(v: Any, where: str, np: Any) -> Any:
 # repair it.
 HELLO = """import sys
 try:
- import texel, texel.app as _a
+ import texel
+ try:
+  import texel.protocol as _a
+ except ImportError:
+  import texel.app as _a
  _v = (_a.PROTOCOL, texel.__version__)
 except Exception as _e:
  _v = ('missing', str(_e))
@@ -189,7 +195,7 @@ _v = _i = _a = None
 # can hang a board's) must not keep deploy from replacing it; a display can
 # only be playing if texel.app is loaded, so nothing that plays is missed.
 HELLO_LOADED = HELLO.replace(
-    " import texel, texel.app as _a\n",
+    " import texel\n try:\n  import texel.protocol as _a\n except ImportError:\n  import texel.app as _a\n",
     " _a = sys.modules['texel.app']\n texel = sys.modules['texel']\n").replace(
     "except Exception as _e:\n _v = ('missing', str(_e))",
     "except KeyError:\n _v = ('missing', 'not loaded')")
@@ -206,13 +212,13 @@ def call(module: str, func: str, args: Sequence[Any] = (), kwargs: dict | None =
 # --- long samples regions: data, not code -------------------------------------------
 
 # A samples region of more values than this crosses the link as an upload
-# (texel.app.upload_*: base64 pieces of UPLOAD_PIECE values) instead of a
+# (texel.wire.upload_*: base64 pieces of UPLOAD_PIECE values) instead of a
 # list literal inside the scene. A literal of thousands of numbers is code
 # the board must compile in one go: 9,000 ints overflowed MicroPython's
 # bytecode emitter, and the compile held the virtual board's refresh for
 # 0.33 s. 512 values are ~3.5 KB of literal, compiled in a few ms.
 INLINE_SAMPLES_MAX = 512
-UPLOAD_PIECE = texel.app.UPLOAD_PIECE_MAX
+UPLOAD_PIECE = texel.protocol.UPLOAD_PIECE_MAX
 
 
 def split_uploads(scene: dict[str, Any]) -> tuple[dict[str, Any], list[tuple[int, list[int]]]]:
@@ -263,9 +269,9 @@ def staged_call(module: str, func: str, args: Sequence[Any], scene_at: int,
                 slots: dict[int, int] | None = None, kwargs: dict | None = None) -> str:
     """call(), with the scene in args[scene_at] sent as JSON text (a repr()'d
     str, parsed by the board's json module: scene_text) and completed on the
-    board: the samples region i gets upload slots[i] (texel.app.take_upload)
+    board: the samples region i gets upload slots[i] (texel.wire.take_upload)
     in place of its values before `func` runs. One statement on the board
-    (texel.app.staged): the compile of an eight-line request took 7-11 ms of
+    (texel.wire.staged): the compile of an eight-line request took 7-11 ms of
     every push on an RP2040."""
     rest = [a for k, a in enumerate(args) if k != scene_at]
     fill = tuple(sorted((int(i), int(slot)) for i, slot in (slots or {}).items()))

@@ -107,7 +107,7 @@ class BoardOwner:
 
     def check_board_name(self) -> None:
         """The board file board_name is one the board has and can run
-        (texel.app.board_display; nothing that plays is touched): ValueError
+        (texel.wire.board_display; nothing that plays is touched): ValueError
         with the board's words and the names it can run when not, BoardLost
         when the board does not answer. `texelpad lab --board` asks it at
         startup, not at the first session."""
@@ -155,7 +155,7 @@ class BoardOwner:
             self._running(b)
             st = b.status()
         # the board file's port "virtual" is texel.hw.virtual's VirtualHw, the
-        # only backend with a scripted finger (texel.app.finger)
+        # only backend with a scripted finger (texel.wire.finger)
         v = st.get("port") == "virtual"
         self._virtual_of = (b, v)
         return v

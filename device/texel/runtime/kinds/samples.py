@@ -1,6 +1,6 @@
 # Region kind "samples": a map the host made (an upload). Exactly one of
 # "values" (numbers 0..1) or "u16" (ints 0..65535; or an Upload (runtime/
-# upload.py) the host filled through texel.app.upload_* - large data crosses
+# upload.py) the host filled through texel.wire.upload_* - large data crosses
 # the link as data, not as a literal the board compiles), 1..MAX_SAMPLES of
 # them, and "fit":
 #   "tile" (default): value k plays at region position k mod m - one value

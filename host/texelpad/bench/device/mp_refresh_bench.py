@@ -30,6 +30,7 @@ import time
 
 import texel
 import texel.app as app
+import texel.wire as wire
 from texel import compat
 from texel.runtime import scene
 
@@ -40,7 +41,7 @@ MAX_BATCHES = 4096              # per component measurement (preallocated: a 2 M
 MAX_REFRESH_BATCHES = 16384     # per refresh measurement
 RECORD = 1024                   # duties the virtual board records (cleared every batch)
 PERIOD_US = 120                 # virtual time between refreshes (8,333 Hz)
-# The scripted swipe (app.finger keyframes, ms and mm), repeated for as long
+# The scripted swipe (texel.wire.finger keyframes, ms and mm), repeated for as long
 # as the bench runs: touch at 5 mm, swipe to 95 mm at 100 mm/s across both
 # halves of the split screen, hold 50 ms, lift 40 ms, and back.
 SWIPE_MS = [(0, 5.0), (900, 95.0), (950, 95.0), (960, None), (1000, 95.0),
@@ -260,7 +261,7 @@ def measure_refresh(seconds):
     cb = hw.cb
     r = rt.refresh
     clock = _Clock()
-    app.finger(SWIPE_MS)
+    wire.finger(SWIPE_MS)
     cycle0 = hw.now
     t = hw.now
     # warm-up: a few batches not timed
@@ -278,7 +279,7 @@ def measure_refresh(seconds):
     while (_us(w0, time.ticks_us()) < budget or k < 5) and k < MAX_REFRESH_BATCHES:
         if t - cycle0 >= CYCLE_US:
             hw.now = t
-            app.finger(SWIPE_MS)
+            wire.finger(SWIPE_MS)
             cycle0 = t
         hw.clear_record()
         t0 = time.ticks_us()
@@ -305,7 +306,7 @@ def swipe_inputs(rt):
     of BATCH."""
     from array import array
     hw = rt.hw
-    app.finger(SWIPE_MS)
+    wire.finger(SWIPE_MS)
     t0 = hw.now
     n = (CYCLE_US // PERIOD_US) // BATCH * BATCH
     gc.collect()

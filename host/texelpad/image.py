@@ -48,10 +48,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Mapping, Sequence
 
-from .. import __version__
-from ..toolchain import mpy_cross_cmd
+from . import __version__
+from .toolchain import mpy_cross_cmd
 
 import texel
+from texel.compat import PORT_TABLE, PORTS, UNIX_PLATFORMS, port_of
 
 # The device package as installed beside this host package: device/texel in a
 # checkout (editable install), site-packages/texel from a wheel.
@@ -59,8 +60,8 @@ PACKAGE_DIR = Path(texel.__file__).resolve().parent
 BOARDS_DIR = PACKAGE_DIR / "boards.d"
 MAIN_PY = PACKAGE_DIR / "main.py"            # the board's /main.py, not a module
 HW_DIR = "hw"                                # texel/hw/<backend>.py
-# The hardware backend module each board port runs (texel.app._make_hw).
-PORT_BACKEND = {"rp2": "rp2", "stm32": "stm32", "circuitpython": "cpy", "virtual": "virtual"}
+# The hardware backend module each board port runs (texel.compat.PORT_TABLE: texel.app's too).
+PORT_BACKEND = {p: PORT_TABLE[p]["backend"][0] for p in PORTS}
 # Host-only modules of the texel package (paths under it), the ONE list: every
 # board image leaves them out - deploy's (.mpy and --source), mip's
 # package.json, the firmware's frozen code and ROMFS (texelpad.firmware builds
@@ -124,9 +125,10 @@ class Target:
 
 
 TARGETS: dict[str, Target] = {
-    "rp2": Target("rp2", "mpy", "armv6m", "rp2"),                # RP2040, Cortex-M0+
-    "pyboard": Target("pyboard", "mpy", "armv7emsp", "stm32"),   # STM32F405, Cortex-M4F
-    "unix": Target("unix", "mpy", "x64", "virtual"),             # the virtual board
+    # archs: the port table's (texel.compat.PORT_TABLE)
+    "rp2": Target("rp2", "mpy", PORT_TABLE["rp2"]["arch"], "rp2"),              # RP2040, Cortex-M0+
+    "pyboard": Target("pyboard", "mpy", PORT_TABLE["stm32"]["arch"], "stm32"),  # STM32F405, M4F
+    "unix": Target("unix", "mpy", PORT_TABLE["virtual"]["arch"], "virtual"),    # the virtual board
     # CircuitPython's .mpy format is its own: it gets the sources
     "circuitpython": Target("circuitpython", "source", None, "circuitpython"),
     "source": Target("source", "source"),                        # deploy --source
@@ -208,9 +210,15 @@ def decode_mpy(mpy: int) -> tuple[int, int, str | None]:
     return mpy & 0xFF, (mpy >> 8) & 3, ARCHS[index]
 
 
-# sys.platform -> the board port whose backend the image carries (unknown
-# platforms get every backend).
-_PLATFORM_PORT = {"rp2": "rp2", "pyboard": "stm32", "linux": "virtual", "darwin": "virtual"}
+def _platform_port(platform: str | None) -> str | None:
+    """sys.platform -> the board port whose backend the image carries (the
+    port table's; the unix port's platforms the virtual board's; unknown
+    platforms None: every backend)."""
+    if not platform:
+        return None
+    if platform in UNIX_PLATFORMS:
+        return "virtual"
+    return port_of("micropython", platform)
 
 
 def target_for(impl_name: str, mpy: int | None, version: Sequence,
@@ -229,14 +237,14 @@ def target_for(impl_name: str, mpy: int | None, version: Sequence,
                          % (impl_name,))
     fmt = decode_mpy(mpy) if mpy is not None else None
     arch = fmt[2] if fmt else None
-    if platform == "rp2" or (platform is None and arch == "armv6m"):
+    if _platform_port(platform) == "rp2" or (platform is None and arch == "armv6m"):
         if _version3(version)[:2] < MIN_MICROPYTHON_RP2:
             raise ImageError(
                 "MicroPython %s on rp2 is too old: texelpad needs %s or later (the refresh is a "
                 "hard machine.Timer IRQ); update the firmware (https://micropython.org/download/)"
                 % (_vtext(version), ".".join(map(str, MIN_MICROPYTHON_RP2))))
     if source:
-        return Target("source", "source", None, _PLATFORM_PORT.get(platform or ""))
+        return Target("source", "source", None, _platform_port(platform))
     mc = mpy_cross()
     if fmt is None:
         raise ImageError(
@@ -251,7 +259,7 @@ def target_for(impl_name: str, mpy: int | None, version: Sequence,
             "%s: update the firmware to MicroPython %s, or deploy --source (plain .py files, "
             "compiled by the board)" % (_vtext(version), fmt[0], fmt[1], mc.release, mc.mpy_text,
                                          mc.release))
-    port = _PLATFORM_PORT.get(platform or "")
+    port = _platform_port(platform)
     for t in TARGETS.values():
         if t.form == "mpy" and t.arch == arch and (platform is None or t.port == port):
             return t

@@ -1,0 +1,216 @@
+# The wire API: what the host's texelpad.link calls on the board besides
+# the user API of texel.app (start, push, status, stop), and what a person at
+# the REPL never needs (docs/runtime.md). Data crosses as data here: scenes as
+# JSON text (staged), long samples regions as base64 pieces (upload_*), maps
+# and telemetry back as base64 (samples_b64, telemetry_b64). The virtual
+# board's stepped time and scripted finger (advance, finger) are here too:
+# the host drives them. Nothing here plays without texel.app.
+import gc
+from . import app, compat
+from .protocol import UPLOAD_PIECE_MAX      # values per piece (the contract's)
+from .runtime import scene as _scene
+
+
+def board_display(board_name):
+    """The display of board file `board_name` if start() would take it
+    ({"positions", "dx_um"}), else ValueError in start()'s words: what a
+    power-up scene is checked against."""
+    d = app._checked_board(board_name)["display"]
+    return {"positions": d["positions"], "dx_um": d["dx_um"]}
+
+
+
+def scene_source(inline_max=None):
+    """The canonical dict of the scene playing (None when stopped): what the
+    host needs to redraw it. A samples region longer than inline_max values
+    comes back as its count (an int) instead of the values: the host reads
+    those with samples_b64() in pieces (a 19,200-value repr would need some
+    120 KB of the board's heap at once). inline_max None: everything inline."""
+    rt = app._rt
+    if rt is None or rt.refresh.scene is None:
+        return None
+    src = rt.refresh.scene.source
+    out = {}
+    for k in src:
+        out[k] = src[k]
+    regs = []
+    for r in src["regions"]:
+        tex = r["texture"]
+        if tex["kind"] == "samples":
+            vals = tex["u16"]
+            n = len(vals)
+            if inline_max is not None and n > inline_max:
+                u16 = n                 # its count: the host reads it with samples_b64
+            elif isinstance(vals, tuple):
+                u16 = vals
+            else:                       # an upload's chunks, inline
+                u16 = tuple([vals[i] for i in range(n)])
+            if u16 is not vals:
+                r = {"start_mm": r["start_mm"], "end_mm": r["end_mm"],
+                     "texture": {"kind": "samples", "fit": tex["fit"], "u16": u16}}
+        regs.append(r)
+    out["regions"] = regs
+    return out
+
+
+def samples_b64(region, offset, count):
+    """Values offset .. offset+count of the playing scene's samples region
+    `region` (its index in the canonical order), as base64 of little-endian
+    uint16: the read side of upload_write."""
+    import binascii
+    rt = app._running()
+    sc = rt.refresh.scene
+    regs = sc.source["regions"] if sc is not None else ()
+    if not (isinstance(region, int) and 0 <= region < len(regs)) \
+            or regs[region]["texture"]["kind"] != "samples":
+        raise ValueError("samples_b64: region %r is not a samples region of the scene playing"
+                         % (region,))
+    vals = regs[region]["texture"]["u16"]
+    n = len(vals)
+    if not (isinstance(offset, int) and isinstance(count, int) and 0 <= offset <= n
+            and 0 <= count <= UPLOAD_PIECE_MAX):
+        raise ValueError("samples_b64: offset %r, count %r outside 0 .. %d (at most %d per piece)"
+                         % (offset, count, n, UPLOAD_PIECE_MAX))
+    end = min(n, offset + count)
+    if not isinstance(vals, tuple):     # an upload (upload.Chunks): its own bytes
+        return binascii.b2a_base64(vals.bytes_of(offset, end)).strip().decode()
+    b = bytearray(2 * (end - offset))
+    for i in range(offset, end):
+        v = vals[i]
+        j = 2 * (i - offset)
+        b[j] = v & 0xFF
+        b[j + 1] = v >> 8
+    return binascii.b2a_base64(b).strip().decode()
+
+
+# --- uploads ---------------------------------------------------------------------------
+# Large sample data crosses the link as data: the host stages each long
+# samples region with upload_begin, sends it in pieces of base64 text
+# (upload_write: one short call each, so the board never compiles a literal
+# of thousands of numbers - a 9,000-int list literal overflowed the
+# bytecode emitter - and the refresh is never held up for long), then
+# pushes the scene with take_upload(slot) in place of the values. Nothing
+# plays until that push, which validates the upload like any scene: an
+# interrupted upload changes nothing (the next upload_begin frees it).
+_uploads = []
+
+
+STAGED = ("push", "start")     # what staged() calls
+
+
+def staged(func, text, fill=(), args=(), scene_at=0, kwargs=None):
+    """The host's push/start in one call (texelpad.link.protocol.staged_call):
+    the scene arrives as JSON text (parsed here by the C json module), the
+    samples region i takes upload slot k for each (i, k) in fill, then
+    func(*args with the scene at scene_at, **kwargs). Returns ('ok', its
+    value) or ('err', the ValueError's text). One statement for the board to
+    compile instead of eight: 7-11 ms less per push on an RP2040
+    (bench/firmware.py)."""
+    if func not in STAGED:
+        return ("err", "staged: %r is not one of %s" % (func, STAGED))
+    try:
+        import json
+        s = json.loads(text)
+        if fill:
+            g = s["regions"]
+            for i, k in fill:
+                g[i]["texture"]["u16"] = take_upload(k)
+        a = list(args)
+        a.insert(scene_at, s)
+        f = app.push if func == "push" else app.start
+        return ("ok", f(*a, **(kwargs or {})))
+    except ValueError as e:
+        return ("err", str(e))
+
+
+def upload_begin(sizes):
+    """Stage one upload per entry of `sizes` (values each, 1 .. MAX_SAMPLES),
+    freeing any earlier one. Returns the number of slots."""
+    global _uploads
+    _uploads = []
+    gc.collect()
+    if not isinstance(sizes, (list, tuple)) or not 1 <= len(sizes) <= _scene.MAX_REGIONS:
+        raise ValueError("upload_begin: expected a list of 1 .. %d sizes" % _scene.MAX_REGIONS)
+    from .runtime.upload import Upload
+    try:
+        ups = [Upload(n) for n in sizes]
+    except MemoryError:
+        gc.collect()
+        raise ValueError("not enough memory on the board to receive %d sample values (%s) "
+                         "beside the scene playing, which keeps playing; to make room, "
+                         "play a small scene first (texelpad push --constant 0)"
+                         % (sum(sizes), compat.memory_words() or "the heap is full"))
+    _uploads = ups
+    return len(ups)
+
+
+def upload_write(slot, offset, b64):
+    """The next piece of upload `slot`: base64 text of little-endian uint16
+    values starting at value `offset`. Returns the values arrived so far."""
+    import binascii
+    if not (isinstance(slot, int) and 0 <= slot < len(_uploads)):
+        raise ValueError("upload_write: no upload %r (upload_begin first)" % (slot,))
+    if not isinstance(b64, str) or len(b64) > 4 * UPLOAD_PIECE_MAX // 3 * 2 + 8:
+        raise ValueError("upload_write: a piece is base64 text of at most %d values"
+                         % UPLOAD_PIECE_MAX)
+    full = ("not enough memory on the board for the next piece of the upload (%s); the "
+            "current scene keeps playing")
+    try:
+        data = binascii.a2b_base64(b64)
+    except ValueError:
+        raise ValueError("upload_write: the piece is not base64")
+    except MemoryError:
+        raise ValueError(full % (compat.memory_words() or "the heap is full"))
+    try:
+        return _uploads[slot].write(offset, data)
+    except MemoryError:
+        raise ValueError(full % (compat.memory_words() or "the heap is full"))
+
+
+def take_upload(slot):
+    """Upload `slot`, handed over for a scene's samples region (and no longer
+    staged). Validation refuses it unless every value arrived."""
+    if not (isinstance(slot, int) and 0 <= slot < len(_uploads)) or _uploads[slot] is None:
+        raise ValueError("take_upload: no upload %r" % (slot,))
+    up = _uploads[slot]
+    _uploads[slot] = None
+    return up
+
+
+def upload_discard():
+    """Free whatever is staged (an interrupted upload)."""
+    global _uploads
+    _uploads = []
+    gc.collect()
+
+
+
+def telemetry_b64():
+    """telemetry() for the host: (count, base64 text, lost), the text the
+    count's int32 times (us), int32 positions and uint16 amplitudes one
+    after the other, little-endian - copied at C speed and ~half the bytes
+    of the repr of the same samples (runtime/refresh.py telemetry_packed_since)."""
+    import binascii
+    rt = app._running()
+    t, p, m, n, rt.tel_tail, lost = rt.refresh.telemetry_packed_since(rt.tel_tail)
+    return n, binascii.b2a_base64(t + p + m).decode().strip(), lost
+
+
+def advance(ms):
+    """Virtual board only: run `ms` milliseconds of stepped time."""
+    rt = app._running()
+    if not hasattr(rt.hw, "advance"):
+        raise ValueError("advance(): only the virtual board has stepped time")
+    return rt.hw.advance(int(ms * 1000))
+
+
+def finger(keyframes):
+    """Virtual board only: script the finger, [(t_ms, position_mm or None)],
+    relative to now. Returns now (the board's ticks_us), so the host can line
+    the script up with telemetry."""
+    rt = app._running()
+    if not hasattr(rt.hw, "set_finger"):
+        raise ValueError("finger(): only the virtual board has a scripted finger")
+    dx = rt.board["display"]["dx_um"] / 1000.0
+    return rt.hw.set_finger([(int(t * 1000), None if p is None else int(p / dx + 0.5))
+                             for t, p in keyframes])
