@@ -98,7 +98,6 @@ def pytest_configure(config):
                                 % (name, ", ".join(HYPOTHESIS_PROFILES)))
     if getattr(config.option, "numprocesses", None) and not hasattr(config, "workerinput"):
         return                  # the pytest-xdist controller: it runs no test
-    import_every_module()
     # Each test process (the run, or each pytest-xdist worker: tools/test.sh runs
     # two) announces the virtual boards its tests start in a folder of its own
     # (host/texelpad/sim/virtual.py registry_dir): a board another worker's test
@@ -107,6 +106,15 @@ def pytest_configure(config):
     global _RUNTIME_DIR
     _RUNTIME_DIR = tempfile.mkdtemp(prefix="texelpad-tests-run-")
     os.environ["TEXELPAD_RUNTIME_DIR"] = _RUNTIME_DIR
+
+
+@pytest.hookimpl(trylast=True)          # after -m and -k took their share
+def pytest_collection_modifyitems(session, config, items):
+    # every module imported once the tests are known, before any runs - but only
+    # where a hypothesis property will run (the pool above): a test file without
+    # one starts in a fraction of a second (tools/test.sh --unit)
+    if any(getattr(getattr(item, "obj", None), "is_hypothesis_test", False) for item in items):
+        import_every_module()
 
 
 def pytest_unconfigure(config):

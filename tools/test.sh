@@ -4,7 +4,10 @@
 # lint (ruff) and the host's types (mypy), then the tests.
 #
 #   bash tools/test.sh            every test (CI)
-#   bash tools/test.sh --fast     the development slice: -m "not slow" (about 2 minutes)
+#   bash tools/test.sh --fast     the development slice: -m "not slow" (about 6 minutes)
+#   bash tools/test.sh --unit     the everyday lane: no virtual board, no instruments, no
+#                                 emulated chip, no fuzz target, nothing slow; pip only when
+#                                 pyproject.toml changed, the lint but not mypy (about a minute)
 #   bash tools/test.sh ARGS...    any pytest arguments (a file, -k, -x ...)
 #
 # The tests run on two pytest-xdist workers, a test file to a worker (loadfile:
@@ -14,17 +17,30 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 args=()
+unit=0
 for a in "$@"; do
-    if [ "$a" = "--fast" ]; then args+=(-m "not slow"); else args+=("$a"); fi
+    case "$a" in
+        --fast) args+=(-m "not slow") ;;
+        --unit) unit=1; args+=(-m "not slow and not vboard and not instruments and not fuzz") ;;
+        *) args+=("$a") ;;
+    esac
 done
 [ -x .venv/bin/python ] || python3 -m venv .venv
-.venv/bin/python -m pip install -q --upgrade pip >/dev/null
-.venv/bin/python -m pip install -q -e '.[test]'
+# pip again only when what it installs from changed (the stamp: pyproject.toml's hash)
+stamp=.venv/.texelpad-installed
+want=$(sha256sum pyproject.toml | cut -d' ' -f1)
+if [ "$unit" = 0 ] || [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
+    .venv/bin/python -m pip install -q --upgrade pip >/dev/null
+    .venv/bin/python -m pip install -q -e '.[test]'
+    echo "$want" > "$stamp"
+fi
 # the lint and the types first (pyproject.toml: [tool.ruff], [tool.mypy]); each takes
 # seconds, and a red one stops here with what it found
 .venv/bin/python -m ruff check --quiet host device tools tests bench
-.venv/bin/python -m mypy --no-error-summary               # host/texelpad ([tool.mypy] files)
-.venv/bin/python -m mypy --no-error-summary bench         # the research benchmarks, on their own
+if [ "$unit" = 0 ]; then
+    .venv/bin/python -m mypy --no-error-summary               # host/texelpad ([tool.mypy] files)
+    .venv/bin/python -m mypy --no-error-summary bench         # the research benchmarks, on their own
+fi
 workers="${TEXELPAD_TEST_WORKERS:-2}"
 xdist=()
 if [ "$workers" != 0 ]; then xdist=(-n "$workers" --dist loadfile); fi

@@ -478,6 +478,30 @@ def plan_ms_cpython(repeat: int) -> dict[str, float]:
     return out
 
 
+def _machine_row(name: str, exe: str, info: dict[str, Any], heap: str) -> dict[str, Any]:
+    """What the results say of one interpreter (or the emulated chip)."""
+    return {"name": name, "exe": exe, "impl": info.get("impl"),
+            "version": ".".join(str(x) for x in info.get("version", []) if x != ""),
+            "build": info.get("build"), "machine": info.get("machine"),
+            "float_bits": info.get("float_bits"), "float": float_name(info.get("float_bits")),
+            "viper": info.get("viper"), "ulab": info.get("ulab"),
+            "variants": info.get("variants"), "heap": heap,
+            "calibration_us": info.get("calibration"), "plan_ms": info.get("plan_ms")}
+
+
+def _estimate(rows: list[Row], viper: dict[str, bool], calibration: Any, costs: Any) -> None:
+    """Each row's RP2040 estimate (and the unix port's model of its own row)."""
+    timing_params = HARD_CASES[TIMING_CASE][0]
+    for row in rows:
+        # an int row without viper runs the Python fill: that is what it costs
+        path = "int-py" if row.variant == "int" and not viper.get(row.runtime) else row.variant
+        if path in model.SYNTH:
+            row.est_rp2040 = model.estimate(path, timing_params, row.samples, row.texels, costs)
+            if row.runtime == toolchain.UNIX_PORT and calibration:
+                row.model_unix = model.estimate(path, timing_params, row.samples, row.texels,
+                                                model.costs_unix(calibration))
+
+
 def run(case_names: list[str] | None = None, runtimes: Iterable[str] = RUNTIMES,
         repeat: int = 11, progress: Progress | None = None,
         chip: str | None = None) -> BenchResult:
@@ -525,14 +549,7 @@ def run(case_names: list[str] | None = None, runtimes: Iterable[str] = RUNTIMES,
             # the RP2040 estimate's I/B/C ratios and the op-count check come
             # from the unix port (texelpad/bench/opcount.py)
             calibration = info.get("calibration")
-        machine[rt] = {
-            "name": RUNTIME_NAMES[rt], "exe": exe, "impl": info.get("impl"),
-            "version": ".".join(str(x) for x in info.get("version", []) if x != ""),
-            "build": info.get("build"), "machine": info.get("machine"),
-            "float_bits": info.get("float_bits"), "float": float_name(info.get("float_bits")),
-            "viper": info.get("viper"), "ulab": info.get("ulab"),
-            "variants": info.get("variants"), "heap": MP_HEAP,
-            "calibration_us": info.get("calibration"), "plan_ms": info.get("plan_ms")}
+        machine[rt] = _machine_row(RUNTIME_NAMES[rt], exe, info, MP_HEAP)
         if info and not info.get("viper"):
             skipped.append({"runtime": rt, "variant": "int (viper)",
                             "reason": "no native emitter: the int row is the engine's "
@@ -550,25 +567,10 @@ def run(case_names: list[str] | None = None, runtimes: Iterable[str] = RUNTIMES,
             failed += mp.errors
             viper[CHIP] = bool(mp.info.get("viper"))
             info = mp.info
-            machine[CHIP] = {
-                "name": RUNTIME_NAMES[CHIP], "exe": "rp2emu (../shared/instruments)",
-                "impl": info.get("impl"),
-                "version": ".".join(str(x) for x in info.get("version", []) if x != ""),
-                "build": info.get("build"), "machine": info.get("machine"),
-                "float_bits": info.get("float_bits"), "float": float_name(info.get("float_bits")),
-                "viper": info.get("viper"), "ulab": info.get("ulab"),
-                "variants": info.get("variants"), "heap": "the chip's own",
-                "calibration_us": info.get("calibration"), "plan_ms": info.get("plan_ms")}
+            machine[CHIP] = _machine_row(RUNTIME_NAMES[CHIP], "rp2emu (../shared/instruments)",
+                                         info, "the chip's own")
     costs, costs_note = model.costs_rp2040(calibration)
-    timing_params = HARD_CASES[TIMING_CASE][0]
-    for row in rows:
-        # an int row without viper runs the Python fill: that is what it costs
-        path = "int-py" if row.variant == "int" and not viper.get(row.runtime) else row.variant
-        if path in model.SYNTH:
-            row.est_rp2040 = model.estimate(path, timing_params, row.samples, row.texels, costs)
-            if row.runtime == toolchain.UNIX_PORT and calibration:
-                row.model_unix = model.estimate(path, timing_params, row.samples, row.texels,
-                                                model.costs_unix(calibration))
+    _estimate(rows, viper, calibration, costs)
     return BenchResult(rows=rows, skipped=skipped, failed=failed, case_names=names,
                        repeat=repeat, machine=machine, calibration=calibration,
                        rp2040_costs=costs, rp2040_costs_note=costs_note,

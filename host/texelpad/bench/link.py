@@ -67,15 +67,7 @@ def run(pushes: int = 200, deploy: bool = True,
         if chip:
             vb.start()                      # boots the firmware, waits for its port
         if deploy:
-            from ..deploy.install import deploy as do_deploy
-            for label in ("cold", "warm"):
-                with connect(vb.port, check=False, import_image=False, timeout=timeout) as b:
-                    t0 = time.perf_counter()
-                    rep = do_deploy(b)
-                    res["deploy_%s_s" % label] = time.perf_counter() - t0
-                    res["deploy_%s" % label] = rep
-                say("deploy %s: %.2f s, %d files written, %d bytes"
-                    % (label, res["deploy_%s_s" % label], rep["written"], rep["bytes_written"]))
+            res.update(_deploys(vb.port, timeout, say))
         with connect(vb.port, timeout=timeout) as b:
             if chip:
                 t0 = time.perf_counter()
@@ -84,27 +76,8 @@ def run(pushes: int = 200, deploy: bool = True,
             else:
                 b.start("virtual", None, realtime=True)
             display = b.status()["display"]
-            lat, sent, recv, mem, acked, build = [], [], [], [], 0, []
             t_all = time.perf_counter()
-            for i in range(pushes):
-                params = {"pitch_db": round(-5.0 + 20.0 * (i % 97) / 97, 3),
-                          "irregularity_db": -12.9, "seed": i}
-                s0, r0 = b.link.sent, b.link.received
-                t0 = time.perf_counter()
-                st = b.push_texel(params)
-                lat.append(time.perf_counter() - t0)
-                sent.append(b.link.sent - s0)
-                recv.append(b.link.received - r0)
-                reg = st["scene"]["regions"]
-                if (st["pushes"] == i + 2 and len(reg) == 1 and reg[0]["seed"] == i
-                        and reg[0]["pitch_db"] == params["pitch_db"] and st["faults"] == 0):
-                    acked += 1
-                mem.append(st["mem_free"])
-                if st.get("last_push"):             # the board's own clock
-                    build.append(st["last_push"]["build_us"] + st["last_push"]["swap_us"])
-                if progress and (i + 1) % max(1, pushes // 10) == 0:
-                    say("push %d/%d: median %.1f ms" % (i + 1, pushes,
-                                                        1e3 * statistics.median(lat)))
+            lat, sent, recv, mem, acked, build = _soak(b, pushes, say if progress else None)
             res["soak_s"] = time.perf_counter() - t_all
             st = b.status()
             try:
@@ -137,6 +110,55 @@ def run(pushes: int = 200, deploy: bool = True,
         "worst_refresh_us": st["worst_us"], "rate_hz": st["rate_hz"],
     })
     return res
+
+
+def _deploys(port: str, timeout: float, say: Callable[[str], None]) -> dict[str, Any]:
+    """texelpad deploy twice, timed: cold (the board's flash empty) and warm
+    (nothing changed)."""
+    from ..deploy.install import deploy as do_deploy
+    from ..link.board import connect
+    res: dict[str, Any] = {}
+    for label in ("cold", "warm"):
+        with connect(port, check=False, import_image=False, timeout=timeout) as b:
+            t0 = time.perf_counter()
+            rep = do_deploy(b)
+            res["deploy_%s_s" % label] = time.perf_counter() - t0
+            res["deploy_%s" % label] = rep
+        say("deploy %s: %.2f s, %d files written, %d bytes"
+            % (label, res["deploy_%s_s" % label], rep["written"], rep["bytes_written"]))
+    return res
+
+
+def _soak(b: Any, pushes: int, say: Callable[[str], None] | None
+          ) -> tuple[list[float], list[int], list[int], list[float], int, list[int]]:
+    """`pushes` full-screen texel pushes, each a new pitch and seed: their
+    latencies (s), bytes sent and received, mem_free, how many the board
+    acknowledged as asked, and the board's own build + swap times (us)."""
+    lat: list[float] = []
+    sent: list[int] = []
+    recv: list[int] = []
+    mem: list[float] = []
+    build: list[int] = []
+    acked = 0
+    for i in range(pushes):
+        params = {"pitch_db": round(-5.0 + 20.0 * (i % 97) / 97, 3),
+                  "irregularity_db": -12.9, "seed": i}
+        s0, r0 = b.link.sent, b.link.received
+        t0 = time.perf_counter()
+        st = b.push_texel(params)
+        lat.append(time.perf_counter() - t0)
+        sent.append(b.link.sent - s0)
+        recv.append(b.link.received - r0)
+        reg = st["scene"]["regions"]
+        if (st["pushes"] == i + 2 and len(reg) == 1 and reg[0]["seed"] == i
+                and reg[0]["pitch_db"] == params["pitch_db"] and st["faults"] == 0):
+            acked += 1
+        mem.append(st["mem_free"])
+        if st.get("last_push"):             # the board's own clock
+            build.append(st["last_push"]["build_us"] + st["last_push"]["swap_us"])
+        if say and (i + 1) % max(1, pushes // 10) == 0:
+            say("push %d/%d: median %.1f ms" % (i + 1, pushes, 1e3 * statistics.median(lat)))
+    return lat, sent, recv, mem, acked, build
 
 
 def _upload(b: Any, display: dict[str, Any], say: Callable[[str], None],

@@ -74,7 +74,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from typing import Iterable
+from typing import Any, Iterable
 
 import numpy as np
 from scipy import stats
@@ -161,20 +161,8 @@ def _frozen(model: str, p: dict[str, np.ndarray], cols):
     return stats.weibull_min(p["k"][cols], loc=0, scale=p["lam"][cols])
 
 
-def fit_swipe(mags, models: Iterable[str] = MODELS) -> dict:
-    """Fit every wavenumber (column) of a swipe's magnitudes, shape
-    (windows, K) as from stft_magnitudes, with each of `models`. Returns
-
-        {"rayleigh": {"sigma": (K,), "ks": (K,), "loglik": (K,)},
-         "rice":     {"nu": (K,), "sigma": (K,), "ks": (K,), "loglik": (K,)},
-         "weibull":  {"k": (K,), "lam": (K,), "ks": (K,), "loglik": (K,)},
-         "degenerate": bool (K,), "windows": n, "fallbacks": {model: count}}
-
-    parameters in the magnitudes' own units (friction), ks the K-S statistic
-    of the fit, loglik the summed log density of the column under the fit.
-    Degenerate columns (all equal, or zero) as the module docstring says.
-    Raises ValueError for a wrong shape or a non-finite or negative
-    magnitude."""
+def _checked(mags: Any, models: Iterable[str]) -> tuple[np.ndarray, tuple[str, ...]]:
+    """fit_swipe's input as an array, and its models, or ValueError saying what is wrong."""
     m = np.asarray(mags, dtype=float)
     models = tuple(models)
     for name in models:
@@ -189,6 +177,24 @@ def fit_swipe(mags, models: Iterable[str] = MODELS) -> dict:
     if np.any(m < 0):
         w, k = np.argwhere(m < 0)[0]
         raise ValueError("mags: window %d, wavenumber %d is negative (%r)" % (w, k, float(m[w, k])))
+    return m, models
+
+
+def fit_swipe(mags, models: Iterable[str] = MODELS) -> dict:
+    """Fit every wavenumber (column) of a swipe's magnitudes, shape
+    (windows, K) as from stft_magnitudes, with each of `models`. Returns
+
+        {"rayleigh": {"sigma": (K,), "ks": (K,), "loglik": (K,)},
+         "rice":     {"nu": (K,), "sigma": (K,), "ks": (K,), "loglik": (K,)},
+         "weibull":  {"k": (K,), "lam": (K,), "ks": (K,), "loglik": (K,)},
+         "degenerate": bool (K,), "windows": n, "fallbacks": {model: count}}
+
+    parameters in the magnitudes' own units (friction), ks the K-S statistic
+    of the fit, loglik the summed log density of the column under the fit.
+    Degenerate columns (all equal, or zero) as the module docstring says.
+    Raises ValueError for a wrong shape or a non-finite or negative
+    magnitude."""
+    m, models = _checked(mags, models)
     n = m.shape[0]
     top = float(m.max())
     cmax = m.max(axis=0)

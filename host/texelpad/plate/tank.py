@@ -458,6 +458,15 @@ def _report(inductance_h: float | None, capacitance_f: float | None,
                             format_quantity(Cp, "F")))
             lines.append("  " + _tuning_line(tu))
     data["tank"] = t.as_dict()
+    _impedance_and_estimate(t, bus_volts, q, drive, share, lines, data)
+    return "\n".join(lines), data
+
+
+def _impedance_and_estimate(t: Tank, bus_volts: float | None, q: float | None, drive: str,
+                            share: float, lines: list[str], data: dict[str, Any]) -> None:
+    """_report's last lines: the tank's impedance, and the voltage estimate
+    when a bus voltage and Q were given (share: the piezo's part of the
+    tank's capacitance)."""
     lines.append("  characteristic impedance sqrt(L/C) = %.4g ohm (tank current amplitude = "
                  "capacitor voltage amplitude / %.4g ohm; it circulates in the tank, the supply "
                  "delivers only the losses)" % (t.impedance_ohm, t.impedance_ohm))
@@ -474,4 +483,3 @@ def _report(inductance_h: float | None, capacitance_f: float | None,
                      "bandwidth); rate the inductor, capacitors and wiring above this."
                      % (drive, bus_volts, q, _v(vf), _v(vc * share),
                         _v(_result("piezo_volts", 2 * vc * share)), i_amp))
-    return "\n".join(lines), data
