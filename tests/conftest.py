@@ -37,19 +37,11 @@ def golden_dir() -> Path:
 #   "nightly"          fresh random cases, NIGHTLY_SCALE times as many per property
 #                      (thousands), still no example database and no deadline.
 # e.g.  TEXELPAD_HYPOTHESIS=nightly pytest -s -m "not slow" tests/gen/test_build_property.py
-# The profiles are registered here and picked by those modules (their hyp_settings,
-# which repeat NIGHTLY_SCALE); they are not loaded globally, so other hypothesis
-# tests keep their own settings.
-from hypothesis import HealthCheck, settings as _hyp_settings  # noqa: E402
-
+# The profiles are registered by tests/support/hyp_profiles.py, which those modules
+# import (their hyp_settings repeat NIGHTLY_SCALE); they are not loaded globally, so
+# other hypothesis tests keep their own settings - and a test file without hypothesis
+# does not import it (1.5 s of a one-file run where bytecode is not cached).
 HYPOTHESIS_PROFILES = ("default", "nightly")
-NIGHTLY_SCALE = 25
-_HYP_COMMON = dict(database=None, deadline=None, print_blob=True,
-                   suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
-                                          HealthCheck.filter_too_much,
-                                          HealthCheck.large_base_example])
-_hyp_settings.register_profile("texelpad-default", derandomize=True, **_HYP_COMMON)
-_hyp_settings.register_profile("texelpad-nightly", derandomize=False, **_HYP_COMMON)
 
 
 # --- hypothesis' constants: the same pool in every test process -------------------
@@ -108,12 +100,26 @@ def pytest_configure(config):
     os.environ["TEXELPAD_RUNTIME_DIR"] = _RUNTIME_DIR
 
 
-@pytest.hookimpl(trylast=True)          # after -m and -k took their share
+HEAVY = Path(__file__).resolve().parent / "heavy.txt"    # tools/heavy_tests.py writes it
+
+
+@pytest.hookimpl(tryfirst=True)         # before -m deselects: the mark must be there
 def pytest_collection_modifyitems(session, config, items):
-    # every module imported once the tests are known, before any runs - but only
-    # where a hypothesis property will run (the pool above): a test file without
-    # one starts in a fraction of a second (tools/test.sh --unit)
-    if any(getattr(getattr(item, "obj", None), "is_hypothesis_test", False) for item in items):
+    # the tests of the everyday lane that take half a second or more here: marked
+    # heavy, which tools/test.sh --unit leaves out (--fast and CI run them)
+    heavy = {ln.strip() for ln in HEAVY.read_text().splitlines()
+             if ln.strip() and not ln.startswith("#")}
+    for item in items:
+        if item.nodeid in heavy or item.nodeid.split("::")[0] in heavy:    # a test, or a file
+            item.add_marker(pytest.mark.heavy)
+
+
+def pytest_collection_finish(session):
+    # every module imported once the tests are known (after -m and -k took their
+    # share), before any runs - but only where a hypothesis property will run (the
+    # pool above): a test file without one starts in a fraction of a second
+    if any(getattr(getattr(item, "obj", None), "is_hypothesis_test", False)
+           for item in session.items):
         import_every_module()
 
 

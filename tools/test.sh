@@ -6,8 +6,9 @@
 #   bash tools/test.sh            every test (CI)
 #   bash tools/test.sh --fast     the development slice: -m "not slow" (about 6 minutes)
 #   bash tools/test.sh --unit     the everyday lane: no virtual board, no instruments, no
-#                                 emulated chip, no fuzz target, nothing slow; pip only when
-#                                 pyproject.toml changed, the lint but not mypy (about a minute)
+#                                 emulated chip, no fuzz target, nothing slow, no test of half a
+#                                 second or more (heavy: tests/heavy.txt, tools/heavy_tests.py);
+#                                 pip only when pyproject.toml changed, the lint but not mypy
 #   bash tools/test.sh ARGS...    any pytest arguments (a file, -k, -x ...)
 #
 # The tests run on two pytest-xdist workers, a test file to a worker (loadfile:
@@ -21,7 +22,7 @@ unit=0
 for a in "$@"; do
     case "$a" in
         --fast) args+=(-m "not slow") ;;
-        --unit) unit=1; args+=(-m "not slow and not vboard and not instruments and not fuzz") ;;
+        --unit) unit=1; args+=(-m "not slow and not vboard and not instruments and not fuzz and not heavy") ;;
         *) args+=("$a") ;;
     esac
 done

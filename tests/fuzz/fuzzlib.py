@@ -33,6 +33,8 @@ from typing import Any, Callable
 
 from hypothesis import settings
 
+from support import hyp_profiles  # noqa: F401 (registers the profiles)
+
 SMOKE_CASES = 50
 NIGHTLY_CASES = 10_000
 MODES = ("smoke", "nightly", "off")

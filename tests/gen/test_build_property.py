@@ -47,7 +47,7 @@ import numpy as np
 import pytest
 from hypothesis import Phase, example, given, note, settings, strategies as st
 
-from support import mpy
+from support import hyp_profiles, mpy  # noqa: F401 (hyp_profiles: registers the profiles)
 import texel
 from texel.gen import engine_int, engine_numpy, engine_pure
 from texel.gen import params as P

@@ -29,7 +29,7 @@ from array import array
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from support import mpy
+from support import hyp_profiles, mpy  # noqa: F401 (hyp_profiles: registers the profiles)
 import texel
 from texel.runtime import scene as S
 

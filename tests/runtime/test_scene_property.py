@@ -76,7 +76,7 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, note, settings, strategies as st
 from hypothesis.control import currently_in_test_context
 
-from support import mpy
+from support import hyp_profiles, mpy  # noqa: F401 (hyp_profiles: registers the profiles)
 import texel
 from texel.gen import params as P
 from texel.runtime import scene as S
