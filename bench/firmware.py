@@ -226,7 +226,7 @@ def _request(b: Any, scene: dict[str, Any]) -> dict[str, Any]:
             b._upload([u for _, u in uploads], None)
         except (LinkError, ValueError) as e:
             return {"refused": "upload: %s" % (str(e)[:300],)}
-    code = protocol.staged_call(protocol.APP, "push", [plain], 0,
+    code = protocol.staged_call(protocol.WIRE, "push", [plain], 0,
                                 {i: k for k, (i, _) in enumerate(uploads)})
     try:
         out = b.link.exec("_tpf_req(%r)" % code, timeout=600).strip().splitlines()

@@ -389,7 +389,7 @@ def test_ctrl_c_during_the_upload_changes_nothing(port):
         st = b.status()
         print("\nafter Ctrl-C at %d of %d bytes: %s" % (seen[-1], 2 * n, _figures(st)))
         assert st["running"] and st["pushes"] == pushes and b.scene_source() == before
-        assert b.link.eval("import texel.app as a\nprint(repr(len(a._uploads)))") == 0
+        assert b.link.eval("import texel.wire as w\nprint(repr(len(w._uploads)))") == 0
 
 
 def test_a_host_that_gives_up_leaves_no_half_started_board(port, monkeypatch):

@@ -1,4 +1,4 @@
-"""Long samples regions cross the link as data, in pieces (texel.app.upload_*,
+"""Long samples regions cross the link as data, in pieces (texel.wire.upload_*,
 texelpad.link.protocol.split_uploads), at the documented size (19,200 values,
 texel.runtime.kinds.samples.MAX_SAMPLES); Ctrl-C during a push changes nothing (or
 says exactly what changed); a board file for other firmware is refused before
@@ -73,7 +73,7 @@ def test_full_size_u16_upload_in_pieces_refresh_within_budget(board):
 
     def progress(done, total):
         seen.append((done, total))
-        board._app("advance", 2)               # refreshes between the pieces
+        board._wire("advance", 2)               # refreshes between the pieces
     st0 = board.status()
     board.sent_code.clear()
     st = board.push(_scene({"kind": "samples", "u16": u16}, "noise"), progress=progress)
@@ -147,21 +147,21 @@ def test_bad_value_in_a_long_region_refused_before_anything_is_sent(board):
 def test_board_refuses_incomplete_or_disordered_uploads(board):
     """The device side checks what the host would never send."""
     b = board
-    assert b._app("upload_begin", [4]) == 1
+    assert b._wire("upload_begin", [4]) == 1
     with pytest.raises(DeviceError, match="pieces arrive in order"):
-        b._app("upload_write", 0, 2, "AAAAAA==")
+        b._wire("upload_write", 0, 2, "AAAAAA==")
     with pytest.raises(DeviceError, match="not base64"):
-        b._app("upload_write", 0, 0, "A")
-    assert b._app("upload_write", 0, 0, "AQACAA==") == 2          # values 1, 2
+        b._wire("upload_write", 0, 0, "A")
+    assert b._wire("upload_write", 0, 0, "AQACAA==") == 2          # values 1, 2
     kind, msg = b.link.eval(protocol.staged_call(
-        protocol.APP, "push", [{"regions": [{"start_mm": 0, "end_mm": 1, "texture": {
+        protocol.WIRE, "push", [{"regions": [{"start_mm": 0, "end_mm": 1, "texture": {
             "kind": "samples", "u16": None}}]}], 0, {0: 0}))
     assert kind == "err" and msg == ("regions[0].texture.u16: the upload is incomplete "
                                      "(2 of 4 values arrived)")
     with pytest.raises(DeviceError, match="no upload 0"):
-        b._app("take_upload", 0)                   # taken by the refused push
+        b._wire("take_upload", 0)                   # taken by the refused push
     with pytest.raises(DeviceError, match=r"1 \.\. 19200"):
-        b._app("upload_begin", [19201])
+        b._wire("upload_begin", [19201])
 
 
 def test_ctrl_c_during_the_upload_changes_nothing(board):
@@ -176,7 +176,7 @@ def test_ctrl_c_during_the_upload_changes_nothing(board):
     st = board.status()
     assert st["pushes"] == pushes and board.scene_source() == before
     # what was staged is freed on the board
-    assert board.link.eval("import texel.app as a\nprint(repr(len(a._uploads)))") == 0
+    assert board.link.eval("import texel.wire as w\nprint(repr(len(w._uploads)))") == 0
 
 
 class _Trip:
