@@ -378,34 +378,7 @@ def _module_cycles(root: Path) -> list[tuple[str, ...]]:
     graph = {n: {m for m in imports(p)
                  if m in mods and m not in (n, top) and not n.startswith(m + ".")}
              for n, p in mods.items() if n != top}
-    index: dict[str, int] = {}
-    low: dict[str, int] = {}
-    stack: list[str] = []
-    found: list[tuple[str, ...]] = []
-
-    def visit(v: str) -> None:             # Tarjan's strongly connected components
-        index[v] = low[v] = len(index)
-        stack.append(v)
-        for w in graph[v]:
-            if w not in index:
-                visit(w)
-                low[v] = min(low[v], low[w])
-            elif w in stack:
-                low[v] = min(low[v], index[w])
-        if low[v] == index[v]:
-            comp = []
-            while True:
-                w = stack.pop()
-                comp.append(w)
-                if w == v:
-                    break
-            if len(comp) > 1:
-                found.append(tuple(sorted(comp)))
-
-    for v in sorted(graph):
-        if v not in index:
-            visit(v)
-    return sorted(found)
+    return sorted(tuple(c) for c in cycles(graph))      # the layer graph's Tarjan, above
 
 
 def test_no_import_cycles_between_modules_but_the_one_explained():
