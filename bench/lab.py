@@ -14,6 +14,10 @@ reference as 9,600 uploaded samples (the left half) and seed 001's texel
 options (1 mm texels, min_cpmm, phase reset) on the right, so every change
 uploads the reference again.
 
+A fourth, "strip": what every page's strip asks of the board (the scene
+playing, BoardOwner.scene_source) after each mapping push and again while
+it plays on - read over the link once, then remembered.
+
 Two paths, both measured: "owner" pushes through the lab's BoardOwner in
 this process (the board's part); "http" is what a participant's slider does -
 `texelpad lab` started as a process, a free exploration session from the
@@ -82,6 +86,36 @@ def run_mapping(steps: int = 200) -> dict:
         irr = float(k % 101)
         return slider_scene(st, {}, display, pitch, irr, k)[0], st.reference
     return _through_owner(steps, step, "BoardOwner.push in this process, seed 001's mapping")
+
+
+def run_strip(steps: int = 200) -> dict:
+    """What every page's strip asks (GET /api/strip: BoardOwner.scene_source)
+    of seed 001's mapping scenes - 9,600 samples read back over the link:
+    once after each push (read from the board) and again while the scene
+    plays on (remembered: the experimenter's page asks every second)."""
+    st = Mapping(1)
+    first: list[float] = []
+    again: list[float] = []
+    with stop_on_signals():
+        vb = open_virtual(source=True)
+        try:
+            owner = BoardOwner(vb.port, "virtual", realtime=True)
+            display = owner.display()
+            for k in range(max(1, steps // 10)):
+                owner.push(slider_scene(st, {}, display, float(k % 101), 50.0, k)[0])
+                for times in (first, again, again, again):
+                    t0 = time.perf_counter()
+                    owner.scene_source()
+                    times.append((time.perf_counter() - t0) * 1e3)
+            reads, last = owner.source_reads, owner.status()
+            owner.close()
+        finally:
+            vb.stop()
+    return {"after_a_push": _figures(first, [st.reference] * len(first)),
+            "unchanged": _figures(again, [st.reference] * len(again)),
+            "board_reads": reads, "overruns": last["overruns"], "refreshes": last["refreshes"],
+            "board": "virtual (MicroPython unix port, real time)",
+            "path": "BoardOwner.scene_source in this process, seed 001's mapping scenes"}
 
 
 def _figures(times: list[float], refs: list[str]) -> dict:
@@ -163,6 +197,16 @@ def main(argv: list[str] | None = None) -> int:
                  res["steps"], res["overruns"], res["refreshes"]), flush=True)
         print("  median by reference (ms): " + ", ".join(
             "%s %.1f" % kv for kv in res["median_ms_by_reference"].items()), flush=True)
+    res = out["strip"] = run_strip(a.steps)
+    for k, what in (("after_a_push", "read from the board after a push"),
+                    ("unchanged", "the same scene asked again (remembered)")):
+        f = res[k]
+        print("the scene playing, as every strip asks it (seed 001's mapping, 9,600 samples), "
+              "%s: median %.1f ms, p95 %.1f ms, max %.1f ms over %d asks"
+              % (what, f["median_ms"], f["p95_ms"], f["max_ms"], f["steps"]), flush=True)
+    print("  %d reads reached the board for %d asks"
+          % (res["board_reads"], res["after_a_push"]["steps"] + res["unchanged"]["steps"]),
+          flush=True)
     if a.json:
         with open(a.json, "w") as f:
             json.dump(out, f, indent=1)

@@ -40,6 +40,15 @@ def browser():
         b.close()
 
 
+@pytest.fixture(autouse=True)
+def _pages_closed(browser):
+    """Every test's pages closed after it: an experimenter's page left open
+    polls the server every second, and the next test's clicks queue behind it."""
+    yield
+    for context in browser.contexts:
+        context.close()
+
+
 @pytest.fixture(scope="module")
 def lab(tmp_path_factory):
     data = tmp_path_factory.mktemp("lab")
@@ -77,11 +86,19 @@ def _start(browser, url: str, config: str, participant: str, seed: int, **extra)
 
 
 def _wait_answers(p, n: int, done: bool = False):
-    if done:
-        p.wait_for_selector("#done:not([hidden])")
-    else:
-        p.wait_for_function("document.getElementById('progress').textContent"
-                            ".includes('%d answer')" % n)
+    """The page shows n answers (or the end); on a timeout, the page's own
+    words (its error line, its progress) say why."""
+    try:
+        if done:
+            p.wait_for_selector("#done:not([hidden])")
+        else:
+            p.wait_for_function("document.getElementById('progress').textContent"
+                                ".includes('%d answer')" % n)
+    except Exception as e:
+        seen = p.evaluate("[document.getElementById('progress').textContent, "
+                          "document.getElementById('error').textContent]")
+        raise AssertionError("waiting for answer %d: the page shows progress %r, error %r"
+                             % (n, seen[0], seen[1])) from e
 
 
 def _blind(p):
@@ -240,6 +257,31 @@ def test_mapping_clicked_through(browser, lab):
     right = s.records[1]["scene"]["regions"][1]["texture"]        # seed 001's stimulus
     assert right["texel_samples"] == 189 and right["phase"] == "reset"
     assert right["min_cpmm"] == 1.0
+
+
+def test_a_slider_move_lost_on_the_way_is_played_before_the_match_is_answered(browser, lab):
+    """A slider move that never reached the board (the connection dropped):
+    the server takes only the match that plays, so "this is my match" plays
+    the sliders' place first, then answers it - one answer, no silent refusal."""
+    url, data = lab
+    exp, p, sid, detail = _start(browser, url, "mapping", "web09", 7)
+    dropped = []
+
+    def drop_first(route):
+        if not dropped:
+            dropped.append(route.request.post_data)
+            route.abort()
+        else:
+            route.continue_()
+    p.route("**/feel", drop_first)
+    p.fill("#pitch", "300")
+    p.wait_for_function("document.getElementById('error').textContent.includes('does not answer')")
+    p.click("#submit")
+    _wait_answers(p, 1)
+    assert dropped and p.inner_text("#error") == ""
+    s = Session.open(Path(data) / (sid + ".jsonl"))
+    first = next(iter(s.answers()))
+    assert first["answer"]["pitch"] == 30.0
 
 
 # --- issue 24: one click, one answer; the experimenter sees every refusal -------------------

@@ -160,6 +160,38 @@ def test_a_strip_is_rendered_once_per_scene_and_new_scenes_show(lab):
 
 
 @pytest.mark.vboard
+def test_the_scene_is_read_from_the_board_once_per_scene_played(lab):
+    """Every page's strip asks what plays (the experimenter's every second);
+    a long samples region is read over the link in pieces, holding the board.
+    The owner asks the board once per scene played, and what it answers is
+    what the board says it plays - after a push, after a refused one, after
+    a stop (texel.wire through the owner's own Board, read directly here)."""
+    owner = lab.lab.owner
+    long = {"regions": [{"start_mm": 0, "end_mm": 101.76, "texture": {
+        "kind": "samples", "fit": "tile", "u16": [(i * 7919) % 65536 for i in range(6000)]}}]}
+    owner.push(long)
+    reads = owner.source_reads
+    for _ in range(3):
+        assert lab.get("/api/strip").status_code == 200
+    assert owner.source_reads == reads + 1
+    truth = owner._board.scene_source()
+    assert lab.get("/api/scene").json()["scene"] == truth
+    assert truth["regions"][0]["texture"]["u16"] == long["regions"][0]["texture"]["u16"]
+    bad = {"regions": [{"start_mm": 0, "end_mm": 10, "texture": {"kind": "constant",
+                                                                 "level": 2.0}}]}
+    with pytest.raises(ValueError):
+        owner.push(bad)
+    assert lab.get("/api/scene").json()["scene"] == truth          # it plays on
+    lab.post("/api/strip/texel", json={"pitch_db": 4.0, "irregularity_db": -20.0, "seed": 1})
+    now = lab.get("/api/scene").json()["scene"]
+    assert now == owner._board.scene_source() != truth
+    assert now["regions"][0]["texture"]["pitch_db"] == 4.0
+    edited = lab.get("/api/scene").json()["scene"]          # a caller's copy, not the owner's
+    edited["regions"].clear()
+    assert lab.get("/api/scene").json()["scene"] == now
+
+
+@pytest.mark.vboard
 def test_the_finger_moves_and_bad_requests_change_nothing(lab):
     owner = lab.lab.owner
     assert lab.post("/api/finger", json={"position_mm": 40.0}).status_code == 200

@@ -23,8 +23,8 @@ function setBusy(v) {
 async function reload(e) {
   if (!e || e.status !== 409) return false;
   show(await call("GET", "/api/sessions/" + sid));
-  showError(/does not play/.test(e.message) ? "The texture changed: feel it again, then answer."
-                                            : "");
+  showError(/does not play|not what plays/.test(e.message)
+            ? "The texture changed: feel it again, then answer." : "");
   return true;
 }
 
@@ -78,8 +78,10 @@ async function feel(k) {
   setBusy(false);
 }
 
-// free exploration: slider changes go to the board one at a time, the latest wins
-let sliderBusy = false, sliderNext = null, sliderRange = null;
+// free exploration: slider changes go to the board one at a time, the latest wins;
+// sliderFailed: the last one did not reach the board (the server answers only
+// the match that plays), so "this is my match" sends it again first
+let sliderBusy = false, sliderNext = null, sliderRange = null, sliderFailed = false;
 // the irregularity slider: linear in dB, or (the lab's app) linear in sigma
 // (decades), sent as 10 log10(max(sigma, 0.001)) dB (study/free.py)
 function irregOf(x) {
@@ -119,7 +121,9 @@ async function slide() {
   try {
     while (sliderNext) {
       const v = sliderNext; sliderNext = null;
+      sliderFailed = true;              // until the board says it plays v
       await call("POST", "/api/sessions/" + sid + "/feel", Object.assign({question: number}, v));
+      sliderFailed = false;
       if (strip) strip.refresh();
     }
   } finally { sliderBusy = false; }
@@ -193,6 +197,9 @@ function show(res) {
       if (q.confidence && !c) { showError("choose your confidence (1-5) first"); return; }
       setBusy(true);            // at once: a second click of a double-click finds it disabled
       while (sliderBusy) await new Promise((r) => setTimeout(r, 20));
+      if (sliderFailed) {       // the last move never played: play it, then answer it
+        try { await slide(); } catch (e) { setBusy(false); await reload(e); return; }
+      }
       await answer(Object.assign(sliderValues(), q.confidence ? {confidence: Number(c.value)}
                                                               : {}));
     }}, "this is my match"));
