@@ -17,14 +17,12 @@ from __future__ import annotations
 
 import csv
 import json
-import math
 import os
 from pathlib import Path
 from typing import Any, Sequence
 
 from . import protocols
 from .session import Session, SessionError, sessions
-from .space import irregularity_db, pitch_db
 
 COLUMNS = ("participant", "protocol", "session", "config_file", "seed", "n", "time",
            "trial", "answer", "reference", "played_pitch_db", "played_irregularity_db",
@@ -57,6 +55,7 @@ def rows(s: Session) -> list[dict[str, Any]]:
     answered (a column per kind of answer; empty where it does not apply)."""
     h = s.header
     proto = h["protocol"]
+    p = protocols.get(proto)
     state = protocols.start(proto, h["config"], h["seed"])     # what each answer answered
     out = []
     for k, rec in enumerate(s.answers()):
@@ -74,39 +73,10 @@ def rows(s: Session) -> list[dict[str, Any]]:
                    played_texel_samples=tex.get("texel_samples", ""),
                    played_quant_db=tex.get("quant_db", "") if tex else "",
                    option_played="" if rec.get("playing") is None else rec["playing"])
-        row.update(_answer_columns(proto, state, a))
-        result = protocols.apply(proto, state, a)
-        if proto == "mapping" and "similarity" not in result:     # a match: its dB as played
-            row.update(match_pitch_db=result["pitch_db"],
-                       match_irregularity_db=result["irregularity_db"])
+        row.update(p.columns(state, a))            # (from the state before the answer)
+        row.update(p.columns_after(protocols.apply(proto, state, a)))
         out.append(row)
     return out
-
-
-def _answer_columns(proto: str, state: Any, a: Any) -> dict[str, Any]:
-    """The columns of an answer's kind, from the state before it."""
-    if proto == "free":
-        return dict(match_pitch_db=a["pitch_db"], match_irregularity_db=a["irregularity_db"],
-                    confidence=a["confidence"], reference=state.reference, trial=state.trial)
-    if proto == "quant":
-        ref, level = state.current
-        return dict(similarity=a, quant_db=level, reference=ref, trial=state.trial,
-                    match_of=state.current_match, source=state.current_source)
-    if proto == "staircase":
-        return dict(correct=a, length_mm=state.length_mm, trial=len(state.track))
-    if proto == "search" and "choose" in a:
-        return dict(chosen=a["choose"], trial=state.iteration)
-    if proto == "mapping" and state.phase == "match":
-        return dict(reference=state.reference, trial=state.trial, pitch_slider=a["pitch"],
-                    irregularity_slider=a["irregularity"])
-    if proto == "mapping":              # a rating: the match of match_of played
-        ref, of = state.current
-        m = state.match_of(of) or {}
-        return dict(reference=ref, match_of=of, similarity=a, trial=state.trial,
-                    pitch_slider=m.get("pitch", ""), irregularity_slider=m.get("irregularity", ""),
-                    match_pitch_db=m.get("pitch_db", ""),
-                    match_irregularity_db=m.get("irregularity_db", ""))
-    return {}
 
 
 def session_files(data: str | os.PathLike) -> list[Path]:
@@ -172,7 +142,7 @@ def _pyplot() -> Any:
 
 
 def figure(s: Session, out: str | os.PathLike, state: Any = None) -> Path:
-    """The session's summary figure (PNG): one plot per protocol (_PLOTS).
+    """The session's summary figure (PNG): its protocol's plot (study/protocols).
     state: the session replayed (replayed here when not given)."""
     plt = _pyplot()
     h = s.header
@@ -181,147 +151,16 @@ def figure(s: Session, out: str | os.PathLike, state: Any = None) -> Path:
     fig, ax = plt.subplots(figsize=(6, 4.2))
     title = "%s, %s (%s): %d answers" % (h["protocol"], h["participant"], s.path.stem,
                                           sum(1 for _ in s.answers()))
-    if h["protocol"] in ("pursuit", "search", "free"):
+    p = protocols.get(h["protocol"])
+    if p.ON_PLANE:
         _references_on(ax, h)
-    plot = _PLOTS.get(h["protocol"])
-    if plot is not None:
-        plot(fig, ax, state)
+    p.plot(fig, ax, state)
     ax.set_title(title, fontsize=9)
     out = Path(out)
     fig.tight_layout()
     fig.savefig(out, dpi=100)
     plt.close(fig)
     return out
-
-
-def _plot_free(fig: Any, ax: Any, state: Any) -> None:
-    """The free exploration's matches on the plane (size: confidence)."""
-    for m in state.matches:
-        ax.plot(m["pitch_db"], m["irregularity_db"], "o", ms=4 + 2 * m["confidence"],
-                color="C%d" % (list(state.config.references).index(m["reference"]) % 10))
-        ax.annotate(m["reference"], (m["pitch_db"], m["irregularity_db"]), fontsize=7,
-                    xytext=(4, 4), textcoords="offset points")
-    ax.set_xlabel("pitch (dB re 1 c/mm)")
-    ax.set_ylabel("irregularity (dB re 1 decade)")
-    ax.text(0.01, 0.99, "o: the matches (size: confidence)\nx: the references' spectral "
-            "positions", transform=ax.transAxes, va="top", fontsize=7)
-
-
-def _plot_quant(fig: Any, ax: Any, state: Any) -> None:
-    """The quantization test: similarity against q per reference, or the 3x3
-    similarity matrix (design "matrix")."""
-    if state.config.design == "matrix":
-        _plot_matrix(fig, ax, state)
-        return
-    by: dict[str, dict[float, list[int]]] = {}
-    for r in state.ratings:
-        by.setdefault(r["reference"], {}).setdefault(r["quant_db"], []).append(r["similarity"])
-    for i, (ref, levels) in enumerate(sorted(by.items())):
-        qs = sorted(levels)
-        ax.plot([q + 0.08 * (i - 1) for q in qs],
-                [sum(levels[q]) / len(levels[q]) for q in qs], "o-", label=ref)
-    ax.set_xlabel("quantization q (dB)")
-    ax.set_ylabel("similarity (1..5)")
-    ax.set_ylim(0.5, 5.5)
-    ax.set_xticks(list(state.config.levels_db))
-    ax.legend(title="match: %s" % state.config.match_source, fontsize=8, title_fontsize=8)
-
-
-def _plot_matrix(fig: Any, ax: Any, state: Any) -> None:
-    import numpy as np
-    refs = list(state.config.references)
-    cells: dict[tuple[int, int], list[int]] = {}
-    for r in state.ratings:
-        cells.setdefault((refs.index(r["reference"]), refs.index(r["match_of"])),
-                         []).append(r["similarity"])
-    grid = np.full((len(refs), len(refs)), np.nan)
-    for (i, j), v in cells.items():
-        grid[i, j] = sum(v) / len(v)
-    im = ax.imshow(grid, vmin=1, vmax=5, cmap="viridis")
-    for (i, j), v in cells.items():
-        ax.text(j, i, "%.1f" % grid[i, j], ha="center", va="center", color="w")
-    ax.set_xticks(range(len(refs)), ["%s's match" % r for r in refs], fontsize=8)
-    ax.set_yticks(range(len(refs)), refs, fontsize=8)
-    ax.set_ylabel("reference")
-    fig.colorbar(im, ax=ax, label="similarity (1..5)")
-
-
-def _plot_pursuit(fig: Any, ax: Any, state: Any) -> None:
-    """The pursuit's centre, trial by trial."""
-    pts = [state.history[0]["centre_before"]] if state.history else \
-        [{"u": state.centre.u, "v": state.centre.v}]
-    pts += [e["centre_after"] for e in state.history]
-    ax.plot([pitch_db(p["u"]) for p in pts], [irregularity_db(p["v"]) for p in pts], "o-")
-    ax.annotate("start", (pitch_db(pts[0]["u"]), irregularity_db(pts[0]["v"])))
-    ax.set_xlabel("pitch (dB re 1 c/mm)")
-    ax.set_ylabel("irregularity (dB re 1 decade)")
-
-
-def _plot_staircase(fig: Any, ax: Any, state: Any) -> None:
-    """The staircase's track, its reversals and threshold."""
-    track = state.track
-    ax.plot([t["length_mm"] for t in track], "-", color="0.6")
-    for i, t in enumerate(track):
-        ax.plot(i, t["length_mm"], "o" if t["correct"] else "x",
-                color="C2" if t["correct"] else "C3")
-    rev = [i for i, t in enumerate(track) if t["reversal"]]
-    ax.plot(rev, [track[i]["length_mm"] for i in rev], "s", mfc="none", ms=10,
-            label="reversals")
-    thr = state.threshold_mm()
-    if thr is not None:
-        ax.axhline(thr, ls="--", label="threshold %.2f mm" % thr)
-    ax.set_xlabel("trial")
-    ax.set_ylabel("texel length (mm)")
-    ax.legend()
-
-
-def _plot_search(fig: Any, ax: Any, state: Any) -> None:
-    """The search's mean by iteration, with its step size inset."""
-    means = [rec["mean_after"] for rec in state.history]
-    ax.set_xlabel("pitch (dB re 1 c/mm)")
-    ax.set_ylabel("irregularity (dB re 1 decade)")
-    if not means:
-        return
-    xs = [pitch_db(m[0]) for m in means]
-    ys = [irregularity_db(m[1]) for m in means]
-    ax.plot(xs, ys, "-", color="0.7")
-    sc = ax.scatter(xs, ys, c=range(len(means)), cmap="viridis", zorder=3)
-    fig.colorbar(sc, ax=ax, label="iteration")
-    ax.annotate("end", (xs[-1], ys[-1]))
-    # the step size per iteration, inset
-    steps = [math.dist(a, b) for a, b in zip(means, means[1:])]
-    if steps:
-        inset = ax.inset_axes([0.62, 0.08, 0.35, 0.28])
-        inset.plot(range(2, len(means) + 1), steps, ".-", lw=0.8)
-        inset.set_title("step size", fontsize=7)
-        inset.tick_params(labelsize=6)
-
-
-def _plot_mapping(fig: Any, ax: Any, state: Any) -> None:
-    """The mapping's matches: the chosen mean pitch (c/mm) against the
-    reference's central frequency, per zeta, with the diagonal (Fig. 4a)."""
-    from .mapping import summary
-    sm = summary(state)
-    for k, row in enumerate(sm["fig4a"]):
-        pts = [(f, m) for f, m in zip(row["fc_cpmm"], row["mean_cpmm"]) if m is not None]
-        if pts:
-            ax.plot([f * 1.06 ** (k - 1) for f, _ in pts], [m for _, m in pts], "o",
-                    color="C%d" % k, label="zeta %g" % row["zeta"])
-    ax.plot([0.5, 40], [0.5, 40], ":", color="0.5")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("reference central frequency (c/mm)")
-    ax.set_ylabel("chosen pitch: the lognormal's mean (c/mm)")
-    rated = len(state.ratings)
-    ax.text(0.01, 0.99, "%d matches, %d ratings%s" % (
-        len(state.matches), rated, "; self-match mean %.2f" % sm["self"]["mean"]
-        if sm["self"]["n"] else ""), transform=ax.transAxes, va="top", fontsize=7)
-    if state.matches:
-        ax.legend(fontsize=8)
-
-
-_PLOTS = {"free": _plot_free, "quant": _plot_quant, "pursuit": _plot_pursuit,
-          "staircase": _plot_staircase, "search": _plot_search, "mapping": _plot_mapping}
 
 
 def _references_on(ax: Any, header: dict[str, Any]) -> None:

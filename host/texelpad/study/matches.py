@@ -49,7 +49,7 @@ def from_end_point(protocol: str, session: Session, state: Any) -> dict[str, dic
     """{the reference it ran on: its end point} of a finished guided
     exploration or a stopped search (ValueError says why not)."""
     sid = session.path.stem
-    if protocol not in ("pursuit", "search"):
+    if protocols.get(protocol).GIVES_MATCHES != "end point":
         raise ValueError("matches_from: %s is a %s session: matches come from a free "
                          "exploration, a guided exploration or a search" % (sid, protocol))
     if not state.done:
@@ -60,6 +60,15 @@ def from_end_point(protocol: str, session: Session, state: Any) -> dict[str, dic
     point = Q.estimate(protocol, state)
     return {ref["name"]: {"pitch_db": point["pitch_db"],
                           "irregularity_db": point["irregularity_db"]}}
+
+
+def from_session(protocol: str, session: Session, state: Any) -> dict[str, dict[str, Any]]:
+    """The matches a session gives (its protocol's GIVES_MATCHES: a free
+    exploration's, or the end point of a guided exploration or a search);
+    ValueError says why not."""
+    if protocols.get(protocol).GIVES_MATCHES == "matches":
+        return from_free(session, state)
+    return from_end_point(protocol, session, state)
 
 
 def references_of(config: dict[str, Any]) -> tuple[str, ...]:

@@ -121,29 +121,16 @@ class SimulatedParticipant:
         p = 1.0 / 3.0 + (2.0 / 3.0) / (1.0 + math.exp(-max(-60.0, min(60.0, z))))
         return self._rng.random() < p
 
+    def jitter(self, scale: float) -> float:
+        """Noise of SD noise*scale (the square's units times scale), or 0."""
+        return self._rng.gauss(0.0, self.noise * scale) if self.noise else 0.0
+
     def answer(self, protocol: str, state) -> object:
         """The answer to the protocol state's current question, as
-        texelpad.study.protocols.apply takes it."""
-        if protocol == "pursuit":
-            q = state.next_comparison()
-            return self.compare(q.a, q.b)
-        if protocol == "staircase":
-            return self.odd_one_out(state.length_mm)
-        if protocol == "search":
-            return {"choose": self.pick(state.ask())}
-        if protocol == "free":
-            from .space import irregularity_db, pitch_db
-            c = state.config
-            n = (lambda: self._rng.gauss(0.0, self.noise)) if self.noise else (lambda: 0.0)
-            p = min(c.pitch_db[1], max(c.pitch_db[0], pitch_db(self.target.u + n())))
-            s = min(c.irregularity_db[1], max(c.irregularity_db[0],
-                                               irregularity_db(self.target.v + n())))
-            return {"pitch_db": round(p, 3), "irregularity_db": round(s, 3), "confidence": 4}
-        if protocol == "quant":
-            return self.rate(state)
-        if protocol == "mapping":
-            return self.map_answer(state)
-        raise ValueError("protocol: unknown %r" % (protocol,))
+        texelpad.study.protocols.apply takes it: the protocol says which of
+        this participant's judgements it asks (its simulate)."""
+        from . import protocols
+        return protocols.get(protocol).simulate(self, state)
 
     def map_answer(self, state) -> object:
         """Seed 001's mapping, scripted (not a model of people: the target is
@@ -154,7 +141,8 @@ class SimulatedParticipant:
         noise), on the config's scale."""
         from . import bandpass
         from .mapping import MEAN_BASE_CPMM, MEAN_RATIO, SD_PER_STEP_CPMM, SLIDER
-        n = (lambda: self._rng.gauss(0.0, self.noise * 100)) if self.noise else (lambda: 0.0)
+        def n() -> float:
+            return self.jitter(100.0)
         if state.phase == "match":
             fc, zeta = bandpass.params_of(state.reference)
             p = math.log(fc / MEAN_BASE_CPMM) / math.log(MEAN_RATIO) + n()

@@ -245,7 +245,8 @@ class Lab:
             seed = random.SystemRandom().randrange(1 << 31)
         if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 1 << 31:
             raise Refused("seed: expected an int in [0, 2^31), got %r" % (seed,))
-        if proto in ("pursuit", "search"):
+        p = protocols.get(proto)
+        if p.REFERENCE_CHOSEN:
             reference = reference or S.DEFAULT_REFERENCE
             if not isinstance(reference, dict):
                 raise Refused("reference: expected a texture object")
@@ -254,11 +255,11 @@ class Lab:
             raise Refused("reference: only the pursuit and the search take one (the free "
                           "exploration and the quantization test name theirs in the config)")
         if body.get("matches_from") is not None:
-            if proto != "quant":
+            if not p.TAKES_MATCHES:
                 raise Refused("matches_from: only the quantization test takes matches")
             config["matches"], config["match_source"] = self._matches_from(
                 body["matches_from"], config)
-        if proto == "quant" and config.get("matches") is None:
+        if p.TAKES_MATCHES and config.get("matches") is None:
             raise Refused("matches: the quantization test rates the participant's own matches: "
                           "give matches_from (their free exploration session)")
         try:
@@ -294,10 +295,7 @@ class Lab:
         for sid in sids:
             lv = self.get(*sid.split("/"))
             try:
-                if lv.protocol == "free":
-                    found.update(M.from_free(lv.session, lv.state))
-                else:
-                    found.update(M.from_end_point(lv.protocol, lv.session, lv.state))
+                found.update(M.from_session(lv.protocol, lv.session, lv.state))
             except ValueError as e:
                 raise Refused(str(e)) from None
         refs = M.references_of(config)
@@ -417,10 +415,9 @@ class Lab:
                            "then answer - nothing changed"
                            % ("another page played on it since" if lv.playing is not None
                               else "it played something else since"))
-        rec = {"question": q.public, "answer": taken, "scene": lv.playing_scene,
-               "playing": lv.playing, "state": q.detail}
-        if lv.protocol == "staircase":
-            rec["picked"], rec["odd"] = body["answer"], q.odd
+        p = protocols.get(lv.protocol)
+        rec = dict({"question": q.public, "answer": taken, "scene": lv.playing_scene,
+                    "playing": lv.playing, "state": q.detail}, **p.record(q, body["answer"]))
         lv.session.append(rec)                          # on disk first, then the state moves
         result = protocols.apply(lv.protocol, lv.state, taken)
         lv.question, lv.sliders, lv.moves = None, None, 0
@@ -438,7 +435,7 @@ class Lab:
         out = self._view(key, lv)
         if lost:
             out["board_lost"] = lost
-        out["result"] = result if lv.protocol != "staircase" else None
+        out["result"] = p.result_shown(result)
         return out
 
     def replay(self, participant: str, name: str, body: dict[str, Any]) -> dict[str, Any]:
