@@ -23,29 +23,30 @@ from __future__ import annotations
 
 from typing import Any
 
-from . import protocols as P
+from . import protocols
 from .question import Question, format_of, reference_of, slider_scene
 
 __all__ = ["Question", "SLIDER_KEYS", "ask", "estimate", "format_of", "normalise",
            "reference_of", "slider_scene", "sliding"]
 
 # the two slider values a sliding protocol takes (feel and answer bodies, move records)
-SLIDER_KEYS = {n: keys for n in P.NAMES if (keys := P.get(n).SLIDER_KEYS) is not None}
+SLIDER_KEYS = {n: keys for n in protocols.NAMES
+               if (keys := protocols.get(n).SLIDER_KEYS) is not None}
 
 
 def sliding(protocol: str, state: Any) -> bool:
     """Whether the protocol's current question is answered with sliders."""
-    return P.get(protocol).sliding(state)
+    return protocols.get(protocol).sliding(state)
 
 
 def ask(protocol: str, state: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
-    return P.get(protocol).ask(state, header, display)
+    return protocols.get(protocol).ask(state, header, display)
 
 
 def estimate(protocol: str, st: Any) -> dict[str, float]:
     """Where a guided exploration (its centre) or a search (its mean) ended,
     in dB (clamped to what the display plays: texelpad.study.space)."""
-    return P.get(protocol).estimate(st)
+    return protocols.get(protocol).estimate(st)
 
 
 def normalise(protocol: str, q: Question, state: Any, answer: Any) -> Any:
@@ -54,4 +55,4 @@ def normalise(protocol: str, q: Question, state: Any, answer: Any) -> Any:
     so true is not 1 and {"choose": true} is not {"choose": 1}."""
     if q.done:
         raise ValueError("the session is finished")
-    return P.get(protocol).normalise(q, state, answer)
+    return protocols.get(protocol).normalise(q, state, answer)
