@@ -148,36 +148,43 @@ def pwm_top(cpu_hz, freq_hz):
     return (cpu_hz + freq_hz // 2) // freq_hz - 1
 
 
+def _carrier(board):
+    """The board file's carrier, checked against the RP2040's PWM: (carrier,
+    freq_hz, cpu_hz, drive, pins, slice); ValueError names the field."""
+    if board.get("port") != "rp2":
+        raise ValueError("board %r: port is %r, hw/rp2 drives 'rp2' boards"
+                         % (board.get("name"), board.get("port")))
+    c = board["carrier"]
+    freq = int(c["freq_hz"])
+    cpu = int(board["cpu_hz"])
+    drive = c.get("drive", "single")
+    pins = [int(p) for p in c["pins"]]
+    if drive not in ("single", "bridge"):
+        raise ValueError("carrier.drive: expected 'single' or 'bridge', got %r" % (drive,))
+    if len(pins) != (2 if drive == "bridge" else 1):
+        raise ValueError("carrier.pins: %s drive needs %d pin(s), got %r"
+                         % (drive, 2 if drive == "bridge" else 1, pins))
+    for p in pins:
+        if not 0 <= p <= 29:
+            raise ValueError("carrier.pins: GPIO %d does not exist on an RP2040" % p)
+    sl = (pins[0] >> 1) & 7         # pwm_gpio_to_slice_num on the RP2040
+    want = c.get("pwm", {}).get("slice")
+    if want is not None and want != sl:
+        raise ValueError("carrier.pwm.slice: GPIO %d is on slice %d, board says %d"
+                         % (pins[0], sl, want))
+    if drive == "bridge" and (((pins[1] >> 1) & 7) != sl or (pins[1] & 1) == (pins[0] & 1)):
+        raise ValueError("carrier.pins: bridge legs %r must be the two channels of one "
+                         "PWM slice (GPIO 2k and 2k+1)" % (pins,))
+    return c, freq, cpu, drive, pins, sl
+
+
 class Hw:
     """Hw(board, direct=None): the rp2 backend. direct=None writes CC
     registers directly on an RP2040 and uses PWM.duty_u16 elsewhere;
     True/False force it (tests)."""
 
     def __init__(self, board, direct=None):
-        if board.get("port") != "rp2":
-            raise ValueError("board %r: port is %r, hw/rp2 drives 'rp2' boards"
-                             % (board.get("name"), board.get("port")))
-        c = board["carrier"]
-        freq = int(c["freq_hz"])
-        cpu = int(board["cpu_hz"])
-        drive = c.get("drive", "single")
-        pins = [int(p) for p in c["pins"]]
-        if drive not in ("single", "bridge"):
-            raise ValueError("carrier.drive: expected 'single' or 'bridge', got %r" % (drive,))
-        if len(pins) != (2 if drive == "bridge" else 1):
-            raise ValueError("carrier.pins: %s drive needs %d pin(s), got %r"
-                             % (drive, 2 if drive == "bridge" else 1, pins))
-        for p in pins:
-            if not 0 <= p <= 29:
-                raise ValueError("carrier.pins: GPIO %d does not exist on an RP2040" % p)
-        sl = (pins[0] >> 1) & 7         # pwm_gpio_to_slice_num on the RP2040
-        want = c.get("pwm", {}).get("slice")
-        if want is not None and want != sl:
-            raise ValueError("carrier.pwm.slice: GPIO %d is on slice %d, board says %d"
-                             % (pins[0], sl, want))
-        if drive == "bridge" and (((pins[1] >> 1) & 7) != sl or (pins[1] & 1) == (pins[0] & 1)):
-            raise ValueError("carrier.pins: bridge legs %r must be the two channels of one "
-                             "PWM slice (GPIO 2k and 2k+1)" % (pins,))
+        c, freq, cpu, drive, pins, sl = _carrier(board)
         mf = machine.freq()
         if mf != cpu:
             raise ValueError("cpu_hz: board says %d Hz but machine.freq() is %d Hz "

@@ -68,33 +68,41 @@ def timer_period(source_hz, freq_hz):
     return (source_hz + freq_hz // 2) // freq_hz - 1
 
 
+def _carrier(board):
+    """The board file's carrier and refresh timer, checked against what this
+    backend drives: (carrier, freq_hz, drive, pins, timer, channel, refresh
+    timer); ValueError names the field."""
+    if board.get("port") != "stm32":
+        raise ValueError("board %r: port is %r, hw/stm32 drives 'stm32' boards"
+                         % (board.get("name"), board.get("port")))
+    c = board["carrier"]
+    freq = int(c["freq_hz"])
+    drive = c.get("drive", "single")
+    pins = list(c["pins"])
+    pwm = c.get("pwm", {})
+    n = int(pwm.get("timer", 8))
+    ch = int(pwm.get("channel", 1))
+    if drive not in ("single", "bridge"):
+        raise ValueError("carrier.drive: expected 'single' or 'bridge', got %r" % (drive,))
+    if len(pins) != (2 if drive == "bridge" else 1):
+        raise ValueError("carrier.pins: %s drive needs %d pin(s), got %r"
+                         % (drive, 2 if drive == "bridge" else 1, pins))
+    if n not in (1, 8):
+        # only the advanced timers have complementary outputs, dead time
+        # and the MOE safe state this backend relies on
+        raise ValueError("carrier.pwm.timer: expected 1 or 8 (advanced timers), got %r" % (n,))
+    if not 1 <= ch <= (3 if drive == "bridge" else 4):
+        raise ValueError("carrier.pwm.channel: expected 1..%d for %s drive, got %r"
+                         % (3 if drive == "bridge" else 4, drive, ch))
+    rt = int(board.get("refresh", {}).get("timer", _REFRESH_TIMER))
+    if rt in (1, 8):
+        raise ValueError("refresh.timer: %d is a carrier timer" % rt)
+    return c, freq, drive, pins, n, ch, rt
+
+
 class Hw:
     def __init__(self, board):
-        if board.get("port") != "stm32":
-            raise ValueError("board %r: port is %r, hw/stm32 drives 'stm32' boards"
-                             % (board.get("name"), board.get("port")))
-        c = board["carrier"]
-        freq = int(c["freq_hz"])
-        drive = c.get("drive", "single")
-        pins = list(c["pins"])
-        pwm = c.get("pwm", {})
-        n = int(pwm.get("timer", 8))
-        ch = int(pwm.get("channel", 1))
-        if drive not in ("single", "bridge"):
-            raise ValueError("carrier.drive: expected 'single' or 'bridge', got %r" % (drive,))
-        if len(pins) != (2 if drive == "bridge" else 1):
-            raise ValueError("carrier.pins: %s drive needs %d pin(s), got %r"
-                             % (drive, 2 if drive == "bridge" else 1, pins))
-        if n not in (1, 8):
-            # only the advanced timers have complementary outputs, dead time
-            # and the MOE safe state this backend relies on
-            raise ValueError("carrier.pwm.timer: expected 1 or 8 (advanced timers), got %r" % (n,))
-        if not 1 <= ch <= (3 if drive == "bridge" else 4):
-            raise ValueError("carrier.pwm.channel: expected 1..%d for %s drive, got %r"
-                             % (3 if drive == "bridge" else 4, drive, ch))
-        rt = int(board.get("refresh", {}).get("timer", _REFRESH_TIMER))
-        if rt in (1, 8):
-            raise ValueError("refresh.timer: %d is a carrier timer" % rt)
+        c, freq, drive, pins, n, ch, rt = _carrier(board)
 
         # 1. legs as plain outputs, low, while the timer is set up
         for p in pins:

@@ -368,6 +368,30 @@ def _offset(a, base):
     return d
 
 
+def _resolve(words, tab, addr, chunked, nbuf):
+    """Fill W (words) and core()'s table (tab) before a swap: every address
+    as its offset from the lowest one (W_BASE holds that base, split in two
+    words), chunk tables' entries likewise, and each table row's value as
+    core() looks it up - a K_PLAN row the index of its plan's first word in
+    W, a K_BUF or K_CHUNK row its buffer's offset."""
+    base = min(a for _, a in addr)
+    for ct, cs in chunked:
+        base = min(base, min(cs))
+    for k, a in addr:
+        words[k] = _offset(a, base)
+    for ct, cs in chunked:
+        for c in range(len(cs)):
+            ct[c] = _offset(cs[c], base)
+    for r in range(0, len(tab) - 4, 4):      # every row but the sentinel
+        kind = tab[r + 2]
+        if kind == 2:                       # scene.K_PLAN
+            tab[r + 3] = W_BUF0 + nbuf + W_PLAN * tab[r + 3]
+        elif kind == 1 or kind == 3:        # scene.K_BUF, K_CHUNK
+            tab[r + 3] = words[W_BUF0 + tab[r + 3]]
+    words[W_BASE] = base & 0xFFFFFFFF
+    words[W_BASE + 1] = (base >> 16) >> 16
+
+
 def _state(i, bias=0):
     # a Refresh attribute kept in S[i] (stored + bias: positions may be -1)
     def get(self):
@@ -482,22 +506,7 @@ class FastRefresh(Refresh):
             words[b + 2] = ln
             words[b + 3] = g
             words[b + 4] = 65536 // ln + 1      # core()'s reciprocal of L
-        base = min(a for _, a in addr)
-        for ct, cs in chunked:
-            base = min(base, min(cs))
-        for k, a in addr:
-            words[k] = _offset(a, base)
-        for ct, cs in chunked:
-            for c in range(len(cs)):
-                ct[c] = _offset(cs[c], base)
-        for r in range(0, len(tab) - 4, 4):      # every row but the sentinel
-            kind = tab[r + 2]
-            if kind == 2:                       # scene.K_PLAN
-                tab[r + 3] = W_BUF0 + nbuf + W_PLAN * tab[r + 3]
-            elif kind == 1 or kind == 3:        # scene.K_BUF, K_CHUNK
-                tab[r + 3] = words[W_BUF0 + tab[r + 3]]
-        words[W_BASE] = base & 0xFFFFFFFF
-        words[W_BASE + 1] = (base >> 16) >> 16
+        _resolve(words, tab, addr, chunked, nbuf)
         chunked = [ct for ct, _ in chunked]
         keep = (words, scene, tab, chunked)
         # The previous generation stays referenced until the next swap: the

@@ -23,6 +23,7 @@ import tempfile
 import threading
 import time
 import tty
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterator
 
@@ -41,6 +42,18 @@ RAW_BANNER = b"raw REPL; CTRL-B to exit\r\n"
 RESTARTS_MAX = 5
 RESTARTS_WINDOW_S = 5.0
 OUT_BUFFER_MAX = 1 << 20        # bytes held for a client that does not read the port
+
+
+@dataclass
+class _RelayState:
+    """What the relay holds between reads (VirtualBoard._relay)."""
+    to_child: bytearray = field(default_factory=bytearray)  # the client's, not yet taken
+    to_port: bytearray = field(default_factory=bytearray)   # the interpreter's, not yet taken
+    boot: bytearray = field(default_factory=bytearray)      # its output while it boots
+    raw: bool = False               # the REPL mode (to restore after a soft reset)
+    booting: str | None = "friendly"    # None once the interpreter is at the mode's prompt
+    tail: bytes = b""               # the last bytes of output (to spot the raw banner)
+    restarts: list[float] = field(default_factory=list)
 
 
 class VirtualBoard:
@@ -187,15 +200,9 @@ class VirtualBoard:
     # One select loop on purpose (hence the noqa): its states - booting to the friendly
     # or the raw prompt, the raw banner, a soft reset, a death - share the buffers;
     # tests/host/test_virtual_pty.py drives each.
-    def _relay(self) -> None:  # noqa: C901
+    def _relay(self) -> None:
         """The supervisor: port <-> interpreter, soft resets, until stop()."""
-        to_child = bytearray()      # what the client sent, not yet taken by the interpreter
-        to_port = bytearray()       # what the interpreter said, not yet taken by the port
-        boot = bytearray()          # an interpreter's output while it boots
-        raw = False                 # the REPL mode (to restore after a soft reset)
-        booting: str | None = "friendly"    # None once the interpreter is at the mode's prompt
-        tail = b""                  # the last bytes of output (to spot the raw banner)
-        restarts: list[float] = []
+        st = _RelayState()
         try:
             self._spawn()
         except OSError as e:
@@ -205,12 +212,12 @@ class VirtualBoard:
         try:
             while not self._stopping:
                 rl = [self._wake_r, self._master]
-                if len(to_port) < OUT_BUFFER_MAX:
+                if len(st.to_port) < OUT_BUFFER_MAX:
                     rl.append(self._child_fd)
                 wl = []
-                if to_port:
+                if st.to_port:
                     wl.append(self._master)
-                if to_child and booting is None:
+                if st.to_child and st.booting is None:
                     wl.append(self._child_fd)
                 r, w, _ = select.select(rl, wl, [], 1.0)
                 if self._wake_r in r:
@@ -218,65 +225,22 @@ class VirtualBoard:
                 if self._master in r:
                     data = _read(self._master)
                     if data:
-                        if raw and b"\x02" in data:       # Ctrl-B: back to the friendly REPL
-                            raw = False
-                        to_child += data
+                        if st.raw and b"\x02" in data:    # Ctrl-B: back to the friendly REPL
+                            st.raw = False
+                        st.to_child += data
                 if self._master in w:
-                    to_port = to_port[_write(self._master, to_port):]
+                    st.to_port = st.to_port[_write(self._master, st.to_port):]
                 if self._child_fd in w:
-                    to_child = to_child[_write(self._child_fd, to_child):]
+                    st.to_child = st.to_child[_write(self._child_fd, st.to_child):]
                 if self._child_fd not in r:
                     continue
                 data = _read(self._child_fd)
                 if data is None:                         # nothing after all
                     continue
                 if data:
-                    if booting is None:
-                        to_port += data
-                        tail = (tail + data)[-64:]
-                        if RAW_BANNER in tail:
-                            raw = True
-                            tail = b""
-                        continue
-                    boot += data
-                    if booting == "friendly" and boot.endswith(b">>> "):
-                        if not self._ready.is_set():    # the first boot: the port as it was
-                            to_port += boot
-                            self._ready.set()
-                            booting = None
-                        elif raw:                       # back into the raw REPL, silently
-                            booting = "raw"
-                            boot.clear()
-                            _write_all(self._child_fd, b"\r\x01")
-                        else:
-                            to_port += boot
-                            booting = None
-                    elif booting == "raw" and boot.endswith(RAW_BANNER + b">"):
-                        to_port += RAW_BANNER + b">"
-                        booting = None
-                    continue
-                # EOF: the interpreter exited - a soft reset, or a death
-                code = self.proc.wait(timeout=10) if self.proc is not None else None
-                os.close(self._child_fd)
-                self._child_fd = -1
-                if self._stopping:
+                    self._child_said(st, data)
+                elif not self._child_exited(st):
                     break
-                now = time.monotonic()
-                restarts = [t for t in restarts if now - t < RESTARTS_WINDOW_S] + [now]
-                if booting is not None or len(restarts) > RESTARTS_MAX:
-                    self.failure = ("the MicroPython unix port exited (code %s) %s: %s" % (
-                        code, "before its REPL prompt" if booting is not None else
-                        "%d times in %g s" % (len(restarts), RESTARTS_WINDOW_S),
-                        bytes(boot[-200:] or tail).decode("utf-8", "replace").strip()
-                        or "no output"))
-                    self._ready.set()
-                    break
-                self.resets += 1
-                to_port += SOFT_REBOOT
-                boot.clear()
-                tail = b""
-                booting = "friendly"
-                self._spawn()
         except (OSError, subprocess.TimeoutExpired) as e:
             if not self._stopping:
                 self.failure = "the virtual board's relay failed: %s" % e
@@ -287,6 +251,61 @@ class VirtualBoard:
                 with contextlib.suppress(OSError):
                     os.close(self._child_fd)
                 self._child_fd = -1
+
+    def _child_said(self, st: _RelayState, data: bytes) -> None:
+        """The interpreter's output: to the port once it is at its prompt;
+        while it boots, held until the prompt of the mode the port was in
+        (after a soft reset in the raw REPL, the raw REPL again, silently)."""
+        if st.booting is None:
+            st.to_port += data
+            st.tail = (st.tail + data)[-64:]
+            if RAW_BANNER in st.tail:
+                st.raw = True
+                st.tail = b""
+            return
+        boot = st.boot
+        boot += data
+        if st.booting == "friendly" and boot.endswith(b">>> "):
+            if not self._ready.is_set():    # the first boot: the port as it was
+                st.to_port += boot
+                self._ready.set()
+                st.booting = None
+            elif st.raw:                    # back into the raw REPL, silently
+                st.booting = "raw"
+                boot.clear()
+                _write_all(self._child_fd, b"\r\x01")
+            else:
+                st.to_port += boot
+                st.booting = None
+        elif st.booting == "raw" and boot.endswith(RAW_BANNER + b">"):
+            st.to_port += RAW_BANNER + b">"
+            st.booting = None
+
+    def _child_exited(self, st: _RelayState) -> bool:
+        """EOF: the interpreter exited - a soft reset (a new one is started:
+        True), or a death, or stop() (False)."""
+        code = self.proc.wait(timeout=10) if self.proc is not None else None
+        os.close(self._child_fd)
+        self._child_fd = -1
+        if self._stopping:
+            return False
+        now = time.monotonic()
+        st.restarts = [t for t in st.restarts if now - t < RESTARTS_WINDOW_S] + [now]
+        if st.booting is not None or len(st.restarts) > RESTARTS_MAX:
+            self.failure = ("the MicroPython unix port exited (code %s) %s: %s" % (
+                code, "before its REPL prompt" if st.booting is not None else
+                "%d times in %g s" % (len(st.restarts), RESTARTS_WINDOW_S),
+                bytes(st.boot[-200:] or st.tail).decode("utf-8", "replace").strip()
+                or "no output"))
+            self._ready.set()
+            return False
+        self.resets += 1
+        st.to_port += SOFT_REBOOT
+        st.boot.clear()
+        st.tail = b""
+        st.booting = "friendly"
+        self._spawn()
+        return True
 
     # --- the registry: `texelpad ports` finds a running `texelpad virtual` ------------
     def announce(self) -> Path:
