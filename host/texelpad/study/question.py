@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from . import scenes as S
-from .space import Point, irregularity_db, pitch_db
+from .space import Point, irregularity_db, pitch_db, texel_params
 
 
 @dataclass
@@ -59,3 +59,10 @@ def js(x: Any) -> str:
         return json.dumps(x, sort_keys=True)
     except (TypeError, ValueError):
         return repr(x)
+
+
+def played_db(p: Point) -> dict[str, float]:
+    """The point as the display plays it, in dB (clamped: texelpad.study.space):
+    where a guided exploration or a search ended."""
+    t = texel_params(p)
+    return {"pitch_db": t["pitch_db"], "irregularity_db": t["irregularity_db"]}

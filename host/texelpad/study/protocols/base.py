@@ -66,7 +66,8 @@ class Protocol:
         return out
 
     # --- asking (study/questions.py) ------------------------------------------------------
-    def ask(self, state: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
+    # (ask, plot and trials: a module's functions, staticmethod(_ask) ...; positional only)
+    def ask(self, state: Any, header: dict[str, Any], display: dict[str, Any], /) -> Question:
         """What it asks now: the participant's view, the scenes, the
         experimenter's view (study/questions.py)."""
         raise NotImplementedError
@@ -110,7 +111,7 @@ class Protocol:
         """Columns only the answer's result knows (the state after it)."""
         return {}
 
-    def plot(self, fig: Any, ax: Any, state: Any) -> None:
+    def plot(self, fig: Any, ax: Any, state: Any, /) -> None:
         """The session's summary figure, on matplotlib's fig and ax."""
 
     # --- describe (study/describe.py) -----------------------------------------------------
@@ -119,7 +120,7 @@ class Protocol:
         return self.resolved(state, header)
 
     def trials(self, state: Any, header: dict[str, Any], display: dict[str, Any],
-               listed: int) -> dict[str, Any]:
+               listed: int, /) -> dict[str, Any]:
         """{"trials": [...], "rules": [...]}: the trial list before anyone
         runs it (listed: how many an open-ended one lists)."""
         raise NotImplementedError

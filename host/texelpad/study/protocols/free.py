@@ -26,7 +26,8 @@ def _ask(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
                          "matches": len(st.matches)})
 
 
-def _trials(st: Any, header: dict[str, Any], display: dict[str, Any]) -> dict[str, Any]:
+def _trials(st: Any, header: dict[str, Any], display: dict[str, Any],
+            listed: int = 0) -> dict[str, Any]:
     c = st.config
     trials = []
     while not st.done:
@@ -65,11 +66,12 @@ class FreeProtocol(Protocol):
     FIXED = True
     ON_PLANE = True
 
+    ask = staticmethod(_ask)
+    plot = staticmethod(_plot)
+    trials = staticmethod(_trials)
+
     def state(self, config: dict[str, Any], seed: int, fmt: int) -> Any:
         return F.Free(seed, F.Config(**tuples(config)))
-
-    def ask(self, state: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
-        return _ask(state, header, display)
 
     def normalise(self, q: Question, state: Any, answer: Any) -> Any:
         return state.checked_answer(answer)
@@ -85,13 +87,6 @@ class FreeProtocol(Protocol):
     def columns(self, state: Any, a: Any) -> dict[str, Any]:
         return dict(match_pitch_db=a["pitch_db"], match_irregularity_db=a["irregularity_db"],
                     confidence=a["confidence"], reference=state.reference, trial=state.trial)
-
-    def plot(self, fig: Any, ax: Any, state: Any) -> None:
-        _plot(fig, ax, state)
-
-    def trials(self, state: Any, header: dict[str, Any], display: dict[str, Any],
-               listed: int) -> dict[str, Any]:
-        return _trials(state, header, display)
 
 
 PROTOCOL = FreeProtocol()

@@ -36,7 +36,8 @@ def _ask(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
                     {"reference": ref, "match_of": of, "phase": "rate", "texture": tex})
 
 
-def _trials(st: Any, header: dict[str, Any], display: dict[str, Any]) -> dict[str, Any]:
+def _trials(st: Any, header: dict[str, Any], display: dict[str, Any],
+            listed: int = 0) -> dict[str, Any]:
     c = st.config
     trials = []
     while st.phase == "match":
@@ -92,11 +93,12 @@ class MappingProtocol(Protocol):
     SLIDER_KEYS = ("pitch", "irregularity")
     FIXED = True
 
+    ask = staticmethod(_ask)
+    plot = staticmethod(_plot)
+    trials = staticmethod(_trials)
+
     def state(self, config: dict[str, Any], seed: int, fmt: int) -> Any:
         return MP.Mapping(seed, MP.Config(**tuples(config)))
-
-    def ask(self, state: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
-        return _ask(state, header, display)
 
     def sliding(self, state: Any) -> bool:
         return state.phase == "match"           # then the ratings: buttons
@@ -123,13 +125,6 @@ class MappingProtocol(Protocol):
             return {}
         return dict(match_pitch_db=result["pitch_db"],          # a match: its dB as played
                     match_irregularity_db=result["irregularity_db"])
-
-    def plot(self, fig: Any, ax: Any, state: Any) -> None:
-        _plot(fig, ax, state)
-
-    def trials(self, state: Any, header: dict[str, Any], display: dict[str, Any],
-               listed: int) -> dict[str, Any]:
-        return _trials(state, header, display)
 
 
 PROTOCOL = MappingProtocol()

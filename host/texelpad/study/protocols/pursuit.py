@@ -8,7 +8,7 @@ from typing import Any
 from .. import pursuit as PV
 from .. import scenes as S
 from ..describing import option
-from ..question import Question, db_of, format_of, reference_of
+from ..question import Question, played_db, db_of, format_of, reference_of
 from ..space import irregularity_db, pitch_db, texel_params
 from .base import Protocol, tuples
 
@@ -39,7 +39,8 @@ def _ask(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
                      "A_is_plus": q.a_is_plus, "seeds": [sa, sb]})
 
 
-def _trials(st: Any, header: dict[str, Any], display: dict[str, Any]) -> dict[str, Any]:
+def _trials(st: Any, header: dict[str, Any], display: dict[str, Any],
+            listed: int = 0) -> dict[str, Any]:
     c = st.config
     seed = header["seed"]
     first = st.trial
@@ -94,26 +95,19 @@ class PursuitProtocol(Protocol):
     GIVES_MATCHES = "end point"
     ON_PLANE = True
 
+    ask = staticmethod(_ask)
+    plot = staticmethod(_plot)
+    trials = staticmethod(_trials)
+
     def state(self, config: dict[str, Any], seed: int, fmt: int) -> Any:
         return PV.Pursuit(seed, PV.Config(**tuples(config)))
 
-    def ask(self, state: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
-        return _ask(state, header, display)
-
     def estimate(self, state: Any) -> dict[str, float]:
-        t = texel_params(state.centre)
-        return {"pitch_db": t["pitch_db"], "irregularity_db": t["irregularity_db"]}
+        return played_db(state.centre)
 
     def simulate(self, who: Any, state: Any) -> Any:
         q = state.next_comparison()
         return who.compare(q.a, q.b)
-
-    def plot(self, fig: Any, ax: Any, state: Any) -> None:
-        _plot(fig, ax, state)
-
-    def trials(self, state: Any, header: dict[str, Any], display: dict[str, Any],
-               listed: int) -> dict[str, Any]:
-        return _trials(state, header, display)
 
 
 PROTOCOL = PursuitProtocol()

@@ -34,7 +34,8 @@ def _ask(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
                      "quant_db": level, "texture": shown, "match_source": st.config.match_source})
 
 
-def _trials(st: Any, header: dict[str, Any], display: dict[str, Any]) -> dict[str, Any]:
+def _trials(st: Any, header: dict[str, Any], display: dict[str, Any],
+            listed: int = 0) -> dict[str, Any]:
     c = st.config
     v = format_of(header)
     phases = st.phases                      # the rater renderings' start phases (quant.py)
@@ -116,11 +117,12 @@ class QuantProtocol(Protocol):
     TAKES_MATCHES = True
     FIXED = True
 
+    ask = staticmethod(_ask)
+    plot = staticmethod(_plot)
+    trials = staticmethod(_trials)
+
     def state(self, config: dict[str, Any], seed: int, fmt: int) -> Any:
         return QT.Quant(seed, QT.Config(**tuples(config)))
-
-    def ask(self, state: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
-        return _ask(state, header, display)
 
     def normalise(self, q: Question, state: Any, answer: Any) -> Any:
         return state.checked_answer(answer)
@@ -132,13 +134,6 @@ class QuantProtocol(Protocol):
         ref, level = state.current
         return dict(similarity=a, quant_db=level, reference=ref, trial=state.trial,
                     match_of=state.current_match, source=state.current_source)
-
-    def plot(self, fig: Any, ax: Any, state: Any) -> None:
-        _plot(fig, ax, state)
-
-    def trials(self, state: Any, header: dict[str, Any], display: dict[str, Any],
-               listed: int) -> dict[str, Any]:
-        return _trials(state, header, display)
 
 
 PROTOCOL = QuantProtocol()

@@ -10,8 +10,8 @@ from typing import Any
 from ...search.preference import PreferenceSearch, candidate_params
 from .. import scenes as S
 from ..describing import option
-from ..question import Question, format_of, mean_of, reference_of
-from ..space import Point, irregularity_db, pitch_db, texel_params
+from ..question import Question, played_db, format_of, mean_of, reference_of
+from ..space import Point, irregularity_db, pitch_db
 from .base import SCENE_KEYS, Protocol, tuples
 
 
@@ -34,7 +34,8 @@ def _ask(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
                      "candidates": cands})
 
 
-def _trials(st: Any, header: dict[str, Any], display: dict[str, Any]) -> dict[str, Any]:
+def _trials(st: Any, header: dict[str, Any], display: dict[str, Any],
+            listed: int = 0) -> dict[str, Any]:
     q = _ask(st, header, display)
     first = {"iteration": 0, "options": [option(n, sc, display)
                                          for n, sc in zip(q.public["options"], q.options)],
@@ -77,6 +78,10 @@ class SearchProtocol(Protocol):
     GIVES_MATCHES = "end point"
     ON_PLANE = True
 
+    ask = staticmethod(_ask)
+    plot = staticmethod(_plot)
+    trials = staticmethod(_trials)
+
     def state(self, config: dict[str, Any], seed: int, fmt: int) -> Any:
         return PreferenceSearch(seed, texture_format=fmt, **tuples(config))
 
@@ -97,21 +102,14 @@ class SearchProtocol(Protocol):
     def resolved(self, state: Any, config: dict[str, Any]) -> dict[str, Any]:
         return dict(config)             # (no Config: it keeps what it was given)
 
-    def ask(self, state: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
-        return _ask(state, header, display)
-
     def estimate(self, state: Any) -> dict[str, float]:
-        t = texel_params(Point(state.mean[0], state.mean[1]))
-        return {"pitch_db": t["pitch_db"], "irregularity_db": t["irregularity_db"]}
+        return played_db(Point(state.mean[0], state.mean[1]))
 
     def simulate(self, who: Any, state: Any) -> Any:
         return {"choose": who.pick(state.ask())}
 
     def columns(self, state: Any, a: Any) -> dict[str, Any]:
         return dict(chosen=a["choose"], trial=state.iteration) if "choose" in a else {}
-
-    def plot(self, fig: Any, ax: Any, state: Any) -> None:
-        _plot(fig, ax, state)
 
     def full_config(self, state: Any, header: dict[str, Any]) -> dict[str, Any]:
         """Its own fields (no Config) and the scenes' keys."""
@@ -120,10 +118,6 @@ class SearchProtocol(Protocol):
         fields["x0"] = fields["x0"] if fields["x0"] is not None else [0.5] * len(state.dims)
         out = dict(fields, **{k: v for k, v in header.items() if k in SCENE_KEYS})
         return json.loads(json.dumps(out))
-
-    def trials(self, state: Any, header: dict[str, Any], display: dict[str, Any],
-               listed: int) -> dict[str, Any]:
-        return _trials(state, header, display)
 
 
 PROTOCOL = SearchProtocol()

@@ -82,11 +82,12 @@ class StaircaseProtocol(Protocol):
     NAME = "staircase"
     TITLE = "texel-length oddity staircase (seed 001)"
 
+    ask = staticmethod(_ask)
+    plot = staticmethod(_plot)
+    trials = staticmethod(_trials)
+
     def state(self, config: dict[str, Any], seed: int, fmt: int) -> Any:
         return SC.Staircase(SC.Config(**config))
-
-    def ask(self, state: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
-        return _ask(state, header, display)
 
     def normalise(self, q: Question, state: Any, answer: Any) -> Any:
         return super().normalise(q, state, answer) == q.odd    # what it takes: found or not
@@ -103,18 +104,11 @@ class StaircaseProtocol(Protocol):
     def columns(self, state: Any, a: Any) -> dict[str, Any]:
         return dict(correct=a, length_mm=state.length_mm, trial=len(state.track))
 
-    def plot(self, fig: Any, ax: Any, state: Any) -> None:
-        _plot(fig, ax, state)
-
     def full_config(self, state: Any, header: dict[str, Any]) -> dict[str, Any]:
         out = self.resolved(state, header)
         if "distribution" not in out:           # the stimulus as it plays
             out["distribution"] = state.config.texture()
         return out
-
-    def trials(self, state: Any, header: dict[str, Any], display: dict[str, Any],
-               listed: int) -> dict[str, Any]:
-        return _trials(state, header, display, listed)
 
 
 PROTOCOL = StaircaseProtocol()
