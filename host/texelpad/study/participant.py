@@ -141,17 +141,15 @@ class SimulatedParticipant:
         noise), on the config's scale."""
         from . import bandpass
         from .mapping import MEAN_BASE_CPMM, MEAN_RATIO, SD_PER_STEP_CPMM, SLIDER
-        def n() -> float:
-            return self.jitter(100.0)
         if state.phase == "match":
             fc, zeta = bandpass.params_of(state.reference)
-            p = math.log(fc / MEAN_BASE_CPMM) / math.log(MEAN_RATIO) + n()
-            i = 2.0 * zeta * fc / SD_PER_STEP_CPMM + n()
+            p = math.log(fc / MEAN_BASE_CPMM) / math.log(MEAN_RATIO) + self.jitter(100.0)
+            i = 2.0 * zeta * fc / SD_PER_STEP_CPMM + self.jitter(100.0)
             lo, hi = SLIDER
             return {"pitch": round(min(hi, max(lo, p))), "irregularity": round(min(hi, max(lo, i)))}
         ref, of = state.current
         lo, hi = state.config.scale
-        return int(min(hi, max(lo, round((10 if ref == of else 4) + n()))))
+        return int(min(hi, max(lo, round((10 if ref == of else 4) + self.jitter(100.0)))))
 
     def rate(self, state) -> int:
         """The similarity rating of the quantization test's current trial

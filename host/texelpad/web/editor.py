@@ -643,13 +643,6 @@ class Editor:
         self.memory, self.renders = Memory(), Renders()
 
     # --- what plays --------------------------------------------------------------------
-    def running(self) -> dict[str, Any]:
-        st = self.lab.owner.status()
-        if not st.get("running"):
-            self.lab.owner.display()    # starts it (the owner's board file), as every page does
-            st = self.lab.owner.status()
-        return st
-
     def palette(self) -> dict[str, Any]:
         display = self.lab.owner.display()
         texel_spec = {}
@@ -672,8 +665,7 @@ class Editor:
 
     def scene(self) -> dict[str, Any]:
         """The playing scene in the editor's form, its scene_id and strip."""
-        st = self.running()
-        canonical = self.lab.owner.scene_source()
+        st, canonical = self.lab.owner.playing()
         display = {"positions": st["display"]["positions"], "dx_um": st["display"]["dx_um"]}
         strip = strip_answer(self.renders, self.memory, st, canonical)
         return {"regions": editor_regions(canonical, display, _strip.idle_of(st), self.memory),
@@ -681,8 +673,7 @@ class Editor:
                 "scene_id": strip["scene_id"], "strip": strip}
 
     def strip(self) -> dict[str, Any]:
-        st = self.running()
-        return strip_answer(self.renders, self.memory, st, self.lab.owner.scene_source())
+        return strip_answer(self.renders, self.memory, *self.lab.owner.playing())
 
     # --- painting ------------------------------------------------------------------------
     def paint(self, body: Any, display: dict[str, Any]) -> Painting:

@@ -43,9 +43,9 @@ class BoardOwner:
         # asks what plays (the experimenter's every second), and a long
         # samples region is ~67 KB read over the link in pieces (0.36 s
         # holding the lock, where a status is ~0.02 s: bench/results/lab.txt,
-        # "strip"). The board's status
-        # counts its pushes and describes what plays; while those read the
-        # same on the same connection, the scene is the one read before.
+        # "strip"). The board's status counts its pushes and describes what
+        # plays; while those read the same on the same connection, the scene
+        # is the one read before.
         self._source_of: tuple[tuple[Any, ...], dict[str, Any] | None] | None = None
         self.source_reads = 0       # scene_source() calls that reached the board
 
@@ -104,17 +104,31 @@ class BoardOwner:
     def scene_source(self) -> dict[str, Any] | None:
         """The canonical scene the board plays (to draw the strip): read from
         the board once per scene played, then remembered (see __init__)."""
-        def go(b: Board) -> dict[str, Any] | None:
+        return self._call(lambda b: self._source(b, b.status()))
+
+    def playing(self) -> tuple[dict[str, Any], dict[str, Any] | None]:
+        """(the board's status, the canonical scene it plays) - what a strip
+        draws - with texelpad started first when it is not running (the
+        owner's board file, as every page does); one status round trip."""
+        def go(b: Board) -> tuple[dict[str, Any], dict[str, Any] | None]:
             st = b.status()
-            key = (self.connections, st.get("running"), st.get("pushes"), repr(st.get("last_push")),
-                   repr(st.get("scene")))
-            known = self._source_of
-            if known is None or known[0] != key:
-                known = self._source_of = (key, b.scene_source())
-                self.source_reads += 1
-            # (a copy: a caller that edits it must not edit the remembered one)
-            return copy.deepcopy(known[1])
+            if not st.get("running"):
+                if self._display is None:
+                    self._running(b)
+                st = b.status()
+            return st, self._source(b, st)
         return self._call(go)
+
+    def _source(self, b: Board, st: dict[str, Any]) -> dict[str, Any] | None:
+        """The scene b plays, st its status just now (under the lock)."""
+        key = (self.connections, st.get("running"), st.get("pushes"), repr(st.get("last_push")),
+               repr(st.get("scene")))
+        known = self._source_of
+        if known is None or known[0] != key:
+            known = self._source_of = (key, b.scene_source())
+            self.source_reads += 1
+        # (a copy: a caller that edits it must not edit the remembered one)
+        return copy.deepcopy(known[1])
 
     def _running(self, b: Board) -> dict[str, Any]:
         """texelpad running on the board (started when it is not): its display."""

@@ -170,14 +170,6 @@ def strip_answer(cache: StripCache, st: dict[str, Any],
                 regions=item["regions"], name=item["name"], scene_id=item["scene_id"])
 
 
-def _status_running(owner: Any) -> dict[str, Any]:
-    st = owner.status()
-    if not st.get("running"):
-        owner.display()                 # starts it (the owner's board file), as every page does
-        st = owner.status()
-    return st
-
-
 def check_position(body: Any, display: dict[str, Any]) -> float | None:
     """{"position_mm": number in [0, display length] or null} -> mm or None."""
     keys(body, {"position_mm"})
@@ -218,8 +210,7 @@ def routes(lab: Any) -> list:
     def strip(request: Request) -> dict[str, Any]:
         if request.query_params:
             raise Refused("GET /api/strip takes no parameters")
-        st = _status_running(lab.owner)
-        return strip_answer(cache, st, lab.owner.scene_source())
+        return strip_answer(cache, *lab.owner.playing())
 
     def finger(request: Request) -> dict[str, Any]:
         body = body_of(request)
