@@ -28,11 +28,7 @@ from texel.runtime.boards import DX_UM_MAX, POSITIONS_MAX
 from . import configs as C
 from . import protocols
 from . import scenes as S
-from .describing import scene
 from .session import SessionError
-
-__all__ = ["TPAD_DISPLAY", "describe", "full_config", "header_config", "load",
-           "parse_display", "render_text", "scene", "texture_text"]
 
 # the TPaD of seeds 000 and 001: 19,200 positions of 5.3 um (texel.runtime.boards)
 TPAD_DISPLAY: dict[str, Any] = {"positions": 19200, "dx_um": 5.3}
