@@ -80,7 +80,9 @@ GOALS = {
     "reference_to_playing_ms": 20.0, "brush_to_playing_ms": 200.0,
     "first_push_answers_ms": 30.0, "refresh_us": 10.0, "overruns": 0,
     "heap_free_playing_bytes": 200 * 1024, "refused": 0,
+    "user_push_ms": 20.0,       # issue 32: app.push of a full-screen texel without "v"
 }
+USER_PUSHES = 5                 # the user's script below, each a new seed
 
 # what the board runs (sent once after connecting): the request wrapper
 DEVICE_CODE = r'''
@@ -248,6 +250,35 @@ def _request(b: Any, scene: dict[str, Any]) -> dict[str, Any]:
     return r
 
 
+# A user's script, as docs/device-api.md writes one: the texture without "v"
+# (format 2 since 0.2; "v": 1 is the lab's float generator, timed for contrast).
+# The board's clock around the call; the script is compiled by the raw REPL
+# before it runs, as mpremote exec does.
+USER_SCRIPT = """import time, texel.app
+t0 = time.ticks_us()
+texel.app.push({"regions": [{"start_mm": 0, "end_mm": %r, "texture": %r}]})
+print(time.ticks_diff(time.ticks_us(), t0))"""
+
+
+def _user_pushes(b: Any, display: dict[str, Any], say: Progress) -> dict[str, Any]:
+    """texel.app.push of a full-screen texel texture written as a user writes
+    it (no "v"), USER_PUSHES seeds; and with "v": 1 (twice) for contrast.
+    Microseconds from the call to its return on the board's clock."""
+    out: dict[str, Any] = {}
+    for label, extra, n in (("no_v", {}, USER_PUSHES), ("v1", {"v": 1}, 2)):
+        us = []
+        for k in range(n):
+            tex = dict({"kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9,
+                        "seed": 100 + k}, **extra)
+            us.append(int(b.link.eval(USER_SCRIPT % (_total(display), tex), timeout=120)))
+        out[label] = us
+        say("user's push, full-screen texel %s: %s us" % (
+            "without \"v\"" if not extra else "with \"v\": 1", us))
+    st = b.status()
+    out["format_played"] = [r.get("v") for r in st["scene"]["regions"]]
+    return out
+
+
 def _irq_costs(b: Any, display: dict[str, Any], reps: int, say: Progress) -> dict[str, Any]:
     """Refresh cost incl. IRQ entry/exit for a full-screen scene of each
     region kind (and 16 texel regions), texelpad/bench/chip.py's method."""
@@ -350,6 +381,9 @@ def run_board(firmware: str | None, pushes: int, scenes: int | None, irq_reps: i
             res["run_overruns"] = snap[2]
             res["run_worst_refresh_us"] = snap[3]
             res["run_faults"] = snap[4]
+            # 2b: a push as a user scripts it (mpremote exec / Thonny): one
+            # texel.app.push of a full-screen texel without "v", call -> return
+            res["user_push"] = _user_pushes(b, display, say)
             # 3: the refresh per region kind
             res["refresh"] = _irq_costs(b, display, irq_reps, say)
             # 4: the heap, playing the power-up scene, then before texelpad starts
@@ -471,6 +505,10 @@ def summarize(res: dict[str, Any]) -> dict[str, Any]:
         "pushes": len(rows), "refused": len(rows) - len(ok),
         "refusals": [(r["name"], r["refused"]) for r in rows if "refused" in r],
         "mem_free_slope_per_push": slope_per_push(mem),
+        "user_push_ms": _ms(max(res["user_push"]["no_v"])) if res.get("user_push") else None,
+        "user_push_ms_median": _ms(statistics.median(res["user_push"]["no_v"]))
+        if res.get("user_push") else None,
+        "user_push_v1_ms": _ms(max(res["user_push"]["v1"])) if res.get("user_push") else None,
         "mem_free_first": mem[0] if mem else None, "mem_free_last": mem[-1] if mem else None,
     }
     return f
@@ -497,6 +535,8 @@ ROWS = [  # (key, label, unit, goal text)
      ">= 204,800"),
     ("refused", "pushes refused", "", "0"),
     ("mem_free_slope_per_push", "free memory trend", "B/push", "flat"),
+    ("user_push_ms", "app.push, full-screen texel without \"v\" (max of %d)" % USER_PUSHES, "ms",
+     "<= 20"),
 ]
 
 
@@ -539,6 +579,9 @@ def table(out: dict[str, Any]) -> str:
              ("refresh_us_with_exception", "  refresh + 30 exception cycles not emulated", "us"),
              ("worst_refresh_body_us", "  refresh body worst (its own clock) while pushing",
               "us"),
+             ("user_push_ms_median", "  app.push without \"v\": call -> return, median", "ms"),
+             ("user_push_v1_ms", "  app.push with \"v\": 1 (the lab's float plan), max of 2",
+              "ms"),
              ("heap_free_playing_default_bytes", "heap free playing the power-up scene", "B"),
              ("heap_free_after_import_bytes", "heap free, texel.app imported, not playing", "B"),
              ("heap_free_bare_bytes", "heap free at boot before texelpad starts", "B")]

@@ -7,7 +7,7 @@
     res = texelpad.encode(friction_map)   # map -> the texel parameters that feel the same
     res["texture"]                         # the dict a board plays (b.push_texel)
 """
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 
 def connect(port=None, timeout=10.0, check=True):

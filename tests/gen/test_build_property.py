@@ -126,6 +126,7 @@ def valid_params(draw):
             p[k] = draw(VALID[k])
     if "length_samples" not in p:
         p["length_samples"] = draw(VALID["length_samples"])    # the default 9600 is over LEN_CAP
+    p["v"] = 1              # the property is format 1's float plan (no "v" is format 2: test_plan_int)
     if draw(_uniform_int(0, 4)) == 0:                           # one in 5: hundreds of short texels
         p["texel_samples"] = draw(_uniform_int(1, 10))
         p["length_samples"] = draw(_uniform_int(LEN_CAP // 2, LEN_CAP))
@@ -134,7 +135,7 @@ def valid_params(draw):
 
 def _ex(**kw):
     d = {"pitch_db": P.PITCH_DB_MAX, "irregularity_db": P.IRREG_DB_MAX, "length_samples": LEN_CAP,
-         "seed": P.SEED_MAX}
+         "seed": P.SEED_MAX, "v": 1}
     d.update(kw)
     return d
 
@@ -505,7 +506,7 @@ def test_refusals_match_under_micropython():
     CPython raised OverflowError) and replayed draws out of range (z = 100:
     MicroPython raised OverflowError "can't convert inf to int"): the same
     ValueError, word for word, on the unix port as on CPython."""
-    base = {"pitch_db": 6, "irregularity_db": 5, "length_samples": 100}
+    base = {"pitch_db": 6, "irregularity_db": 5, "length_samples": 100, "v": 1}
     cases = [(dict(base, **{k: v}), None) for k in ("pitch_db", "gain", "band_limit_cpmm")
              for v in (10 ** 400, -(2 ** 70))]
     cases += [(base, (0.5, [z] * 2)) for z in (100.0, -1e300, 12.0, 10 ** 400, -11, 9.5)]
@@ -532,7 +533,7 @@ def test_replayed_draws_at_the_bound_build_on_float32():
 import texel
 for pd, z in ((19.747, 10.0), (-20.0, -10.0), (19.747, -10.0), (-20.0, 10.0)):
     p = {"pitch_db": pd, "irregularity_db": 5.0, "quant_db": 20.0, "texel_samples": 3,
-         "length_samples": 3000}
+         "length_samples": 3000, "v": 1}
     pl = texel.make_plan(p, (1.0, [z] * 1000))
     q = texel.render_u16(p, (1.0, [z] * 1000), engine="int")
     f = pl.f[0]

@@ -18,7 +18,7 @@ def test_defaults_filled_and_input_untouched():
     assert src == keep
     assert v == {"pitch_db": 6.3, "irregularity_db": -12.9, "texel_samples": 50,
                  "length_samples": 9600, "quant_db": 0.0, "seed": 0, "gain": 1.0,
-                 "v": 1, "band_limit_cpmm": None}
+                 "v": 2, "band_limit_cpmm": None}       # no "v": format 2 (issue 32)
 
 
 def test_ints_accepted_for_floats_and_converted():
@@ -98,6 +98,13 @@ def test_ragged_map_allowed_and_texel_count():
     assert P.texel_count(v) == 1
 
 
+def test_draws_without_v_say_which_format_replays_them():
+    """No "v" is format 2, which draws from its seed: logged draws are refused
+    with the way to replay them ("v": 1), not silently ignored."""
+    with pytest.raises(ValueError, match=r"draws: replaying logged draws is format 1's \(v=1\)"):
+        texel.make_plan(GOOD, (0.5, [0.0] * 192))
+
+
 def test_render_rejects_before_any_work():
     with pytest.raises(ValueError, match="pitch_db"):
         texel.render(dict(GOOD, pitch_db=float("nan")))
@@ -114,7 +121,7 @@ def test_render_rejects_before_any_work():
 ])
 def test_bad_draws(draws, fragment):
     with pytest.raises(ValueError) as e:
-        texel.make_plan(GOOD, draws)
+        texel.make_plan(dict(GOOD, v=1), draws)     # replayed draws are format 1's
     assert fragment in str(e.value)
 
 
@@ -139,7 +146,8 @@ def test_huge_int_in_a_float_field_is_out_of_range(key, value):
     assert str(e.value) == "%s: a huge int (beyond 2^62) is out of range [%r, %r]" % (key, lo, hi)
 
 
-WIDE = {"pitch_db": 6.3, "irregularity_db": 5.0, "texel_samples": 50, "length_samples": 500}
+WIDE = {"pitch_db": 6.3, "irregularity_db": 5.0, "texel_samples": 50, "length_samples": 500,
+        "v": 1}                     # replayed draws are format 1's
 
 
 @pytest.mark.parametrize("zs,fragment", [

@@ -265,14 +265,28 @@ def test_format2_parameters_on_the_grid_and_ties_refused():
                         "band_limit_cpmm": 50.00011, "v": 2})
     assert (c["pitch_db"], c["irregularity_db"], c["quant_db"], c["band_limit_cpmm"]) == \
         (12.346, -7.0, 0.001, 50.0)
-    assert texel.validate({"pitch_db": 12.3456, "irregularity_db": 0})["pitch_db"] == 12.3456
-    assert texel.validate({"pitch_db": 1, "irregularity_db": 0})["v"] == 1     # saved files keep v1
+    assert texel.validate({"pitch_db": 12.3456, "irregularity_db": 0, "v": 1})["pitch_db"] == 12.3456
+    assert texel.validate({"pitch_db": 1, "irregularity_db": 0})["v"] == 2     # no "v": format 2 (issue 32)
+    assert texel.validate({"pitch_db": 12.3456, "irregularity_db": 0})["pitch_db"] == 12.346
     with pytest.raises(ValueError, match=r"pitch_db: 12\.3455 is half-way .* \(give 12\.345 or 12\.346\)"):
         texel.validate({"pitch_db": 12.3455, "irregularity_db": 0, "v": 2})
     with pytest.raises(ValueError, match=r"irregularity_db: -0\.0005 is half-way"):
         texel.validate({"pitch_db": 1, "irregularity_db": -0.0005, "v": 2})
     with pytest.raises(ValueError, match="draws: replaying logged draws is format 1's"):
         texel.make_plan({"pitch_db": 1, "irregularity_db": 0, "v": 2}, draws=(0.5, [0.0]))
+
+
+def test_a_canonical_format2_set_validates_to_itself_at_the_nyquist_band_limit():
+    """Hole (found when format 2 became the default): band_limit_cpmm at
+    Nyquist (94.33962 c/mm, the top of its range) went onto the grid as 94.34,
+    out of range - the canonical dict (a pulled scene) was refused when pushed
+    again. The grid point below, 94.339, is what it takes now."""
+    for key in ("band_limit_cpmm", "min_cpmm"):
+        for value in (texel.NYQUIST_CPMM, 94.3396, 94.3391):
+            c = texel.validate({"pitch_db": 6, "irregularity_db": -9, key: value, "v": 2})
+            assert c[key] == 94.339 and texel.validate(c) == c, (key, value)
+    c = texel.validate({"pitch_db": 6, "irregularity_db": -9, "band_limit_cpmm": 94.3384, "v": 2})
+    assert c["band_limit_cpmm"] == 94.338
 
 
 def test_format2_is_the_same_texture_for_every_seed_and_length_prefix():

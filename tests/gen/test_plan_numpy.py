@@ -208,7 +208,7 @@ def test_replayed_draws_random_and_refused():
               for _ in range(count + rnd.randint(0, 3))]
         draws = (rnd.choice([rnd.random(), 0.0, 1.0, 0.5]), zs)
         assert_same_plan(Plan(p, draws), PN.make_plan(p, draws))
-    p = texel.validate({"pitch_db": 6.0, "irregularity_db": -10.0, "length_samples": 200})
+    p = texel.validate({"pitch_db": 6.0, "irregularity_db": -10.0, "length_samples": 200, "v": 1})
     for bad in [(0.5, [0.0]), (2.0, [0.0] * 4), (0.5, [0.0, 11.0, 0.0, 0.0]), 3,
                 (0.5, "abcd"), (0.5, [float("nan")] * 4)]:
         with pytest.raises(ValueError) as a:

@@ -1,12 +1,14 @@
-"""New textures are format 2; a texture without "v" reads as format 1 (issue 19,
-part 4; docs/generator.md "Which format").
+"""Format 2 is the one default (issue 32 item 1; docs/generator.md "Which
+format"): a texture without "v" is format 2 everywhere - texel.render, the
+device API, scene files, Board.push, the board's own validation; format 1,
+the lab's float generator, only by "v": 1.
 
 Every creator writes "v", 2 unless asked for 1: the CLI's texel flags (push,
 render) and encode, Board.push_texel, the shipped scenes, the board's
 DEFAULT_SCENE, the lab's studies (a config's texture_format, recorded in the
 session header) - and `scene pull` writes the canonical scene, which says "v".
-The reading rule stays: a parameter set or file without "v" is format 1, the
-lab's float generator (texel.render, scene files)."""
+A file saved before 0.2 (when no "v" read as format 1) keeps its texture with
+`texelpad scene pin FILE`, which writes "v": 1 where a texel says nothing."""
 import json
 
 import numpy as np
@@ -35,17 +37,79 @@ def _texels(scene):
     return [r["texture"] for r in scene["regions"] if r["texture"]["kind"] == "texel"]
 
 
-# --- the reading rule: no "v" is format 1 -----------------------------------------
+# --- the reading rule: no "v" is format 2 -----------------------------------------
 
-def test_a_texture_without_v_reads_as_format_1():
-    assert P.FORMAT_VERSION == 1 and P.FORMAT_NEW == 2
-    assert texel.validate(TEX)["v"] == 1
-    assert np.array_equal(texel.render_u16(TEX), texel.render_u16(dict(TEX, v=1)))
-    assert not np.array_equal(texel.render_u16(TEX), texel.render_u16(dict(TEX, v=2)))
-    # a scene file's texel region without "v": format 1 (saved files keep their texture)
-    old = {"regions": [{"start_mm": 0, "end_mm": 50.88, "texture": dict(TEX, kind="texel")}]}
-    (tex,) = _texels(scene_mod.validate(old, TPAD))
-    assert tex["v"] == 1
+def test_a_texture_without_v_reads_as_format_2():
+    assert P.FORMAT_VERSION == 2 and P.FORMAT_NEW == 2
+    assert texel.validate(TEX)["v"] == 2
+    assert np.array_equal(texel.render_u16(TEX), texel.render_u16(dict(TEX, v=2)))
+    assert not np.array_equal(texel.render_u16(TEX), texel.render_u16(dict(TEX, v=1)))
+    # a scene file's texel region without "v": format 2
+    new = {"regions": [{"start_mm": 0, "end_mm": 50.88, "texture": dict(TEX, kind="texel")}]}
+    (tex,) = _texels(scene_mod.validate(new, TPAD))
+    assert tex["v"] == 2
+    # format 1 by "v": 1, and logged draws say so when "v" is missing
+    assert texel.validate(dict(TEX, v=1))["v"] == 1
+    with pytest.raises(ValueError, match=r"draws: .*format 1's \(v=1\)"):
+        texel.make_plan(TEX, (0.5, [0.0] * 192))
+
+
+def test_the_board_reads_no_v_as_format_2_on_micropython():
+    """The device code under the MicroPython unix port: validate and the
+    scene builder read a texel without "v" as format 2, and it renders the
+    same map as CPython (bit for bit)."""
+    from support import mpy
+    out = mpy.run("import texel\n"
+                  "p = {'pitch_db': 6.3, 'irregularity_db': -12.9, 'seed': 7, 'length_samples': 500}\n"
+                  "print(texel.validate(p)['v'])\n"
+                  "print(list(texel.render_u16(p, engine='int')))\n").splitlines()
+    assert out[0] == "2"
+    want = texel.render_u16(dict(TEX, length_samples=500), engine="int")
+    assert eval(out[1]) == list(want)
+
+
+# --- texelpad scene pin: an old file keeps its texture --------------------------------
+
+OLD = {"name": "old", "regions": [
+    {"start_mm": 0, "end_mm": 40, "texture": dict(TEX, kind="texel")},
+    {"start_mm": 40, "end_mm": 80, "texture": dict(TEX, kind="texel", v=2)},
+    {"start_mm": 80, "end_mm": 101.76, "texture": {"kind": "reference", "name": "4sin"}}]}
+
+
+def test_scene_pin_writes_v1_where_a_texel_says_nothing(tmp_path, capsys):
+    f, g = tmp_path / "old.json", tmp_path / "new.json"
+    f.write_text(json.dumps(OLD))
+    g.write_text(json.dumps({"regions": [OLD["regions"][1]]}))
+    before_g = g.read_bytes()
+    code, out, err = run_cli(capsys, "scene", "pin", "--check", str(f), str(g))
+    assert code == 1 and "would pin 1 texel texture" in out, (out, err)
+    assert json.loads(f.read_text()) == OLD                   # --check writes nothing
+    code, out, err = run_cli(capsys, "scene", "pin", str(f), str(g))
+    assert code == 0, err
+    assert '%s: pinned 1 texel texture without "v" to format 1' % f in out
+    assert "%s: nothing to pin" % g in out
+    assert g.read_bytes() == before_g                         # untouched
+    pinned = json.loads(f.read_text())
+    assert [r["texture"].get("v") for r in pinned["regions"]] == [1, 2, None]
+    # it plays what the file played before 0.2: format 1
+    (a, b) = _texels(scene_mod.validate(pinned, TPAD))
+    assert a["v"] == 1 and b["v"] == 2
+    # twice: nothing more to do
+    code, out, err = run_cli(capsys, "scene", "pin", "--check", str(f))
+    assert code == 0 and "nothing to pin" in out
+
+
+def test_scene_pin_refuses_before_writing_anything(tmp_path, capsys):
+    f, bad = tmp_path / "old.json", tmp_path / "bad.json"
+    f.write_text(json.dumps(OLD))
+    bad.write_text(json.dumps({"regions": [{"start_mm": 0, "end_mm": 1}]}))
+    code, out, err = run_cli(capsys, "scene", "pin", str(f), str(bad))
+    assert code == 2 and "bad.json: regions[0]: expected" in err
+    assert json.loads(f.read_text()) == OLD                   # the good one was not written either
+    code, out, err = run_cli(capsys, "scene", "pin", str(tmp_path / "missing.json"))
+    assert code == 2 and "no such file" in err
+    code, out, err = run_cli(capsys, "scene", "pin", "split-4sin")   # a shipped scene: not a file here
+    assert code == 2 and "no such file" in err
 
 
 # --- the command line ---------------------------------------------------------------
@@ -62,8 +126,9 @@ def test_render_default_is_format_2(tmp_path, capsys):
         maps[name] = np.load(f)
     assert np.array_equal(maps["default"], maps["2"])
     assert not np.array_equal(maps["default"], maps["1"])
-    # --format 1 is the lab's generator: a set without "v"
-    assert np.array_equal(maps["1"], np.asarray(texel.render(TEX, engine="int")))
+    # --format 1 is the lab's generator ("v": 1); no "v" is format 2
+    assert np.array_equal(maps["1"], np.asarray(texel.render(dict(TEX, v=1), engine="int")))
+    assert np.array_equal(maps["default"], np.asarray(texel.render(TEX, engine="int")))
 
 
 def _args(*argv):
@@ -196,10 +261,10 @@ def test_api_push_texel_is_format_2_unless_v_says(port):
         assert st["scene"]["regions"][0]["v"] == 2
         assert _texels(b.scene_source())[0]["v"] == 2
         assert b.push_texel(dict(TEX, v=1))["scene"]["regions"][0]["v"] == 1
-        # push(scene) reads a file: a texel region without "v" is format 1
+        # push(scene) reads a file: a texel region without "v" is format 2 on the board
         st = b.push({"regions": [{"start_mm": 0, "end_mm": 101.76,
                                   "texture": dict(TEX, kind="texel")}]})
-        assert st["scene"]["regions"][0]["v"] == 1
+        assert st["scene"]["regions"][0]["v"] == 2
 
 
 @pytest.mark.vboard

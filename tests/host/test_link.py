@@ -5,9 +5,12 @@ refused with the board's state unchanged; never a soft reset."""
 import ast
 import copy
 import math
+import re
 import time
 
 import pytest
+
+import texel
 
 import texelpad
 from texelpad.link import board as board_mod
@@ -71,7 +74,7 @@ def b(vb):
 def test_handshake_reports_firmware_and_image(b):
     assert b.firmware["implementation"] == "micropython"
     assert b.firmware["version"] >= (1, 26, 0)
-    assert b.image == {"protocol": texelpad.link.board.PROTOCOL, "texel": "0.1.0"}
+    assert b.image == {"protocol": texelpad.link.board.PROTOCOL, "texel": texel.__version__}
 
 
 def test_push_status_monitor_round_trip(b):
@@ -187,10 +190,11 @@ def test_board_without_the_image(tmp_path):
 
 
 def test_image_older_than_host(vb, monkeypatch):
-    monkeypatch.setattr(board_mod, "HOST_IMAGE_VERSION", "0.2.0")
-    with pytest.raises(ImageTooOld, match=r"texel 0.1.0 \(protocol 2\).*run texelpad deploy"):
+    monkeypatch.setattr(board_mod, "HOST_IMAGE_VERSION", "9.0.0")
+    with pytest.raises(ImageTooOld, match=r"texel %s \(protocol 2\).*run texelpad deploy"
+                       % re.escape(texel.__version__)):
         texelpad.connect(vb.port)
-    monkeypatch.setattr(board_mod, "HOST_IMAGE_VERSION", "0.1.0")
+    monkeypatch.setattr(board_mod, "HOST_IMAGE_VERSION", texel.__version__)
     monkeypatch.setattr(board_mod, "PROTOCOL", 3)
     with pytest.raises(ImageTooOld, match="protocol 2"):
         texelpad.connect(vb.port)

@@ -123,7 +123,7 @@ def _build_mpy_package(dst: Path, with_viper: bool) -> Path:
     return dst
 
 
-CHECK = {"pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7, "length_samples": 19200}
+CHECK = {"pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7, "length_samples": 19200, "v": 1}
 
 
 def _cp_digests():

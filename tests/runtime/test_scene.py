@@ -360,7 +360,7 @@ def test_canonical_form():
         {"start_mm": 0.0, "end_mm": 50.88, "texture": {"kind": "reference", "name": "4sin"}},
         {"start_mm": 50.88, "end_mm": 101.76, "texture": {
             "kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9, "texel_samples": 50,
-            "quant_db": 0.0, "seed": 7, "gain": 1.0, "v": 1, "band_limit_cpmm": None}}]}
+            "quant_db": 0.0, "seed": 7, "gain": 1.0, "v": 2, "band_limit_cpmm": None}}]}   # no "v": format 2
     assert isinstance(c["regions"][0]["start_mm"], float)
     assert "idle_amplitude" not in c
     assert S.validate(c, D) == c                     # idempotent

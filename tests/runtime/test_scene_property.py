@@ -202,7 +202,7 @@ TEXEL_VALID = {
                           st.integers(0, 20)),
     "seed": st.integers(0, P.SEED_MAX),
     "gain": st.one_of(_finite(0.0, 1.0), st.sampled_from([0, 1])),
-    "v": st.just(1),
+    "v": st.just(1),            # absent (it is optional): format 2, the default (issue 32)
     "band_limit_cpmm": st.one_of(st.none(), _finite(0.01, NYQ), st.sampled_from([0.01, NYQ, 1, 94])),
 }
 TEXEL_BAD = {
@@ -241,6 +241,19 @@ def _big_upload(draw, key, m):
     return [((a * i + b) % 65536) / 65535.0 for i in range(m)]
 
 
+def _near_a_grid_tie(t):
+    """Whether format 2 would refuse t for a value half-way between two points
+    of its 0.001 grid (texel/gen/grid.py: a "bad" value, not a valid one)."""
+    from texel.gen import grid
+    for k in grid.GRID_KEYS:
+        if isinstance(t.get(k), (int, float)):
+            try:
+                grid.on_grid(k, t[k])
+            except ValueError:
+                return True
+    return False
+
+
 @st.composite
 def valid_texture(draw, kind=None):
     if kind is None:
@@ -253,6 +266,8 @@ def valid_texture(draw, kind=None):
         for k in draw(st.lists(st.sampled_from(OPTIONAL_TEXEL), max_size=len(OPTIONAL_TEXEL),
                                unique=True)):
             t[k] = draw(TEXEL_VALID[k])
+        if "v" not in t and _near_a_grid_tie(t):
+            t["v"] = 1      # format 2 (no "v") refuses a value half-way on its grid: not valid
         return t
     if kind == "reference":
         return {"kind": "reference", "name": draw(st.sampled_from(NAMES))}
@@ -895,7 +910,16 @@ def check_build(c, display):
             by_int = np.asarray([by_engine["int"].amp(x) for x in range(s, e)])
             assert (by_int == q).all()
             plan = texel.make_plan(p)
-            if plan.count <= TEXEL_BOUND_MAX_TEXELS:
+            if texel.validate(p)["v"] == 2:
+                # format 2 (a texel without "v", or "v": 2): the int engine's map is
+                # the texture (above); the numpy engine renders the same integer plan
+                # in float64 (docs/generator.md "Texture format 2": within 0.28 PWM
+                # step below Nyquist), rounded as engine_numpy.render of the plan
+                if plan.count <= TEXEL_BOUND_MAX_TEXELS:
+                    ref = engine_numpy.render(plan)
+                    by_np = np.asarray([by_engine["numpy"].amp(x) for x in range(s, e)])
+                    assert (by_np == np.floor(ref * 65535.0 + 0.5)).all()
+            elif plan.count <= TEXEL_BOUND_MAX_TEXELS:
                 ref = engine_numpy.render(plan)
                 assert (np.abs(q / 65535.0 - ref) <= pr.error_bound(plan, "int", u16=True)).all()
                 by_np = np.asarray([by_engine["numpy"].amp(x) for x in range(s, e)])

@@ -19,7 +19,8 @@ def runs(golden_dir: Path):
             q = float(row["quant_log10"])
             n, L = int(row["texelnum"]), int(row["texellength"])
             params = {"pitch_db": 10 * math.log10(P), "irregularity_db": 10 * math.log10(s),
-                      "quant_db": 10 * q, "texel_samples": L, "length_samples": n * L}
+                      "quant_db": 10 * q, "texel_samples": L, "length_samples": n * L,
+                      "v": 1}     # the lab's float generator (format 1): what replays draws
             u = float((spt / f"run{i:02d}_u.csv").read_text())
             z = np.loadtxt(spt / f"run{i:02d}_z.csv")
             out.append({

@@ -31,6 +31,13 @@ def on_grid(key, value):
     return mdb(value) / 1000.0
 
 
+# The highest grid point a c/mm key may take: the display's Nyquist pitch
+# 94.33962 c/mm would round up to 94.34, which is out of the keys' range
+# [0.01, Nyquist], so a canonical dict would not validate again (a pulled
+# scene refused on push). 94.339 is the grid point below it.
+CPMM_TOP = 94.339
+
+
 def to_grid(p):
     """Put a validated format-2 parameter dict on the grid, in place."""
     for key in GRID_KEYS:
@@ -38,4 +45,7 @@ def to_grid(p):
         if p.get(key) is not None:
             # (quant_db is 0 or >= 0.001: params refuses finer, so a
             # quantization that is on stays on)
-            p[key] = on_grid(key, p[key])
+            g = on_grid(key, p[key])
+            if key in ("band_limit_cpmm", "min_cpmm") and g > CPMM_TOP:
+                g = CPMM_TOP
+            p[key] = g

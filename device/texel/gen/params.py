@@ -4,7 +4,7 @@
 # with every default filled in, or raises ValueError naming key, value, range,
 # in the words every device validator shares (gen/check.py: _words()).
 
-FORMAT_VERSION = 1     # what a parameter set without "v" means (saved files keep their texture)
+FORMAT_VERSION = 2     # what a parameter set without "v" means (issue 32: format 2 is the one default; "v": 1 asks for the lab's float plan)
 FORMAT_LATEST = 2      # texture format 2: the integer plan (gen/plan_int.py)
 FORMAT_NEW = 2         # what the host writes into every texture it makes (CLI, push_texel, scenes, the lab)
 

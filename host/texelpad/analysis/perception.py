@@ -383,6 +383,17 @@ def _acf(C: np.ndarray, L: int, n: int) -> np.ndarray:
     return 0.5 * np.real(first + conv) / L
 
 
+def _distribution(params: Mapping[str, Any]) -> dict[str, Any]:
+    """params validated as the distribution they draw from: a set without "v"
+    is checked as format 1's continuous parameters. Both formats draw the same
+    distribution (format 2 on a 0.001 dB grid), and a model evaluated between
+    grid points (the encoder's search, a plot's axis) must not be refused
+    for a half-way value that only format 2's grid cares about."""
+    p = dict(params)
+    p.setdefault("v", 1)
+    return texel.validate(p)
+
+
 def expected_periodogram(params: Mapping[str, Any], n: int | None = None
                          ) -> tuple[np.ndarray, np.ndarray]:
     """(f in c/mm, expected power per bin) of periodogram() of a texel
@@ -398,7 +409,7 @@ def expected_periodogram(params: Mapping[str, Any], n: int | None = None
     p = dict(params)
     if n is not None:
         p["length_samples"] = int(n)
-    p = texel.validate(p)
+    p = _distribution(p)
     m = segment_length(p["length_samples"])
     if m < MIN_SAMPLES:
         raise ValueError("length_samples: %d samples is too short to have a spectrum (at "
@@ -416,7 +427,7 @@ def expected_periodogram(params: Mapping[str, Any], n: int | None = None
 def expected_aliased_fraction(params: Mapping[str, Any]) -> float:
     """Expected fraction of a texture's texels drawn above Nyquist (they
     alias; texel.gen.plan counts the drawn ones: Plan.fraction_above_nyquist)."""
-    p = texel.validate(dict(params))
+    p = _distribution(params)
     cap = p["band_limit_cpmm"]
     if cap is not None and cap <= NYQUIST_CPMM:
         return 0.0
@@ -633,7 +644,7 @@ def texel_pattern(params: Mapping[str, Any], n: int | None = None,
     """The expected felt pattern of a texel texture rendered n samples long
     (default: its length_samples)."""
     _, P = expected_periodogram(params, n)
-    length = n if n is not None else texel.validate(dict(params))["length_samples"]
+    length = n if n is not None else _distribution(params)["length_samples"]
     return pattern_of_spectrum(P, segment_length(int(length)), model)
 
 

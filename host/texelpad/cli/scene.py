@@ -1,6 +1,9 @@
 """Scenes as files: `texelpad scene pull FILE` saves what the board plays,
 `texelpad scene boot FILE` makes a scene the board's power-up scene
-(/texelpad.json, read by its /main.py), and `texelpad scenes` lists the
+(/texelpad.json, read by its /main.py), `texelpad scene pin FILE...` writes
+its format into every texel texture of a scene file that does not say it
+(a file from before format 2 became the default keeps its texture), and
+`texelpad scenes` lists the
 example scenes shipped with texelpad (texelpad/scenes/*.json), which
 `--scene NAME` and `scene boot NAME` find by name.
 
@@ -20,7 +23,7 @@ from ..link.transport import DeviceError
 from .connection import add_port_flags, connected_board, not_running, running_board
 from .errors import EXIT_FAIL, EXIT_OK, CliError
 from .files import check_output, write_atomic, write_output
-from .scene_files import read_scene_file, scene_json, shipped_scenes
+from .scene_files import pin_formats, read_scene_file, scene_json, shipped_scenes
 
 
 def add_scene(p: argparse.ArgumentParser) -> None:
@@ -53,12 +56,31 @@ def add_scene(p: argparse.ArgumentParser) -> None:
                    help="the board file to start at power-up (default: the one running now)")
     add_port_flags(s, "the one board plugged in")
     s.set_defaults(func=cmd_scene_boot)
+    s = sub.add_parser("pin", help="write \"v\": 1 into every texel texture of scene files "
+                                   "that does not say its format (files made before format 2 "
+                                   "was the default keep their texture)",
+                       description="A texel texture without \"v\" is format 2 (the integer "
+                                   "plan) since texelpad 0.2; before, it was format 1 (the "
+                                   "lab's float generator). pin writes \"v\": 1 (or --format) "
+                                   "into every texel texture of each FILE that has no \"v\", "
+                                   "so the file plays what it played before. A file with "
+                                   "nothing to pin is not touched; the others are written "
+                                   "atomically (a temporary file renamed over). Every file is "
+                                   "read and checked before any is written.")
+    s.add_argument("files", metavar="FILE", nargs="+", help="scene files (JSON) to pin")
+    s.add_argument("--format", dest="v", type=int, choices=(1, 2), default=1,
+                   help="the format to write (default 1: what a texture without \"v\" "
+                        "played before 0.2)")
+    s.add_argument("--check", action="store_true",
+                   help="write nothing: list the files that would change, exit 1 if any")
+    s.set_defaults(func=cmd_scene_pin)
     p.set_defaults(func=_no_action)
 
 
 def _no_action(args: argparse.Namespace) -> int:
-    raise CliError("", "say what to do: texelpad scene pull FILE, or texelpad scene boot "
-                   "FILE|--current|--clear (see: texelpad scene --help)")
+    raise CliError("", "say what to do: texelpad scene pull FILE, texelpad scene boot "
+                   "FILE|--current|--clear, or texelpad scene pin FILE... (see: texelpad "
+                   "scene --help)")
 
 
 # --- pull ----------------------------------------------------------------------------
@@ -134,6 +156,39 @@ def _source(args: argparse.Namespace) -> str:
     if args.current:
         return "the scene playing now"
     return "stdin" if args.file == "-" else args.file
+
+
+# --- pin ------------------------------------------------------------------------------
+
+def cmd_scene_pin(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    plans = []
+    for f in args.files:                        # every file read and checked before any write
+        if not Path(f).is_file():
+            raise CliError("FILE", "%s: no such file (pin changes scene files; a shipped "
+                           "scene says its format already)" % f)
+        scene = read_scene_file(f, "FILE")
+        try:
+            pinned, count, said = pin_formats(scene, args.v)
+        except ValueError as e:
+            raise CliError("FILE", "%s: %s" % (f, e)) from None
+        plans.append((f, pinned, count, said))
+    changed = 0
+    for f, pinned, count, said in plans:
+        if not count:
+            print("%s: nothing to pin (%d texel texture%s, each says its format)"
+                  % (f, said, "" if said == 1 else "s"))
+            continue
+        changed += 1
+        what = "%d texel texture%s without \"v\"" % (count, "" if count == 1 else "s")
+        if args.check:
+            print("%s: would pin %s to format %d" % (f, what, args.v))
+            continue
+        text = scene_json(pinned)
+        write_output("FILE", f, lambda f=f, text=text: write_atomic(f, text))
+        print("%s: pinned %s to format %d (\"v\": %d)" % (f, what, args.v, args.v))
+    return EXIT_FAIL if args.check and changed else EXIT_OK
 
 
 # --- the shipped scenes ------------------------------------------------------------

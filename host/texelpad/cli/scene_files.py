@@ -84,6 +84,37 @@ def _json_int(text: str) -> int:
     return int(text)
 
 
+def pin_formats(scene: dict[str, Any], v: int = 1) -> tuple[dict[str, Any], int, int]:
+    """(a copy of `scene` with "v": v in every texel texture that has no "v",
+    how many were pinned, how many said their format already). A texture
+    without "v" is format 2 since texelpad 0.2 (texel.gen.params.FORMAT_VERSION);
+    before, it was format 1 - pinning 1 keeps an old file's texture. Only the
+    shape is checked here (regions, each with a texture): the values are the
+    board's to check when the scene is pushed. ValueError names what is not
+    a scene."""
+    import copy
+    regions = scene.get("regions")
+    if not isinstance(regions, list):
+        raise ValueError("not a scene: expected {\"regions\": [...]}, %s"
+                         % ("no \"regions\"" if regions is None
+                            else "\"regions\" is a %s" % type(regions).__name__))
+    out = copy.deepcopy(scene)
+    pinned = said = 0
+    for i, r in enumerate(out["regions"]):
+        tex = r.get("texture") if isinstance(r, dict) else None
+        if not isinstance(tex, dict):
+            raise ValueError("regions[%d]: expected {\"start_mm\", \"end_mm\", \"texture\": {...}}"
+                             % i)
+        if tex.get("kind") != "texel":
+            continue
+        if "v" in tex:
+            said += 1
+        else:
+            tex["v"] = v
+            pinned += 1
+    return out, pinned, said
+
+
 # key order in a written scene (the board's dicts have no order of their own)
 _FIRST = ("kind", "name", "notes", "idle_amplitude", "regions", "start_mm", "end_mm", "texture")
 

@@ -289,8 +289,9 @@ class Board:
     def push_texel(self, params: dict[str, Any]) -> dict[str, Any]:
         """Play one texel parameter set over the whole display. A set without
         "v" is made format 2 (texel.gen.params.FORMAT_NEW: the same map on
-        every board); say "v": 1 for the lab's float generator. (texel.render
-        and render_u16 read a set without "v" as format 1, as saved files are.)"""
+        every board), as texel.render and the board read it too (since 0.2:
+        texel.gen.params.FORMAT_VERSION); say "v": 1 for the lab's float
+        generator."""
         if not isinstance(params, dict):
             raise ValueError("texel parameters: expected a dict, got %s" % type(params).__name__)
         if "v" not in params:
