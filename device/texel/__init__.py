@@ -58,9 +58,9 @@ def _engine(engine):
 def make_plan(params, draws=None):
     """Validate params and compute the per-texel plan (pitches f in cycles/mm,
     start phases phi in rad, fixed-point t28/d28, fraction above Nyquist):
-    format 2 (gen/plan_int.py, integer, the same bits on every runtime: a set
-    without "v" since 0.2) or, for "v": 1, format 1 (gen/plan.py, the lab's
-    float plan). draws replays the lab's logged float draws: format 1 only."""
+    format 2 (gen/plan_int.py, integer, the same bits on every runtime) or,
+    for "v": 1, format 1 (gen/plan.py, the lab's float plan). draws replays
+    the lab's logged float draws: format 1 only."""
     p = validate(params)
     if compat.numpy_mod is not None and compat.IMPL == "cpython":
         # CPython: the same plan bit for bit, built with numpy (gen/plan_numpy.py,
