@@ -18,7 +18,7 @@ import texel.runtime.scene as S
 from texel.gen import brush as B
 from texelpad import toolchain
 
-from support import brush_c, mpy
+from support import core_c as brush_c, mpy
 
 sys.path.insert(0, str(mpy.ROOT / "tools"))
 import gen_brush_tables as T  # noqa: E402
@@ -153,7 +153,7 @@ def brushes_v():
 
 def test_every_cpython_path_paints_the_same_integers():
     """The Python loops, numpy and the firmware's C loops (compiled here with
-    gcc, called through ctypes: tests/support/brush_c.py) - into one array
+    gcc, called through ctypes: tests/support/core_c.py) - into one array
     and into chunks of 512 and of 16 values."""
     for i, v in enumerate(brushes_v()):
         want = B.paint(v, i, 2000, how="python")

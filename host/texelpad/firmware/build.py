@@ -10,7 +10,8 @@ What it makes, in out_dir:
     build/                   CMake's folder (kept: a rebuild only relinks)
 
 The MicroPython build is the rp2 port of MicroPython v1.28.0 with ulab 6.12 and texelpad's brush
-painter (_texelbrush: device/cmod/texelbrush) as user C modules (user_modules):
+core (_texelcore: device/cmod/texelcore - format 2's plan and int engine, the brush painter)
+as user C modules (user_modules):
 by default the offline kit in ../shared/instruments/mpfirmware (build.sh), or a MicroPython
 checkout of the user's (micropython=DIR: `git clone -b v1.28.0
 https://github.com/micropython/micropython`, `make -C mpy-cross`, `make -C ports/rp2 submodules`;
@@ -43,10 +44,10 @@ FLASH_BYTES = 2 * 1024 * 1024         # a Pico's W25Q16 (PICO_FLASH_SIZE_BYTES f
 FROZEN_MAIN = Path(__file__).with_name("frozen_main.py")
 FROZEN_BOOT = Path(__file__).with_name("frozen_boot.py")
 FIRMWARE_INFO = "firmware.json"       # at the ROMFS root: /rom/firmware.json on the board
-# The brush painter's C loops (MicroPython module _texelbrush: texel.gen.brush
-# paints with it where the firmware has it): device/cmod/texelbrush in a
-# checkout, beside the texel package.
-TEXELBRUSH_DIR = image.PACKAGE_DIR.parent / "cmod" / "texelbrush"
+# The C core (MicroPython module _texelcore: texel.compat.core() finds it, and
+# format 2's plan, the int engine and the brush painter run it where the
+# firmware has it): device/cmod/texelcore in a checkout, beside the texel package.
+TEXELCORE_DIR = image.PACKAGE_DIR.parent / "cmod" / "texelcore"
 
 
 # The firmware's build name (sys.implementation._build on the board) is the
@@ -204,19 +205,20 @@ def _run(args: list[str], log: Path, env: dict | None = None) -> None:
 
 def user_modules(out: Path, ulab_cmake: Path | None, say: Callable[[str], None]) -> Path:
     """The user C modules' CMake file for the build (out/usermods.cmake):
-    ulab's (when given) and texelpad's _texelbrush (when its sources are
-    here: a checkout; without them the firmware paints brushes in viper)."""
+    ulab's (when given) and texelpad's _texelcore (when its sources are
+    here: a checkout; without them the firmware runs the viper twins)."""
     lines = ["# written by texelpad firmware (host/texelpad/firmware/build.py)"]
     if ulab_cmake is not None:
         lines.append("include(%s)" % Path(ulab_cmake).as_posix())
-    if (TEXELBRUSH_DIR / "micropython.cmake").is_file():
-        lines.append("include(%s)" % (TEXELBRUSH_DIR / "micropython.cmake").as_posix())
+    if (TEXELCORE_DIR / "micropython.cmake").is_file():
+        lines.append("include(%s)" % (TEXELCORE_DIR / "micropython.cmake").as_posix())
     else:
-        say("no %s: the firmware paints brushes in viper, without the C painter"
-            % TEXELBRUSH_DIR)
+        say("no %s: the firmware runs format 2 and the brush in viper, without the C core"
+            % TEXELCORE_DIR)
     f = out / "usermods.cmake"
     text = "\n".join(lines) + "\n"
-    if not f.is_file() or f.read_text() != text:    # unchanged: CMake keeps its cache
+    changed = f.is_file() and f.read_text() != text
+    if not f.is_file() or changed:                  # unchanged: CMake keeps its cache
         f.write_text(text)
     # the rp2 Makefile runs CMake only when its build folder has no Makefile, so a
     # folder configured with other user modules (an older texelpad's: ulab alone)
@@ -225,9 +227,13 @@ def user_modules(out: Path, ulab_cmake: Path | None, say: Callable[[str], None])
     cache = cmake_dir / "CMakeCache.txt"
     if cache.is_file():
         want = "USER_C_MODULES:UNINITIALIZED=%s" % f
-        if want not in cache.read_text(errors="replace").splitlines():
+        if changed or want not in cache.read_text(errors="replace").splitlines():
             say("the build folder was configured with other C modules: configuring it again")
             (cmake_dir / "Makefile").unlink(missing_ok=True)
+            # MicroPython collects each source's MP_REGISTER_MODULE into a file of
+            # genhdr/module/ and links every file there: a module whose source is
+            # gone (texelpad 0.2's _texelbrush, now _texelcore) would stay listed
+            shutil.rmtree(cmake_dir / "genhdr", ignore_errors=True)
     return f
 
 

@@ -1,7 +1,7 @@
 // The brush painter's integer loops in C (device/texel/gen/brush.py: draws,
 // fill + ifft, ola_emit, leakage's sweeps), for the texelpad firmware's
-// _texelbrush module (modtexelbrush.c) and for the host's tests through
-// ctypes (tests/brush/test_paint_c.py): the same integers as the Python
+// _texelcore module (modtexelcore.c, natmod.c) and for the host's tests through
+// ctypes (tests/support/core_c.py): the same integers as the Python
 // loops, statement for statement. Plain C99, no MicroPython headers.
 // Assumes two's complement int32_t and an arithmetic >> on negative values
 // (gcc and arm-none-eabi-gcc), as Python's >> is.

@@ -1,0 +1,13 @@
+# _texelcore, a MicroPython user C module (docs/firmware.md): the brush
+# painter and format 2 (plan, int engine) in C. host/texelpad/firmware/build.py includes this file
+# beside ulab's.
+add_library(usermod_texelcore INTERFACE)
+target_sources(usermod_texelcore INTERFACE
+    ${CMAKE_CURRENT_LIST_DIR}/brush_core.c
+    ${CMAKE_CURRENT_LIST_DIR}/texel_core.c
+    ${CMAKE_CURRENT_LIST_DIR}/modtexelcore.c
+)
+target_include_directories(usermod_texelcore INTERFACE ${CMAKE_CURRENT_LIST_DIR})
+# -O2 for these two files' loops (the rp2 port builds with -Os)
+set_source_files_properties(${CMAKE_CURRENT_LIST_DIR}/brush_core.c ${CMAKE_CURRENT_LIST_DIR}/texel_core.c PROPERTIES COMPILE_OPTIONS "-O2")
+target_link_libraries(usermod INTERFACE usermod_texelcore)

@@ -1,0 +1,30 @@
+// _texelcore in the texelpad firmware: a user C module beside ulab
+// (micropython.cmake; host/texelpad/firmware/build.py includes it). The
+// functions are texelcore_api.h's, the same the native .mpy (natmod.c) has.
+#include "py/runtime.h"
+
+#define TC_RAISE_BUF(what, have, need) \
+    mp_raise_msg_varg(&mp_type_ValueError, MP_ERROR_TEXT("%s: %d bytes, need %d"), what, \
+                      (int)(have), (int)(need))
+#define TC_FREE(ptr, bytes) m_del(uint8_t, ptr, bytes)
+
+#include "texelcore_api.h"
+
+static const mp_rom_map_elem_t texelcore_globals_table[] = {
+    { MP_ROM_QSTR(MP_QSTR___name__), MP_ROM_QSTR(MP_QSTR__texelcore) },
+    { MP_ROM_QSTR(MP_QSTR_paint), MP_ROM_PTR(&tc_paint_obj) },
+    { MP_ROM_QSTR(MP_QSTR_leak), MP_ROM_PTR(&tc_leak_obj) },
+    { MP_ROM_QSTR(MP_QSTR_texels), MP_ROM_PTR(&tc_texels_obj) },
+    { MP_ROM_QSTR(MP_QSTR_fill), MP_ROM_PTR(&tc_fill_obj) },
+    { MP_ROM_QSTR(MP_QSTR_render), MP_ROM_PTR(&tc_render_obj) },
+    { MP_ROM_QSTR(MP_QSTR_BUILD), MP_ROM_QSTR(MP_QSTR_firmware) },
+    { MP_ROM_QSTR(MP_QSTR_API), MP_ROM_INT(TC_API) },
+};
+static MP_DEFINE_CONST_DICT(texelcore_globals, texelcore_globals_table);
+
+const mp_obj_module_t texelcore_module = {
+    .base = { &mp_type_module },
+    .globals = (mp_obj_dict_t *)&texelcore_globals,
+};
+
+MP_REGISTER_MODULE(MP_QSTR__texelcore, texelcore_module);

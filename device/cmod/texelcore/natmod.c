@@ -1,0 +1,34 @@
+// _texelcore as a dynamic native module (a .mpy with machine code: py/dynruntime.mk
+// and tools/mpy_ld.py of MicroPython 1.28; Makefile here). texelpad deploy
+// installs the build of a board's architecture (sys.implementation._mpy):
+// armv6m (RP2040), armv7emsp (STM32F4), x64 (the unix virtual board). The
+// functions are texelcore_api.h's, the same the firmware's module has.
+#include "py/dynruntime.h"
+
+#define TC_RAISE_BUF(what, have, need) \
+    mp_raise_ValueError(MP_ERROR_TEXT("_texelcore: a buffer is too small"))
+#define TC_FREE(ptr, bytes) m_free(ptr)
+
+#include "texelcore_api.h"
+
+// gcc emits memset/memcpy calls for the C core's zeroed arrays and copies; a
+// native module has no libc, so they go to the firmware's (the examples in
+// MicroPython's examples/natmod do the same)
+void *memset(void *s, int c, size_t n) {
+    return mp_fun_table.memset_(s, c, n);
+}
+void *memcpy(void *dst, const void *src, size_t n) {
+    return mp_fun_table.memmove_(dst, src, n);
+}
+
+mp_obj_t mpy_init(mp_obj_fun_bc_t *self, size_t n_args, size_t n_kw, mp_obj_t *args) {
+    MP_DYNRUNTIME_INIT_ENTRY
+    mp_store_global(MP_QSTR_paint, MP_OBJ_FROM_PTR(&tc_paint_obj));
+    mp_store_global(MP_QSTR_leak, MP_OBJ_FROM_PTR(&tc_leak_obj));
+    mp_store_global(MP_QSTR_texels, MP_OBJ_FROM_PTR(&tc_texels_obj));
+    mp_store_global(MP_QSTR_fill, MP_OBJ_FROM_PTR(&tc_fill_obj));
+    mp_store_global(MP_QSTR_render, MP_OBJ_FROM_PTR(&tc_render_obj));
+    mp_store_global(MP_QSTR_BUILD, MP_OBJ_NEW_QSTR(MP_QSTR_native));
+    mp_store_global(MP_QSTR_API, MP_OBJ_NEW_SMALL_INT(TC_API));
+    MP_DYNRUNTIME_INIT_EXIT
+}

@@ -1,0 +1,172 @@
+// See texel_core.h. Comments name the Python each block mirrors.
+#include "texel_core.h"
+
+#define MASK28 0x0FFFFFFF
+#define Y_LO (-369098752)       // plan_int.Y_LO = -22 * 2^24
+#define Y_HI 251658240          // plan_int.Y_HI = 15 * 2^24
+#define LOG2_STEP0 342929786    // plan_int.LOG2_STEP0
+#define LN2_Q20 726817          // plan_int.LN2_Q20
+#define NORM 512                // plan_int_tables.NORM
+#define EXP_MID 256             // plan_int_tables.EXP_MID
+
+// plan_int.mul28: round(a * b / 2^28) in 15-bit limbs (0 <= a, b < 2^29)
+static int32_t mul28(int32_t a, int32_t b) {
+    int32_t a1 = a >> 15, a0 = a & 0x7FFF, b1 = b >> 15, b0 = b & 0x7FFF;
+    return ((a1 * b1) << 2) + ((a1 * b0 + a0 * b1 + ((a0 * b0) >> 15) + 4096) >> 13);
+}
+
+int32_t tc_texels(uint16_t st[10], int32_t count, int32_t L, int32_t mu, int32_t sigma,
+                  int32_t q, int32_t dcap, const int32_t *tab, int32_t *t28, int32_t *d28,
+                  int32_t *ys, int32_t *zs, int32_t keep) {
+    int32_t above = 0, t = 0, tf = 0;
+    int32_t a_hi = st[0], a_lo = st[1], b_hi = st[2], b_lo = st[3];
+    int32_t c_hi = st[4], c_lo = st[5], d_hi = st[6], d_lo = st[7];
+    int32_t s1 = sigma >> 14, s0 = sigma & 0x3FFF;
+    int32_t ll = L & 0x3FFF, lh = L >> 14;
+    for (int32_t i = -17; i < count; i++) {     // the warm-up (16), the start phase's draw
+        // xoshiro128++ in 16-bit halves (gen/rng.py Rng.next_hi_lo)
+        int32_t lo = a_lo + d_lo;
+        int32_t hi = (a_hi + d_hi + (lo >> 16)) & 0xFFFF;
+        lo &= 0xFFFF;
+        int32_t r_hi = ((hi << 7) | (lo >> 9)) & 0xFFFF;
+        int32_t r_lo = ((lo << 7) | (hi >> 9)) & 0xFFFF;
+        lo = r_lo + a_lo;
+        int32_t x_hi = (r_hi + a_hi + (lo >> 16)) & 0xFFFF;
+        int32_t x_lo = lo & 0xFFFF;
+        int32_t u_hi = ((b_hi << 9) | (b_lo >> 7)) & 0xFFFF;
+        int32_t u_lo = (b_lo << 9) & 0xFFFF;
+        c_hi ^= a_hi; c_lo ^= a_lo;
+        d_hi ^= b_hi; d_lo ^= b_lo;
+        b_hi ^= c_hi; b_lo ^= c_lo;
+        a_hi ^= d_hi; a_lo ^= d_lo;
+        c_hi ^= u_hi; c_lo ^= u_lo;
+        hi = d_hi;
+        d_hi = ((hi << 11) | (d_lo >> 5)) & 0xFFFF;
+        d_lo = ((d_lo << 11) | (hi >> 5)) & 0xFFFF;
+        if (i < 0) {
+            if (i == -1) {                      // the start phase (rng.phase_fraction_u28)
+                st[8] = (uint16_t)x_hi;
+                st[9] = (uint16_t)x_lo;
+                t = (((x_hi << 12) | (x_lo >> 4)) + ((x_lo >> 3) & 1)) & MASK28;
+            }
+            continue;
+        }
+        // inverse normal (plan_int.norm_q24)
+        int32_t sgn;
+        if (x_hi >= 0x8000) {
+            x_hi = 0xFFFF - x_hi;
+            x_lo = 0xFFFF - x_lo;
+            sgn = 1;
+        } else {
+            sgn = -1;
+        }
+        int32_t wh = (x_hi << 1) | (x_lo >> 15);
+        int32_t wl = ((x_lo << 1) & 0xFFFF) | 1;
+        int32_t b, e;
+        if (wh) { b = wh; e = 16; } else { b = wl; e = 0; }
+        if (b >= 0x100) { b >>= 8; e += 8; }
+        if (b >= 0x10) { b >>= 4; e += 4; }
+        if (b >= 0x4) { b >>= 2; e += 2; }
+        if (b >= 0x2) { e += 1; }
+        int32_t top;
+        if (e >= 16) {
+            int32_t k = e - 16;
+            top = ((wh << (16 - k)) | (wl >> k)) & 0xFFFF;
+        } else {
+            top = (wl << (16 - e)) & 0xFFFF;
+        }
+        int32_t j = NORM + (e << 5) + (top >> 11);
+        int32_t t0 = tab[j];
+        int32_t za = t0 + (((tab[j + 1] - t0) * (top & 0x7FF) + 1024) >> 11);
+        if (keep & 1) {
+            zs[i] = za * sgn;
+        }
+        // y = mu +- round(sigma * |z| / 2^24)
+        int32_t z1 = za >> 14, z0 = za & 0x3FFF;
+        int32_t m = s1 * z0 + s0 * z1 + ((s0 * z0 + 0x800000) >> 14);
+        int32_t p = ((s1 * z1) << 4) + (m >> 10);
+        int32_t y = sgn < 0 ? mu - p : mu + p;
+        if (y < Y_LO) {
+            y = Y_LO;
+        } else if (y > Y_HI) {
+            y = Y_HI;
+        }
+        if (q) {                                // round half away from zero to q's grid
+            if (y < 0) {
+                y = -((q - 2 * y) / (2 * q)) * q;
+            } else {
+                y = ((2 * y + q) / (2 * q)) * q;
+            }
+        }
+        if (keep & 2) {
+            ys[i] = y;
+        }
+        // D = round(2^(y + LOG2_STEP0)) in 2^-28 turns (plan_int.step_d)
+        int32_t w = y + LOG2_STEP0;
+        e = w >> 24;
+        int32_t r = w & 0xFFFFFF;
+        int32_t mm = mul28(mul28(tab[r >> 16], tab[EXP_MID + ((r >> 8) & 0xFF)]),
+                           (1 << 28) + (((r & 0xFF) * LN2_Q20 + 32768) >> 16));
+        int32_t d, a, af;
+        if (e >= 28) {
+            int32_t k = e - 28;
+            d = (mm & (MASK28 >> k)) << k;
+            a = d;
+            af = 0;
+        } else if (e < -2) {
+            d = 0;
+            a = 0;
+            af = 0;
+        } else {
+            d = (mm + (1 << (27 - e))) >> (28 - e);
+            if (e >= 20) {
+                int32_t k = e - 20;
+                a = mm >> (28 - e);
+                af = (mm & (0xFF >> k)) << k;
+            } else {
+                a = (mm + (1 << (19 - e))) >> (20 - e);
+                af = a & 0xFF;
+                a >>= 8;
+            }
+        }
+        if (e >= 27) {                          // plan_int.NYQ_EXP
+            above++;
+        }
+        if (dcap && (e >= 28 || d > dcap)) {
+            d = dcap;
+            a = dcap;
+            af = 0;
+        }
+        d28[i] = d & MASK28;
+        t28[i] = t;
+        // t += L * (a + af/256) mod 2^28 (plan_int.mulmod28 and the carry)
+        tf += L * af;
+        int32_t dh = a >> 14, dl = a & 0x3FFF;
+        t = (t + ll * dl + (((ll * dh + lh * dl) & 0x3FFF) << 14) + (tf >> 8)) & MASK28;
+        tf &= 0xFF;
+    }
+    return above;
+}
+
+int32_t tc_fill(uint16_t *out, int32_t a, int32_t b, int32_t t, int32_t d,
+                const uint16_t *tab, int32_t g) {
+    for (; a < b; a++) {
+        t = (t + d) & MASK28;
+        int32_t i = t >> 18;
+        int32_t y0 = tab[i];
+        int32_t v = y0 + (((tab[i + 1] - y0) * ((t >> 2) & 0xFFFF) + 32768) >> 16);
+        out[a] = (uint16_t)((v * g + 8192) >> 14);
+    }
+    return t;
+}
+
+void tc_render(uint16_t *out, int32_t n, int32_t L, int32_t count, const int32_t *t28,
+               const int32_t *d28, const uint16_t *tab, int32_t g) {
+    for (int32_t i = 0; i < count; i++) {
+        int32_t a = i * L, b = a + L;
+        if (b > n) {
+            b = n;
+        }
+        tc_fill(out, a, b, t28[i], d28[i], tab, g);
+    }
+}

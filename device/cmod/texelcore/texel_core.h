@@ -1,0 +1,32 @@
+// Texture format 2 in C: the per-texel plan loop (device/texel/gen/plan_int.py
+// texels_py; plan_int_viper.texels is the same compiled by viper) and the int
+// engine's fill (gen/engine_int.py _fill_py), statement for statement: the
+// same integers on every build of this core (the texelpad firmware's user C
+// module, the dynamic native .mpy of natmod.c, CPython through ctypes:
+// tests/support/core_c.py). Plain C99, no MicroPython headers. Every bound is
+// plan_int.py's: each value stays below 2^31 in magnitude, so int32_t holds
+// it; assumes an arithmetic >> on negative values (gcc, arm-none-eabi-gcc), as
+// Python's >> is.
+#ifndef TEXELPAD_TEXEL_CORE_H
+#define TEXELPAD_TEXEL_CORE_H
+#include <stdint.h>
+
+// plan_int.texels_py: st = seeded(seed) (10 halves; st[8], st[9] get the
+// start phase's draw), tab = plan_int_tables.table() (EXP_HI at 0, EXP_MID at
+// 256, NORM at 512). Fills t28/d28 (count each), ys if keep & 2, zs if
+// keep & 1; returns the number of texels above Nyquist.
+int32_t tc_texels(uint16_t st[10], int32_t count, int32_t L, int32_t mu, int32_t sigma,
+                  int32_t q, int32_t dcap, const int32_t *tab, int32_t *t28, int32_t *d28,
+                  int32_t *ys, int32_t *zs, int32_t keep);
+
+// engine_int._fill_py: samples a..b-1 of out from phase t (2^-28 turns) and
+// step d; tab = sine_table.table() (1,025 Q16 values); g = gain in Q14.
+// Returns the phase after the last sample.
+int32_t tc_fill(uint16_t *out, int32_t a, int32_t b, int32_t t, int32_t d,
+                const uint16_t *tab, int32_t g);
+
+// engine_int.render_u16's loop: every texel's fill, the last cut at n.
+void tc_render(uint16_t *out, int32_t n, int32_t L, int32_t count, const int32_t *t28,
+               const int32_t *d28, const uint16_t *tab, int32_t g);
+
+#endif

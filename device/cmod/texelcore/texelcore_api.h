@@ -1,0 +1,134 @@
+// _texelcore's functions, shared by its two MicroPython builds: the texelpad
+// firmware's user C module (modtexelcore.c, after py/runtime.h) and the
+// dynamic native module (natmod.c, after py/dynruntime.h; texelpad deploy
+// installs it on stock boards). The includer defines TC_RAISE_BUF(what, have,
+// need) and TC_FREE(ptr, bytes), the two things the two APIs spell apart.
+// Arguments are the arrays the Python callers already hold; every size is
+// checked before the C core touches it, and nothing here allocates on the
+// MicroPython heap except paint's 3.9 KB work buffer (freed before it returns).
+#include "brush_core.h"
+#include "texel_core.h"
+
+// The functions and arguments below, as texel.compat.CORE_API expects them:
+// bump both with any change, so a board's older native module is not used.
+#define TC_API 1
+#define MAX_CHUNKS 128          // 65,536 values of 512 (a full screen is 38 chunks)
+#define TC_TAB_I32 (512 + 32 * 32 + 1)     // plan_int_tables.table(): EXP_HI, EXP_MID, NORM
+#define TC_SINE_U16 1025                  // sine_table.table()
+
+static void *tc_buf(mp_obj_t o, size_t want, int flags, const char *what) {
+    mp_buffer_info_t b;
+    mp_get_buffer_raise(o, &b, flags);
+    if (b.len < want) {
+        TC_RAISE_BUF(what, b.len, want);
+    }
+    return b.buf;
+}
+
+// paint(st, invk, ll, sign, off, n, chunks, chunk_bits, tab, log2t, phase, tw, hann, pos):
+// texel.gen.brush._paint_c
+static mp_obj_t tc_paint_fn(size_t n_args, const mp_obj_t *args) {
+    uint16_t *st = tc_buf(args[0], 16, MP_BUFFER_RW, "st");
+    const int32_t *invk = tc_buf(args[1], 4 * TB_K, MP_BUFFER_READ, "invk");
+    const int32_t *ll = tc_buf(args[2], 4 * TB_K, MP_BUFFER_READ, "ll");
+    int32_t sign = mp_obj_get_int(args[3]);
+    int32_t off = mp_obj_get_int(args[4]);
+    int32_t n = mp_obj_get_int(args[5]);
+    size_t nch;
+    mp_obj_t *items;
+    mp_obj_get_array(args[6], &nch, &items);
+    int32_t bits = mp_obj_get_int(args[7]);
+    if (n < 0 || bits < 1 || bits > 30 || nch > MAX_CHUNKS ||
+        (size_t)((n + (1 << bits) - 1) >> bits) > nch) {
+        mp_raise_ValueError(MP_ERROR_TEXT("paint: n, chunks and chunk_bits disagree"));
+    }
+    uint16_t *chunks[MAX_CHUNKS];
+    for (size_t i = 0; i < nch; i++) {
+        int32_t left = n - ((int32_t)i << bits);
+        int32_t need = left < (1 << bits) ? left : (1 << bits);
+        chunks[i] = tc_buf(items[i], 2 * (size_t)(need > 0 ? need : 0), MP_BUFFER_WRITE, "chunk");
+    }
+    tb_tables t = {
+        tc_buf(args[8], 4 * 512, MP_BUFFER_READ, "tab"),
+        tc_buf(args[9], 4 * 257, MP_BUFFER_READ, "log2t"),
+        tc_buf(args[10], 2 * 256, MP_BUFFER_READ, "phase"),
+        tc_buf(args[11], 2 * TB_WINDOW, MP_BUFFER_READ, "tw"),
+        tc_buf(args[12], 4 * TB_WINDOW, MP_BUFFER_READ, "hann"),
+        tc_buf(args[13], 4 * TB_WINDOW, MP_BUFFER_READ, "pos"),
+    };
+    int32_t *work = (int32_t *)m_malloc(4 * TB_WORK);  // on the heap, not the 8 KB stack
+    tb_paint(st, invk, ll, sign, off, &t, n, chunks, bits, work);
+    TC_FREE(work, 4 * TB_WORK);
+    return mp_const_none;
+}
+static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_paint_obj, 14, 14, tc_paint_fn);
+
+// leak(q, a, n, sweeps, c): texel.gen.brush.leakage's sweeps
+static mp_obj_t tc_leak_fn(size_t n_args, const mp_obj_t *args) {
+    int32_t n = mp_obj_get_int(args[2]);
+    if (n < 0 || n > 4096) {
+        mp_raise_ValueError(MP_ERROR_TEXT("leak: n out of range"));
+    }
+    const int32_t *q = tc_buf(args[0], 4 * (size_t)(n + 6), MP_BUFFER_READ, "q");
+    int32_t *a = tc_buf(args[1], 4 * (size_t)(n + 6), MP_BUFFER_RW, "a");
+    const int32_t *c = tc_buf(args[4], 12, MP_BUFFER_READ, "c");
+    tb_leak(q, a, n, mp_obj_get_int(args[3]), c);
+    return mp_const_none;
+}
+static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_leak_obj, 5, 5, tc_leak_fn);
+
+// texels(st, count, L, mu, sigma, q, dcap, tab, t28, d28, ys, zs, keep) -> above:
+// texel.gen.plan_int.texels_py
+static mp_obj_t tc_texels_fn(size_t n_args, const mp_obj_t *args) {
+    int32_t count = mp_obj_get_int(args[1]);
+    int32_t L = mp_obj_get_int(args[2]);
+    int32_t keep = mp_obj_get_int(args[12]);
+    if (count < 0 || count > (1 << 24) || L < 1 || L >= (1 << 21)) {
+        mp_raise_ValueError(MP_ERROR_TEXT("texels: count or L out of range"));
+    }
+    size_t want = 4 * (size_t)count;
+    uint16_t *st = tc_buf(args[0], 20, MP_BUFFER_RW, "st");
+    const int32_t *tab = tc_buf(args[7], 4 * TC_TAB_I32, MP_BUFFER_READ, "tab");
+    int32_t *t28 = tc_buf(args[8], want, MP_BUFFER_WRITE, "t28");
+    int32_t *d28 = tc_buf(args[9], want, MP_BUFFER_WRITE, "d28");
+    int32_t *ys = tc_buf(args[10], keep & 2 ? want : 0, MP_BUFFER_WRITE, "ys");
+    int32_t *zs = tc_buf(args[11], keep & 1 ? want : 0, MP_BUFFER_WRITE, "zs");
+    return mp_obj_new_int(tc_texels(st, count, L, mp_obj_get_int(args[3]),
+                                    mp_obj_get_int(args[4]), mp_obj_get_int(args[5]),
+                                    mp_obj_get_int(args[6]), tab, t28, d28, ys, zs, keep));
+}
+static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_texels_obj, 13, 13, tc_texels_fn);
+
+// fill(out, a, b, t, d, tab, g) -> t: texel.gen.engine_int._fill_py
+static mp_obj_t tc_fill_fn(size_t n_args, const mp_obj_t *args) {
+    mp_buffer_info_t o;
+    mp_get_buffer_raise(args[0], &o, MP_BUFFER_WRITE);
+    int32_t a = mp_obj_get_int(args[1]);
+    int32_t b = mp_obj_get_int(args[2]);
+    if (a < 0 || b < a || (size_t)b > o.len / 2) {
+        mp_raise_ValueError(MP_ERROR_TEXT("fill: a, b outside out"));
+    }
+    const uint16_t *tab = tc_buf(args[5], 2 * TC_SINE_U16, MP_BUFFER_READ, "tab");
+    return mp_obj_new_int(tc_fill((uint16_t *)o.buf, a, b,
+                                  mp_obj_get_int(args[3]) & 0x0FFFFFFF,
+                                  mp_obj_get_int(args[4]) & 0x0FFFFFFF, tab,
+                                  mp_obj_get_int(args[6])));
+}
+static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_fill_obj, 7, 7, tc_fill_fn);
+
+// render(out, n, L, count, t28, d28, tab, g): texel.gen.engine_int.render_u16's loop
+static mp_obj_t tc_render_fn(size_t n_args, const mp_obj_t *args) {
+    int32_t n = mp_obj_get_int(args[1]);
+    int32_t L = mp_obj_get_int(args[2]);
+    int32_t count = mp_obj_get_int(args[3]);
+    if (n < 0 || L < 1 || count < 0 || (int64_t)count * L >= (1 << 30)) {
+        mp_raise_ValueError(MP_ERROR_TEXT("render: n, L and count disagree"));
+    }
+    uint16_t *out = tc_buf(args[0], 2 * (size_t)n, MP_BUFFER_WRITE, "out");
+    const int32_t *t28 = tc_buf(args[4], 4 * (size_t)count, MP_BUFFER_READ, "t28");
+    const int32_t *d28 = tc_buf(args[5], 4 * (size_t)count, MP_BUFFER_READ, "d28");
+    const uint16_t *tab = tc_buf(args[6], 2 * TC_SINE_U16, MP_BUFFER_READ, "tab");
+    tc_render(out, n, L, count, t28, d28, tab, mp_obj_get_int(args[7]));
+    return mp_const_none;
+}
+static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_render_obj, 8, 8, tc_render_fn);

@@ -1,0 +1,111 @@
+"""The C core (device/cmod/texelcore: brush_core.c, texel_core.c), its
+CPython build: compiled for this machine with gcc as one shared library and
+called through ctypes - the same integers as texel.gen.brush's and
+texel.gen.plan_int's / engine_int's Python loops, checked on the host in
+seconds. Its other builds: the firmware's user C module (tests/firmware) and
+the native .mpy (tests/gen/test_texel_core.py, on the unix port and the
+emulated Pico)."""
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from array import array
+from pathlib import Path
+
+from texel.gen import brush as B
+from texel.gen.plan_int_tables import table
+from texel.gen.rng import Rng
+
+from . import mpy
+
+CORE = mpy.ROOT / "device" / "cmod" / "texelcore"
+SRCS = (CORE / "brush_core.c", CORE / "texel_core.c")
+_LIB = None
+
+
+def available() -> bool:
+    return shutil.which("gcc") is not None
+
+
+def lib() -> ctypes.CDLL:
+    global _LIB
+    if _LIB is None:
+        h = hashlib.sha256()
+        for f in SRCS + (CORE / "brush_core.h", CORE / "texel_core.h"):
+            h.update(f.read_bytes())
+        out = Path(tempfile.gettempdir()) / ("texelpad-core-%s.so" % h.hexdigest()[:16])
+        if not out.exists():
+            tmp = out.with_suffix(".so.tmp%d" % os.getpid())
+            # -fwrapv: none of the core's values overflows int32 (texel_core.h),
+            # and if one did, wrap as the ARM builds do rather than let gcc assume
+            subprocess.run(["gcc", "-O2", "-std=c99", "-Wall", "-Wextra", "-Werror", "-shared",
+                            "-fPIC", "-fwrapv", "-o", str(tmp)] + [str(s) for s in SRCS],
+                           check=True)
+            tmp.replace(out)
+        _LIB = ctypes.CDLL(str(out))
+    return _LIB
+
+
+class Tables(ctypes.Structure):
+    _fields_ = [(n, ctypes.c_void_p) for n in ("exp_tab", "log2t", "phase", "tw", "hann", "pos")]
+
+
+def _ptr(a: array) -> int:
+    return a.buffer_info()[0]
+
+
+def paint(brush: dict, seed: int, n: int, chunk_bits: int = 9) -> list[int]:
+    """texel.gen.brush.paint(brush, seed, n) by the C loop, into chunks of
+    2^chunk_bits values as a board's upload Chunks."""
+    _, ptab, tw, hann, log2t, pos = B._tables()
+    tab = array("i", table())
+    keep = (ptab, tw, hann, log2t, pos, tab)
+    t = Tables(*(_ptr(a) for a in (tab, log2t, ptab, tw, hann, pos)))
+    rng = Rng(seed)
+    invk, ll, sign, off = B.compensated(brush)
+    st = B.state(rng)
+    size = 1 << chunk_bits
+    chunks = [array("H", bytes(2 * min(size, n - o))) for o in range(0, n, size)]
+    ptrs = (ctypes.c_void_p * len(chunks))(*(_ptr(c) for c in chunks))
+    work = array("i", bytes(4 * (4 * B.K + 3 * B.WINDOW)))
+    lib().tb_paint(ctypes.c_void_p(_ptr(st)), ctypes.c_void_p(_ptr(invk)),
+                   ctypes.c_void_p(_ptr(ll)), ctypes.c_int32(sign), ctypes.c_int32(off),
+                   ctypes.byref(t), ctypes.c_int32(n), ptrs, ctypes.c_int32(chunk_bits),
+                   ctypes.c_void_p(_ptr(work)))
+    del keep
+    return [v for c in chunks for v in c]
+
+
+def leak(q: array, a: array, n: int, sweeps: int, c: array) -> None:
+    lib().tb_leak(ctypes.c_void_p(_ptr(q)), ctypes.c_void_p(_ptr(a)), ctypes.c_int32(n),
+                  ctypes.c_int32(sweeps), ctypes.c_void_p(_ptr(c)))
+
+
+def _p(a) -> ctypes.c_void_p:
+    return ctypes.c_void_p(_ptr(a))
+
+
+def texels(st: array, count: int, L: int, mu: int, sigma: int, q: int, dcap: int, tab: array,
+           t28: array, d28: array, ys: array, zs: array, keep: int) -> int:
+    """texel.gen.plan_int.texels_py by tc_texels: the same arguments (arrays:
+    st 'H' of 10, the rest 'i'), the same results."""
+    i32 = ctypes.c_int32
+    return lib().tc_texels(_p(st), i32(count), i32(L), i32(mu), i32(sigma), i32(q), i32(dcap),
+                           _p(tab), _p(t28), _p(d28), _p(ys), _p(zs), i32(keep))
+
+
+def fill(out: array, a: int, b: int, t: int, d: int, tab: array, g: int) -> int:
+    """texel.gen.engine_int._fill_py by tc_fill."""
+    i32 = ctypes.c_int32
+    return lib().tc_fill(_p(out), i32(a), i32(b), i32(t), i32(d), _p(tab), i32(g))
+
+
+def render(out: array, n: int, L: int, count: int, t28: array, d28: array, tab: array,
+           g: int) -> None:
+    """texel.gen.engine_int.render_u16's loop by tc_render."""
+    i32 = ctypes.c_int32
+    lib().tc_render(_p(out), i32(n), i32(L), i32(count), _p(t28), _p(d28), _p(tab), i32(g))
