@@ -149,6 +149,29 @@ def native(module, name):
     except (ImportError, SyntaxError, MemoryError, AttributeError):
         return None
 
+# The C core (device/cmod/texelcore: format 2's plan and int engine, the brush
+# painter): the texelpad firmware's built-in _texelcore, or the native .mpy
+# texelpad deploy puts in /lib on a stock board of its architecture. CORE_API
+# is what this package calls; another module (a board deployed by an older
+# texelpad) is not used: the viper and Python twins give the same integers.
+CORE_API = 1
+_core = None
+
+
+def core():
+    """The _texelcore module, or None (CPython: the tests load its ctypes build)."""
+    global _core
+    if _core is None:
+        _core = False
+        if IMPL == "micropython":
+            try:
+                import _texelcore
+                if getattr(_texelcore, "API", 0) == CORE_API:
+                    _core = _texelcore
+            except (ImportError, ValueError, OSError, MemoryError):
+                pass                    # ValueError: a .mpy of another format
+    return _core or None
+
 # Microsecond ticks: time.ticks_us/ticks_diff where the port has them
 # (MicroPython); elsewhere the same arithmetic over MicroPython's 2^30 tick
 # period, from perf_counter_ns (CPython) or monotonic_ns (CircuitPython, which

@@ -135,7 +135,7 @@ def test_a_full_screen_reference_and_a_brush_after_a_series_of_pushes(pico):
 
 
 def test_the_firmware_paints_a_full_screen_brush_in_c_as_the_host_does(pico, capsys):
-    """The firmware's C painter (_texelbrush, device/cmod/texelbrush) paints a
+    """The firmware's C painter (_texelcore, device/cmod/texelcore) paints a
     full-screen brush region (seed 002, issue 21) into the map CPython paints:
     the same integers once the painting's float setup is (float32 here: within
     one PWM step, 8 u16 measured), with no viper module loaded for it; the
@@ -164,6 +164,60 @@ def test_the_firmware_paints_a_full_screen_brush_in_c_as_the_host_does(pico, cap
     assert c is True and viper_loaded is False and st["faults"] == 0
     assert len(got) == len(want) and max(diff) <= 65535 // 3676
     assert diff.count(0) >= 0.8 * len(diff)
+
+
+_CORE_DIGEST = r"""
+import sys, gc, texel
+from texel import compat
+from texel.gen import plan_int as P, engine_int as E
+def _dig(arrs):
+    s = 0
+    for a in arrs:
+        for v in a:
+            s = (s * 31 + (v & 0xFFFFFF)) & 0xFFFFFF
+    return s
+_res = []
+for _p in %r:
+    gc.collect()
+    _pl = P.PlanInt(texel.validate(_p))
+    _res.append((_dig((_pl.t28, _pl.d28, _pl.y)), _dig((E.render_u16(_pl),))))
+print(repr((compat.core().BUILD, P.ENGINE, E.ENGINE, _res,
+            sorted(m for m in sys.modules if m.endswith("_int_viper")))))
+"""
+
+
+def test_the_firmware_plans_and_renders_format_2_in_c_as_cpython_does(pico):
+    """Format 2's per-texel plan and the int engine run in the firmware's C
+    core (_texelcore, a user C module), with no viper twin loaded, and give
+    CPython's plan and map (digests of every value): the hard edges too -
+    1-sample texels at the lowest pitch, the Nyquist pitch under a band limit,
+    the last seed with quantization."""
+    import ast
+    import texel
+    from texel.gen.engine_int import render_u16
+    from texel.gen.plan_int import PlanInt
+    cases = [{"pitch_db": 6.0, "irregularity_db": -10.0, "texel_samples": 50,
+              "length_samples": 19200, "seed": 3},
+             {"pitch_db": -20.0, "irregularity_db": 5.0, "texel_samples": 1, "seed": 4294967295,
+              "quant_db": 0.5, "length_samples": 3000},
+             {"pitch_db": 19.747, "irregularity_db": 0.0, "texel_samples": 7, "seed": 0,
+              "band_limit_cpmm": 50.0, "length_samples": 2100}]
+
+    def dig(arrs):
+        s = 0
+        for a in arrs:
+            for v in a:
+                s = (s * 31 + (int(v) & 0xFFFFFF)) & 0xFFFFFF
+        return s
+    want = []
+    for c in cases:
+        pl = PlanInt(texel.validate(c))
+        want.append((dig((pl.t28, pl.d28, pl.y)), dig((render_u16(pl),))))
+    with _connect(pico.port) as b:
+        out = b.link.exec(_CORE_DIGEST % (cases,), timeout=120)
+    build, plan_engine, fill_engine, got, viper = ast.literal_eval(out.strip().splitlines()[-1])
+    assert (build, plan_engine, fill_engine) == ("firmware", "c", "c")
+    assert got == want and viper == []
 
 
 def test_a_bad_push_is_refused_and_the_scene_kept(pico):

@@ -763,15 +763,12 @@ _C = None                   # the firmware's C module (_native_c())
 
 
 def _native_c():
-    """The texelpad firmware's C painter (device/cmod/texelbrush: module
-    _texelbrush), or None where the board has no such module."""
+    """The C painter (device/cmod/texelcore, compat.core(): the texelpad
+    firmware's _texelcore, or deploy's native module), or None."""
     global _C
     if _C is None:
-        try:
-            import _texelbrush
-            _C = _texelbrush
-        except ImportError:
-            _C = False
+        from ..compat import core
+        _C = core() or False
     return _C or None
 
 
@@ -798,7 +795,7 @@ def paint(brush, seed, n, out=None, how=None):
     the four windows over a sample sum to 1024 exactly: no seams), halved,
     clipped to [0, 1], uint16. Memory beyond out: WINDOW-long work arrays.
 
-    how: "c" (the texelpad firmware's _texelbrush, device/cmod/texelbrush),
+    how: "c" (_texelcore: the firmware's or deploy's native module; device/cmod/texelcore),
     "viper" (brush_viper.py: the port's native emitter), "numpy" (CPython:
     every pair's FFT at once) or "python" (the loops here); None takes the
     first the runtime has. All give the same integers."""
@@ -815,7 +812,8 @@ def paint(brush, seed, n, out=None, how=None):
     if how not in ("c", "viper", "numpy", "python"):
         raise ValueError("how: expected 'c', 'viper', 'numpy' or 'python', got %r" % (how,))
     if how == "c" and _native_c() is None:
-        raise ValueError("how: this board has no C painter (_texelbrush: texelpad firmware)")
+        raise ValueError("how: this board has no C painter (_texelcore: the texelpad firmware, "
+                         "or texelpad deploy's native module)")
     if how == "viper" and _viper() is None:
         raise ValueError("how: this port has no native emitter (viper)")
     if how == "numpy" and _numpy() is None:

@@ -16,7 +16,7 @@
 # rounded (<= 0.5 unit per sample, so <= k/2 units after k samples), the start
 # phase t carries <= 0.5 unit per texel boundary; the table adds 2.4e-6 and
 # Q16/Q14 rounding <= 1.5 LSB of 65535 -> see tests/gen/test_precision.py.
-from ..compat import check_u16_out, native
+from ..compat import check_u16_out, native, core
 from . import sine_table
 
 NAME = "int"
@@ -39,8 +39,16 @@ def _fill_py(out, a, b, t, d, tab, g):
     return t
 
 
-_fill = native("texel.gen.engine_int_viper", "fill") or _fill_py
-VIPER = _fill is not _fill_py
+# The loop that runs: the C core's (compat.core(): the firmware's, or deploy's
+# native module), else viper's, else the Python above - the same integers.
+_C = core()
+if _C:
+    _fill = _C.fill
+    ENGINE = "c"
+else:
+    _fill = native("texel.gen.engine_int_viper", "fill") or _fill_py
+    ENGINE = "py" if _fill is _fill_py else "viper"
+VIPER = ENGINE == "viper"
 
 
 def gain_q14(gain):
@@ -53,6 +61,9 @@ def render_u16(plan, out=None):
     tab = sine_table.table()
     g = gain_q14(plan.gain)
     t28, d28 = plan.t28, plan.d28
+    if _C and _fill is _C.fill:         # one call for every texel
+        _C.render(out, n, L, plan.count, t28, d28, tab, g)
+        return out
     for i in range(plan.count):
         a = i * L
         b = a + L

@@ -40,7 +40,7 @@ from . import params as _params
 from .rng import phase_fraction_u28, uniform_of, WARMUP, SEED_CONSTS
 from .plan_int_tables import table, EXP_HI, EXP_MID, NORM
 from .grid import mdb
-from ..compat import native
+from ..compat import native, core
 
 FORMAT = 2
 MASK28 = 0x0FFFFFFF
@@ -261,8 +261,35 @@ def _ints(n):
 _ONE = _ints(1)             # where the loop's unkept outputs point (never written)
 
 
-_texels = native("texel.gen.plan_int_viper", "texels") or texels_py
-VIPER = _texels is not texels_py
+# The loop that runs: the C core's (compat.core(): the firmware's built-in
+# module, or the native .mpy deploy installs), else viper's, else texels_py -
+# the same integers (tests/gen/test_texel_core.py compares them).
+if core():
+    _texels = core().texels
+    ENGINE = "c"
+else:
+    _texels = native("texel.gen.plan_int_viper", "texels") or texels_py
+    ENGINE = "py" if _texels is texels_py else "viper"
+VIPER = ENGINE == "viper"
+
+
+def texels_for(engine):
+    """The per-texel loop of engine "c", "viper" or "py" (None: the one that
+    runs); ValueError where this runtime has no such engine."""
+    if engine is None:
+        return _texels
+    if engine == "py":
+        return texels_py
+    f = None
+    if engine == "c":
+        f = core() and core().texels
+    elif engine == "viper":
+        f = native("texel.gen.plan_int_viper", "texels")
+    else:
+        raise ValueError("engine: expected 'c', 'viper' or 'py', got %r" % (engine,))
+    if not f:
+        raise ValueError("engine: %r is not on this runtime" % (engine,))
+    return f
 
 
 class PlanInt:
@@ -280,8 +307,8 @@ class PlanInt:
     def __init__(self, p, keep_z=False, engine=None, keep_y=True):
         # p: a validated format-2 parameter set. keep_y=False leaves out the
         # log pitches (a board playing the plan needs only t28/d28: one 4-byte
-        # array less to allocate, ~1.4 ms on a Pico); engine="py" runs the
-        # Python loop where viper is there (tests compare the two).
+        # array less to allocate, ~1.4 ms on a Pico); engine "py", "viper" or
+        # "c" runs that loop (texels_for; tests compare them), None the fastest.
         self.params = p
         self.n = p["length_samples"]
         self.L = L = p["texel_samples"]
@@ -307,7 +334,7 @@ class PlanInt:
         # the lower bound needs the log pitches (then dropped if not kept)
         bound = p.get("min_cpmm") is not None
         ys = _ints(count) if bound and not keep_y else self.y
-        fill = texels_py if engine == "py" else _texels
+        fill = texels_for(engine)
         self.above_nyquist = fill(st, count, L, self.mu, self.sigma, self.q, self.dcap,
                                   tab, self.t28, self.d28, _ONE if ys is None else ys,
                                   self.z if keep_z else _ONE,

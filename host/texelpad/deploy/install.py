@@ -23,6 +23,7 @@ board holds and what to run.
 """
 from __future__ import annotations
 
+import hashlib
 import time
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -185,7 +186,7 @@ def deploy(board: Any, source: bool = False, include_main: bool = True, dry_run:
                 "docs/firmware.md)")
     target = image.target_for(fw["implementation"], fw["mpy"], fw["version"], fw["platform"],
                               source=source)
-    files = image.build_image(target, include_main=include_main)
+    files = with_native_core(image.build_image(target, include_main=include_main), target, say)
     plan = plan_deploy(board, target, files, include_main=include_main, dry_run=dry_run, say=say)
     say_plan(plan, say)
     check_fits(plan)
@@ -196,6 +197,31 @@ def deploy(board: Any, source: bool = False, include_main: bool = True, dry_run:
             restart_what_played(board, plan, say)
     plan.report["seconds"] = time.perf_counter() - t_start
     return plan.report
+
+
+def with_native_core(files: list[image.ImageFile], target: image.Target,
+                     say: Callable[[str], None]) -> list[image.ImageFile]:
+    """The image plus the C core as a native module (/lib/_texelcore.mpy,
+    texelpad.firmware.natmod) where the board's architecture has one, before
+    /main.py (the last file: an interrupted deploy never leaves a power-up
+    script without what it imports). Without one the board runs the viper and
+    Python twins of the same loops (say tells why)."""
+    if target.form != "mpy":
+        return files
+    from ..firmware import natmod
+    if target.arch not in natmod.ARCHS:
+        return files
+    f = natmod.native_module(target.arch, say)
+    if f is None:
+        return files
+    data = f.read_bytes()
+    nat = image.ImageFile(natmod.REMOTE, data, hashlib.sha256(data).hexdigest(), f)
+    say("with the C core as a native module for %s (%s, %d bytes)"
+        % (target.arch, natmod.REMOTE, len(data)))
+    k = len(files)
+    if files and files[-1].remote == image.REMOTE_MAIN:
+        k -= 1
+    return files[:k] + [nat] + files[k:]
 
 
 def plan_deploy(board: Any, target: image.Target, files: list[image.ImageFile],

@@ -1,0 +1,244 @@
+"""The C core (device/cmod/texelcore) in its three builds gives the Python
+loops' integers, bit for bit:
+
+- CPython through ctypes (tests/support/core_c.py): format 2's per-texel
+  plan (texel_core.c tc_texels against plan_int.texels_py: t28, d28, the log
+  pitches, the draws, the texels above Nyquist, the start phase's draw) and
+  the int engine (tc_fill, tc_render against engine_int._fill_py) on the hard
+  cases and random parameter sets on format 2's grid;
+- the dynamic native module for x64 (texelpad.firmware.natmod, MicroPython's
+  dynruntime.mk) on the MicroPython unix port: texel.compat.core() finds it,
+  plan_int and engine_int run it, and its plan and map are CPython's; the
+  viper and Python loops on the same interpreter agree; the brush painter
+  through it paints what viper paints; bad arguments are a ValueError;
+- the armv6m module on the emulated stock Pico after `texelpad deploy` and
+  the firmware's user C module: tests/host/test_emulated_pico.py and
+  tests/firmware/test_firmware_pico.py.
+"""
+from __future__ import annotations
+
+import json
+import os
+import random
+import shutil
+from array import array
+
+import pytest
+
+import texel
+from texel.gen import engine_int, plan_int as P, sine_table
+from texel.gen.plan_int_tables import table
+from texelpad import toolchain
+from texelpad.firmware import natmod
+
+from support import core_c, mpy
+
+from texelpad.analysis.hard_cases import HARD_CASES
+
+pytestmark = pytest.mark.skipif(not core_c.available(), reason="no gcc for the C core's build")
+IN_CI = bool(os.environ.get("CI"))
+
+
+def _random_sets(n: int, seed: int) -> list[dict]:
+    """Format-2 parameter sets drawn over the whole range, on the grid:
+    every option of the per-texel loop (quantization, band limit, texel
+    lengths from 1 sample up)."""
+    r = random.Random(seed)
+    out = []
+    for i in range(n):
+        p = {"pitch_db": round(r.uniform(-20.0, 19.747), 3),
+             "irregularity_db": round(r.uniform(-30.0, 5.0), 3),
+             "texel_samples": r.choice((1, 2, 3, 7, 50, 333, 4096)),
+             "length_samples": r.choice((1, 97, 1000, 19200)),
+             "seed": r.randrange(1 << 32), "v": 2}
+        if i % 3 == 0:
+            p["quant_db"] = round(r.uniform(0.001, 20.0), 3)
+        if i % 4 == 1:
+            p["band_limit_cpmm"] = round(r.uniform(0.1, 94.339), 3)
+        out.append(p)
+    return out
+
+
+def v2(case: str, **kw) -> dict:
+    return dict(HARD_CASES[case][0], v=2, **kw)
+
+
+# the hard cases of tests/gen/test_plan_int.py's runtimes, and random sets
+HARD = {
+    "study": v2("study"), "pitch-nyquist": v2("pitch-nyquist"), "irreg-max": v2("irreg-max"),
+    "white-like": v2("white-like"), "quant-coarse": v2("quant-coarse"),
+    "texel-1": v2("texel-1", length_samples=3000), "texel-long": v2("texel-long"),
+    "seed-max": v2("seed-max"), "ragged": v2("ragged"),
+    "capped": {"pitch_db": 19.747, "irregularity_db": 0.0, "texel_samples": 7,
+               "length_samples": 9600, "seed": 0, "band_limit_cpmm": 50.0, "v": 2},
+    "huge-texel": {"pitch_db": 10.123, "irregularity_db": -30.0, "texel_samples": 1048576,
+                   "length_samples": 100000, "seed": 99, "quant_db": 20.0, "v": 2},
+}
+CASES = dict(HARD, **{"random-%d" % i: p for i, p in enumerate(_random_sets(60, 8))})
+
+
+def _c_plan(pl: P.PlanInt, keep: int) -> tuple:
+    """tc_texels on the plan's own inputs, with fresh outputs."""
+    c = pl.count
+    st = P.seeded(pl.params["seed"])
+    t28, d28, ys, zs = (array("i", bytes(4 * max(c, 1))) for _ in range(4))
+    above = core_c.texels(st, c, pl.L, pl.mu, pl.sigma, pl.q, pl.dcap, array("i", table()),
+                          t28, d28, ys, zs, keep)
+    return above, st, t28[:c], d28[:c], ys[:c], zs[:c]
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_c_plan_is_the_python_loop_bit_for_bit(name):
+    p = texel.validate(CASES[name])
+    want = P.PlanInt(p, keep_z=True, engine="py")
+    above, st, t28, d28, ys, zs = _c_plan(want, 3)
+    assert above == want.above_nyquist
+    assert (st[8], st[9]) == want.x0
+    assert list(t28) == list(want.t28) and list(d28) == list(want.d28)
+    assert list(ys) == list(want.y) and list(zs) == list(want.z)
+    # keep = 0: nothing written where the caller keeps nothing
+    above0, _, t0, d0, ys0, zs0 = _c_plan(want, 0)
+    assert (above0, list(t0), list(d0)) == (above, list(t28), list(d28))
+    assert not any(ys0) and not any(zs0)
+
+
+def test_c_plan_on_the_loops_hard_edges():
+    """Draws at the inverse normal's ends (irregularity at its maximum: sigma*z
+    beyond 64 octaves), y clamped at both ends, steps above a turn per
+    sample, quantization of negative and positive log pitches, and a band
+    limit below every texel's pitch."""
+    sets = [{"pitch_db": pd, "irregularity_db": 5.0, "texel_samples": 1, "length_samples": 4000,
+             "seed": s, "v": 2, **extra}
+            for pd in (-20.0, 0.0, 19.747) for s in (0, 1, 4294967295)
+            for extra in ({}, {"quant_db": 0.001}, {"quant_db": 20.0}, {"band_limit_cpmm": 0.1})]
+    for p in sets:
+        want = P.PlanInt(texel.validate(p), keep_z=True, engine="py")
+        above, st, t28, d28, ys, zs = _c_plan(want, 3)
+        assert (above, list(t28), list(d28), list(ys), list(zs)) == (
+            want.above_nyquist, list(want.t28), list(want.d28), list(want.y), list(want.z)), p
+
+
+def test_c_fill_and_render_are_the_int_engine_bit_for_bit():
+    tab = array("H", sine_table.table())
+    r = random.Random(5)
+    for _ in range(400):
+        n = r.choice((0, 1, 5, 512))
+        t, d = r.randrange(1 << 28), r.choice((0, 1, (1 << 28) - 1, r.randrange(1 << 28)))
+        g = r.choice((0, 1, 8192, 16384))
+        a = array("H", bytes(2 * n))
+        b = array("H", bytes(2 * n))
+        assert core_c.fill(a, 0, n, t, d, tab, g) == engine_int._fill_py(b, 0, n, t, d, tab, g)
+        assert a == b
+    for name in ("study", "texel-1", "ragged", "huge-texel", "random-3", "random-7"):
+        p = texel.validate(CASES[name])
+        pl = P.PlanInt(p, engine="py")
+        want = engine_int.render_u16(pl)
+        out = array("H", bytes(2 * pl.n))
+        core_c.render(out, pl.n, pl.L, pl.count, array("i", pl.t28), array("i", pl.d28), tab,
+                      engine_int.gain_q14(pl.gain))
+        assert list(out) == list(want), name
+
+
+# --- the native module on the unix port -------------------------------------------------
+
+@pytest.fixture(scope="module")
+def x64_module(tmp_path_factory):
+    """A folder holding _texelcore.mpy for x64, built from this checkout."""
+    lack = natmod.missing("x64")
+    if lack:
+        if IN_CI:
+            pytest.fail("CI cannot build the native module: no " + "; no ".join(lack))
+        pytest.skip("cannot build the native module here: no " + "; no ".join(lack))
+    d = tmp_path_factory.mktemp("natmod")
+    f = natmod.build("x64", d)
+    shutil.copyfile(f, d / "_texelcore.mpy")
+    return d
+
+
+NATIVE_SCRIPT = r"""
+import json
+import texel
+from texel import compat
+from texel.gen import plan_int as P, engine_int as E, brush as B
+out = %(out)r
+cases = %(cases)r
+c = compat.core()
+info = {"core": c is not None and c.BUILD, "plan": P.ENGINE, "engine": E.ENGINE,
+        "same": {}, "errors": []}
+def save(path, buf):
+    f = open(path, "wb")
+    f.write(buf)
+    f.close()
+for name in sorted(cases):
+    p = cases[name]
+    pl = P.PlanInt(texel.validate(p))
+    save(out + "/" + name + ".plan", bytes(pl.t28) + bytes(pl.d28) + bytes(pl.y))
+    save(out + "/" + name + ".map", bytes(texel.render_u16(p, engine="int")))
+    same = True
+    for e in ("viper", "py"):
+        q = P.PlanInt(texel.validate(p), engine=e)
+        same = same and bytes(q.t28) == bytes(pl.t28) and bytes(q.d28) == bytes(pl.d28) \
+            and bytes(q.y) == bytes(pl.y)
+    info["same"][name] = same
+br = B.validate(%(brush)r)
+info["brush_same"] = list(B.paint(br, 3, 3000, how="c")) == list(B.paint(br, 3, 3000, how="viper"))
+from array import array
+tab = E.sine_table.table()
+for call in ("c.fill(bytearray(4), 0, 10, 0, 0, tab, 1)",
+             "c.fill(bytearray(40), 0, 10, 0, 0, bytearray(8), 1)",
+             "c.texels(P.seeded(1), 50, 1, 0, 0, 0, 0, P.table(), array('i', [0]), array('i', [0] * 50), array('i', [0]), array('i', [0]), 0)",
+             "c.texels(P.seeded(1), 5, 0, 0, 0, 0, 0, P.table(), array('i', [0] * 5), array('i', [0] * 5), array('i', [0]), array('i', [0]), 0)",
+             "c.render(array('H', [0] * 10), 20, 4, 5, array('i', [0] * 5), array('i', [0] * 5), tab, 1)"):
+    try:
+        eval(call)
+        info["errors"].append((call, None))
+    except ValueError as e:
+        info["errors"].append((call, str(e)))
+print(json.dumps(info))
+"""
+
+_BRUSH = {"k": [8.0] + [1.5 + 0.1 * (i % 20) for i in range(96)],
+          "lam": [0.5] + [0.05 / (1 + 0.04 * i) for i in range(96)], "range": [0.0, 1.0]}
+
+
+def test_native_module_on_the_unix_port_is_cpythons_plan_and_map(x64_module, tmp_path):
+    cases = {k: CASES[k] for k in sorted(CASES) if not k.startswith("random-")
+             or int(k.split("-")[1]) < 20}
+    code = NATIVE_SCRIPT % {"out": str(tmp_path), "cases": cases, "brush": _BRUSH}
+    info = mpy.run_json(code, exe=toolchain.require_micropython(), heapsize="8M", timeout=300,
+                        extra_path=str(x64_module))
+    assert info["core"] == "native" and info["plan"] == "c" and info["engine"] == "c"
+    for name, p in cases.items():
+        pl = P.PlanInt(texel.validate(p))
+        assert (tmp_path / (name + ".plan")).read_bytes() == (
+            bytes(pl.t28) + bytes(pl.d28) + bytes(pl.y)), name
+        assert (tmp_path / (name + ".map")).read_bytes() == bytes(
+            array("H", texel.render_u16(p, engine="int"))), name
+    assert all(info["same"].values()), info["same"]
+    assert info["brush_same"] is True
+    for call, err in info["errors"]:
+        assert err is not None, "accepted: " + call
+        assert "_texelcore" in err or "out" in err or "range" in err or "disagree" in err, err
+
+
+def test_an_old_native_module_is_not_used(tmp_path):
+    """A /lib/_texelcore.mpy of another API (a board deployed by another
+    texelpad) is passed over: the viper loops run, with the same plan."""
+    (tmp_path / "_texelcore.py").write_text("API = 0\nBUILD = 'old'\n")
+    out = mpy.run("from texel import compat\nfrom texel.gen import plan_int as P\n"
+                  "print(compat.core(), P.ENGINE)", extra_path=str(tmp_path))
+    assert out.split() == ["None", "viper"]
+
+
+def test_natmod_says_what_is_missing(monkeypatch):
+    monkeypatch.setattr(natmod.shutil, "which", lambda name: None)
+    lack = natmod.missing("armv6m")
+    assert any("arm-none-eabi-gcc" in m for m in lack) and any("make" in m for m in lack)
+    with pytest.raises(natmod.NatmodError, match="no make"):
+        natmod.build("armv6m", "/nonexistent")
+    assert natmod.missing("xtensa") and natmod.native_module("xtensa") is None
+    said = []
+    monkeypatch.setenv("TEXELPAD_CACHE", "/nonexistent-texelpad-cache")
+    assert natmod.native_module("armv6m", said.append) is None
+    assert said and "viper" in said[-1]
+    json.dumps(natmod.ARCHS)
