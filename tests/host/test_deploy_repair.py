@@ -28,7 +28,11 @@ TEXEL = {"pitch_db": 3.0, "irregularity_db": -10.0, "seed": 5}
 
 
 def _image_files():
-    return image.build_image(image.TARGETS["unix"], include_main=True)
+    """What deploy writes to the virtual board: the image and, where this
+    machine builds it, the C core's native module for x64."""
+    from texelpad.deploy.install import with_native_core
+    t = image.TARGETS["unix"]
+    return with_native_core(image.build_image(t, include_main=True), t, lambda m: None)
 
 
 def _playing(port):
