@@ -154,7 +154,7 @@ def native(module, name):
 # texelpad deploy puts in /lib on a stock board of its architecture. CORE_API
 # is what this package calls; another module (a board deployed by an older
 # texelpad) is not used: the viper and Python twins give the same integers.
-CORE_API = 1
+CORE_API = 2
 _core = None
 
 
@@ -205,7 +205,11 @@ def u16_buffer(n):
     than the length of the import path's strings). Then the buffer is built in
     one block (u16_one_block) and zeroed by slices. That measured 72 ms against
     7.4 ms for a 19,200-sample map on the emulated Pico, so it is only the
-    fallback; callers that build often pass their own buffer (out=)."""
+    fallback; callers that build often pass their own buffer (out=). Where
+    the C core is, its u16 makes it in one block at C speed."""
+    c = core()
+    if c and 0 <= n <= 1048576:
+        return c.u16(n)
     try:
         return array("H", bytes(2 * n))
     except MemoryError:
@@ -221,7 +225,12 @@ def u16_one_block(n):
     second 2n-byte block for the zeroed bytes at the same time - on a
     fragmented board heap that is the difference between fitting and not.
     (MicroPython would silently wrap values above 65535, CPython refuses
-    them: longer buffers take the bytes path.)"""
+    them: longer buffers take the bytes path.) The C core's u16 does the same
+    at C speed, zeroed (texelcore_api.h: 0.04 ms for 19,200 samples on x64
+    against 0.64 ms, 72 ms by range on an RP2040)."""
+    c = core()
+    if c and 0 <= n <= 1048576:
+        return c.u16(n)
     if n <= 65536:
         return array("H", range(n))
     return array("H", bytes(2 * n))

@@ -289,6 +289,22 @@ def test_a_canonical_format2_set_validates_to_itself_at_the_nyquist_band_limit()
     assert c["band_limit_cpmm"] == 94.338
 
 
+def test_every_grid_key_at_both_ends_of_its_range_stays_in_it():
+    """The general rule behind the hole above (gen/grid.py _in_range): a value
+    on format 2's grid never leaves its key's range, at either end, for every
+    grid key - so every canonical set validates again to itself."""
+    from texel.gen.grid import GRID_KEYS
+    from texel.gen.params import OPTION_SPEC, SPEC
+    base = {"pitch_db": 6, "irregularity_db": -9, "v": 2}
+    for key in GRID_KEYS:
+        lo, hi = (SPEC.get(key) or OPTION_SPEC[key])[2:4]
+        for value in (lo, hi, lo + 0.0004, hi - 0.0004):
+            if key == "quant_db" and 0 < value < 0.001:
+                continue                    # refused: finer than the grid (0 = off)
+            c = texel.validate(dict(base, **{key: value}))
+            assert lo <= c[key] <= hi and texel.validate(c) == c, (key, value, c[key])
+
+
 def test_format2_is_the_same_texture_for_every_seed_and_length_prefix():
     """The plan of a shorter map is the prefix of a longer one's (the draws
     come in texel order), as in format 1."""

@@ -10,7 +10,8 @@ loops' integers, bit for bit:
   dynruntime.mk) on the MicroPython unix port: texel.compat.core() finds it,
   plan_int and engine_int run it, and its plan and map are CPython's; the
   viper and Python loops on the same interpreter agree; the brush painter
-  through it paints what viper paints; bad arguments are a ValueError;
+  through it paints what viper paints; its u16 makes compat's zeroed
+  buffers; bad arguments are a ValueError;
 - the armv6m module on the emulated stock Pico after `texelpad deploy` and
   the firmware's user C module: tests/host/test_emulated_pico.py and
   tests/firmware/test_firmware_pico.py.
@@ -183,12 +184,17 @@ for name in sorted(cases):
 br = B.validate(%(brush)r)
 info["brush_same"] = list(B.paint(br, 3, 3000, how="c")) == list(B.paint(br, 3, 3000, how="viper"))
 from array import array
+u = c.u16(19200)
+u[19199] = 65535
+info["u16"] = [isinstance(u, array), len(u), sum(u), len(bytes(u)), len(c.u16(0)),
+               type(compat.u16_one_block(7)) is array, list(compat.u16_buffer(3))]
 tab = E.sine_table.table()
 for call in ("c.fill(bytearray(4), 0, 10, 0, 0, tab, 1)",
              "c.fill(bytearray(40), 0, 10, 0, 0, bytearray(8), 1)",
              "c.texels(P.seeded(1), 50, 1, 0, 0, 0, 0, P.table(), array('i', [0]), array('i', [0] * 50), array('i', [0]), array('i', [0]), 0)",
              "c.texels(P.seeded(1), 5, 0, 0, 0, 0, 0, P.table(), array('i', [0] * 5), array('i', [0] * 5), array('i', [0]), array('i', [0]), 0)",
-             "c.render(array('H', [0] * 10), 20, 4, 5, array('i', [0] * 5), array('i', [0] * 5), tab, 1)"):
+             "c.render(array('H', [0] * 10), 20, 4, 5, array('i', [0] * 5), array('i', [0] * 5), tab, 1)",
+             "c.u16(-1)", "c.u16(1048577)"):
     try:
         eval(call)
         info["errors"].append((call, None))
@@ -216,6 +222,8 @@ def test_native_module_on_the_unix_port_is_cpythons_plan_and_map(x64_module, tmp
             array("H", texel.render_u16(p, engine="int"))), name
     assert all(info["same"].values()), info["same"]
     assert info["brush_same"] is True
+    # u16: a zeroed array('H') in one block (compat's buffers take it)
+    assert info["u16"] == [True, 19200, 65535, 38400, 0, True, [0, 0, 0]]
     for call, err in info["errors"]:
         assert err is not None, "accepted: " + call
         assert "_texelcore" in err or "out" in err or "range" in err or "disagree" in err, err

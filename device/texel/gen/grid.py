@@ -31,11 +31,20 @@ def on_grid(key, value):
     return mdb(value) / 1000.0
 
 
-# The highest grid point a c/mm key may take: the display's Nyquist pitch
-# 94.33962 c/mm would round up to 94.34, which is out of the keys' range
-# [0.01, Nyquist], so a canonical dict would not validate again (a pulled
-# scene refused on push). 94.339 is the grid point below it.
-CPMM_TOP = 94.339
+# A value on the grid never leaves its key's range: the display's Nyquist
+# pitch 94.33962 c/mm (the c/mm keys' top, params.SPEC) would round up to
+# 94.34, out of range, and a canonical dict would not validate again (a pulled
+# scene refused on push); it takes the grid point below, 94.339. (The other
+# keys' limits are grid points: -20.0 .. 19.747 dB, -30.0 .. 5.0, 20.0.)
+def _in_range(key, g):
+    from .params import SPEC, OPTION_SPEC
+    lo, hi = (SPEC.get(key) or OPTION_SPEC[key])[2:4]
+    if g > hi:
+        return int(hi * 1000.0 + 1e-6) / 1000.0         # the grid point below (hi > 0)
+    if g < lo:
+        return -int(-lo * 1000.0 + 1e-6) / 1000.0 if lo < 0 else \
+            (int(lo * 1000.0 - 1e-6) + 1) / 1000.0      # the grid point above
+    return g
 
 
 def to_grid(p):
@@ -45,7 +54,4 @@ def to_grid(p):
         if p.get(key) is not None:
             # (quant_db is 0 or >= 0.001: params refuses finer, so a
             # quantization that is on stays on)
-            g = on_grid(key, p[key])
-            if key in ("band_limit_cpmm", "min_cpmm") and g > CPMM_TOP:
-                g = CPMM_TOP
-            p[key] = g
+            p[key] = _in_range(key, on_grid(key, p[key]))

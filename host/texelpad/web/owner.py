@@ -112,10 +112,9 @@ class BoardOwner:
         owner's board file, as every page does); one status round trip."""
         def go(b: Board) -> tuple[dict[str, Any], dict[str, Any] | None]:
             st = b.status()
-            if not st.get("running"):
-                if self._display is None:
-                    self._running(b)
-                st = b.status()
+            if not st.get("running") and self._display is None:
+                self._running(b)
+                st = b.status()         # only after a start: else the first one holds
             return st, self._source(b, st)
         return self._call(go)
 
