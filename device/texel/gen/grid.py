@@ -36,9 +36,16 @@ def on_grid(key, value):
 # 94.34, out of range, and a canonical dict would not validate again (a pulled
 # scene refused on push); it takes the grid point below, 94.339. (The other
 # keys' limits are grid points: -20.0 .. 19.747 dB, -30.0 .. 5.0, 20.0.)
+_ranges = None          # {grid key: (lo, hi)}, made once: an import inside a function runs
+                        # the import machinery every call (a validate: 67.6 us against 57.5, x64)
+
+
 def _in_range(key, g):
-    from .params import SPEC, OPTION_SPEC
-    lo, hi = (SPEC.get(key) or OPTION_SPEC[key])[2:4]
+    global _ranges
+    if _ranges is None:
+        from .params import SPEC, OPTION_SPEC
+        _ranges = {k: (SPEC.get(k) or OPTION_SPEC[k])[2:4] for k in GRID_KEYS}
+    lo, hi = _ranges[key]
     if g > hi:
         return int(hi * 1000.0 + 1e-6) / 1000.0         # the grid point below (hi > 0)
     if g < lo:
