@@ -36,16 +36,7 @@ def on_grid(key, value):
 # 94.34, out of range, and a canonical dict would not validate again (a pulled
 # scene refused on push); it takes the grid point below, 94.339. (The other
 # keys' limits are grid points: -20.0 .. 19.747 dB, -30.0 .. 5.0, 20.0.)
-_ranges = None          # {grid key: (lo, hi)}, made once: an import inside a function runs
-                        # the import machinery every call (a validate: 67.6 us against 57.5, x64)
-
-
-def _in_range(key, g):
-    global _ranges
-    if _ranges is None:
-        from .params import SPEC, OPTION_SPEC
-        _ranges = {k: (SPEC.get(k) or OPTION_SPEC[k])[2:4] for k in GRID_KEYS}
-    lo, hi = _ranges[key]
+def _in_range(g, lo, hi):
     if g > hi:
         return int(hi * 1000.0 + 1e-6) / 1000.0         # the grid point below (hi > 0)
     if g < lo:
@@ -54,11 +45,14 @@ def _in_range(key, g):
     return g
 
 
-def to_grid(p):
-    """Put a validated format-2 parameter dict on the grid, in place."""
+def to_grid(p, range_of):
+    """Put a validated format-2 parameter dict on the grid, in place, each
+    value within its key's range: range_of(key) -> (lo, hi) (params hands in
+    its own; this module imports nothing of params, which imports it)."""
     for key in GRID_KEYS:
         # (min_cpmm is in a canonical dict only when set: params.SPARSE)
         if p.get(key) is not None:
             # (quant_db is 0 or >= 0.001: params refuses finer, so a
             # quantization that is on stays on)
-            p[key] = _in_range(key, on_grid(key, p[key]))
+            lo, hi = range_of(key)
+            p[key] = _in_range(on_grid(key, p[key]), lo, hi)

@@ -164,13 +164,18 @@ def validate(params):
         # format 2's grid (gen/grid.py: imported only here, so format 1 on a
         # Pico-sized heap carries none of it)
         from .grid import to_grid
-        to_grid(out)
+        to_grid(out, _range_of)
     lo_b = out.get("min_cpmm")
     if lo_b is not None and out["band_limit_cpmm"] is not None and lo_b >= out["band_limit_cpmm"]:
         # (compared on format 2's grid where the plan will use them)
         _words().fail("min_cpmm", "%r must be below band_limit_cpmm %r (cycles/mm)"
                       % (lo_b, out["band_limit_cpmm"]))
     return out
+
+
+def _range_of(key):
+    """(lo, hi) of a key of SPEC or OPTION_SPEC (gen/grid.py keeps values in it)."""
+    return (SPEC.get(key) or OPTION_SPEC[key])[2:4]
 
 
 def has_options(p):
