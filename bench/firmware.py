@@ -20,8 +20,10 @@ its own last_push (validate_us, build_us, swap_us: contiguous from its entry)
 ends at the swap. So:
 
     to playing = compile + JSON parse (up to push's entry) + validate + build + swap
-    answers    = everything until the reply is printed (the gc.collect after
-                 the swap, status(), repr) - the board is ready for the next push
+    answers    = everything until the reply's line is printed (status() and its
+                 repr; texel.wire.reply notes the time): the host has its answer.
+                 The collection of the old scene comes after it (app.tidy), while
+                 the host reads the line; the next request's compile waits for it
 
 (The bytes' transfer over USB before the compile is not counted: "from the
 host's last byte".) The goal verdicts use these figures.
@@ -88,6 +90,7 @@ USER_PUSHES = 5                 # the user's script below, each a new seed
 DEVICE_CODE = r'''
 import time, gc, sys
 import texel.app as _tpf_app
+import texel.wire as _tpf_wire
 _tpf_t = [None]
 _tpf_orig = _tpf_app.push
 def _tpf_push(scene):
@@ -99,6 +102,7 @@ def _tpf_req(code):
     ov0 = rt.refresh.overruns
     n0 = rt.pushes
     _tpf_t[0] = None
+    _tpf_wire.replied_us = None
     err = None
     t0 = time.ticks_us()
     t1 = t0
@@ -109,13 +113,16 @@ def _tpf_req(code):
     except Exception as e:
         err = '%s: %s' % (type(e).__name__, e)
     t2 = time.ticks_us()
+    if _tpf_wire.replied_us is not None:     # the answer's line, before the collection
+        t2 = _tpf_wire.replied_us
     c = None
     code = None
     tp = _tpf_t[0]
     gc.collect()
     print(repr((time.ticks_diff(t1, t0), None if tp is None else time.ticks_diff(tp, t0),
                 time.ticks_diff(t2, t0), rt.last_push if rt.pushes != n0 else None, err,
-                gc.mem_free(), rt.refresh.overruns - ov0, rt.refresh.worst_us, rt.pushes)))
+                gc.mem_free(), rt.refresh.overruns - ov0, rt.refresh.worst_us, rt.pushes,
+                _tpf_wire.tidy_us)))
 def _tpf_heap():
     gc.collect()
     return gc.mem_free()
@@ -233,11 +240,12 @@ def _request(b: Any, scene: dict[str, Any]) -> dict[str, Any]:
     try:
         out = b.link.exec("_tpf_req(%r)" % code, timeout=600).strip().splitlines()
         (compile_us, entry_us, answer_us, lp, err, free, overruns, worst_us,
-         pushes) = ast.literal_eval(out[-1])
+         pushes, tidy_us) = ast.literal_eval(out[-1])
         reply = ast.literal_eval(out[-2]) if len(out) > 1 else None
     except (LinkError, ValueError, SyntaxError, IndexError) as e:
         return {"refused": "link: %s" % (str(e)[:300],)}
     r: dict[str, Any] = {"compile_us": compile_us, "answer_us": answer_us, "mem_free": free,
+                         "tidy_us": tidy_us,
                          "overruns": overruns, "worst_us": worst_us, "pushes": pushes,
                          "request_bytes": len(code)}
     if err or not (isinstance(reply, tuple) and reply and reply[0] == "ok") or lp is None:
@@ -484,6 +492,9 @@ def summarize(res: dict[str, Any]) -> dict[str, Any]:
         "scene_to_playing_worst": worst("scene"),
         "scene_answers_ms": cat("scene", "answer_us"),
         "scene_answers_ms_median": cat("scene", "answer_us", statistics.median),
+        "tidy_after_answer_ms": _ms(max((r.get("tidy_us") or 0) for r in ok)) if ok else None,
+        "tidy_after_answer_ms_median": (_ms(statistics.median(r.get("tidy_us") or 0 for r in ok))
+                                        if ok else None),
         "regions16_to_playing_ms": cat("regions16", "playing_us"),
         "regions16_answers_ms": cat("regions16", "answer_us"),
         "reference_to_playing_ms": cat("reference", "playing_us"),
@@ -572,6 +583,9 @@ def table(out: dict[str, Any]) -> str:
                                                   _fmt(v, unit), _fmt(t, unit), goal, verdict))
     extra = [("scene_to_playing_ms_median", "  scenes: -> playing, median", "ms"),
              ("scene_answers_ms_median", "  scenes: answers, median", "ms"),
+             ("tidy_after_answer_ms", "  after the answer: the old scene's collection, max",
+              "ms"),
+             ("tidy_after_answer_ms_median", "  after the answer: the collection, median", "ms"),
              ("regions16_answers_ms", "  16 texel regions: answers (max)", "ms"),
              ("reference_answers_ms", "  full-screen reference: answers (max)", "ms"),
              ("brush_answers_ms", "  full-screen brush: answers (max)", "ms"),

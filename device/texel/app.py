@@ -61,6 +61,7 @@ class _Runtime:
         self.last_push = None       # the last push's timings (status()["last_push"])
         self.tel_tail = 0           # telemetry read up to here
         self.pushes = 0
+        self.collect_due = False    # a push left the old scene as garbage (tidy())
         self.loop_mode = False      # run() drives the loop instead of a timer
         self.loop = None            # the loop mode's last figures
 
@@ -288,8 +289,13 @@ def _install(canonical, validate_us=0, checked=None):
     t1 = clock()
     old = rt.refresh.swap(sc)
     t2 = clock()
-    del old                     # the old scene's buffers go with the next collection
-    gc.collect()
+    # The old scene's buffers are garbage now. No collection here: it took 5-15 ms of
+    # every answer on an RP2040 (more with a large scene live; bench/firmware.py). It
+    # comes after the answer - tidy(), which texel.wire.reply runs once the host has
+    # its reply - or with the allocator's own collection when a later allocation needs
+    # the room.
+    del old
+    rt.collect_due = True
     rt.pushes += 1
     rt.last_push = {"validate_us": validate_us, "build_us": rt.diff(t1, t0),
                     "swap_us": rt.diff(t2, t1), "scene_bytes": sc.nbytes}
@@ -310,9 +316,21 @@ def push(scene):
         gc.collect()
         raise ValueError("scene does not fit in memory (%s); the current scene keeps playing"
                          % (compat.memory_words() or "the heap is full"))
-    # _install collected already: a second collection here cost ~20 ms of the reply on an
-    # RP2040 (bench/firmware.py)
+    # no collection before the answer (tidy()); and no heap figure in it: gc.mem_free()
+    # walks the whole allocation table, 9 ms on an RP2040 (status() measures it)
     return status(collect=False)
+
+
+def tidy():
+    """Collect what the last push left (the old scene's buffers), if it
+    left anything: texel.wire.reply runs this after the host has its answer,
+    and status() collects anyway. Returns True when it collected."""
+    rt = _rt
+    if rt is None or not rt.collect_due:
+        return False
+    rt.collect_due = False
+    gc.collect()
+    return True
 
 
 def _running():
@@ -323,12 +341,15 @@ def _running():
 
 def status(collect=True):
     """What is playing and how the loop runs (a dict of literals); mem_free
-    after a full collection unless collect is False (the caller just did)."""
+    after a full collection, or None with collect=False (push's answer,
+    which comes before any collection: tidy())."""
     rt = _rt
     if collect:
+        if rt is not None:
+            rt.collect_due = False
         free = compat.heap_free()
     else:
-        free = gc.mem_free() if hasattr(gc, "mem_free") else compat.heap_free()
+        free = None
     st = {"protocol": PROTOCOL, "texel": __version__,
           "firmware": "%s %s" % (sys.implementation.name,
                                  ".".join(str(x) for x in sys.implementation.version[:3])),

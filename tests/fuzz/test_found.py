@@ -41,7 +41,7 @@ def _stub_link(answer: str):
     from texelpad.link.transport import Link
     link = Link.__new__(Link)
     link.port, link.timeout, link.sent, link.received = "/dev/ttyFAKE", 10.0, 0, 0
-    link.exec = lambda code, timeout=None: answer
+    link.exec = lambda code, timeout=None, reply_first=False: answer
     return link
 
 

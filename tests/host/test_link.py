@@ -226,3 +226,39 @@ def test_ulab_engine_on_a_board_without_ulab(b):
         b.render_u16({"pitch_db": 3.0, "irregularity_db": -10.0}, engine="ulab")
     with pytest.raises(ValueError, match="pitch_db: nan"):
         b.render_u16({"pitch_db": float("nan"), "irregularity_db": -10.0})
+
+
+# --- answers before the work after them (issue 32 item 4) --------------------------
+
+def test_an_answer_is_read_before_the_work_after_it(b):
+    """eval_reply returns at the answer's line while the board goes on (a
+    push's collection: texel.wire.reply); the next command reads the rest
+    first, so nothing is mixed up: the work was done, its error text (if it
+    raised) is kept as late_error, and the prompt is where mpremote expects
+    it. A push's answer has no heap figure; status() after it has one."""
+    link = b.link
+    assert link.eval_reply("import time\nprint(repr(('ok', 1)))\ntime.sleep_ms(300)\n"
+                           "_after = 7") == ("ok", 1)
+    assert link.t.tail is not None                   # the board was still sleeping
+    assert link.eval("print(repr(_after))") == 7
+    assert link.t.tail is None and link.t.late_error == ""
+    assert link.eval_reply("print(repr(2))\nraise KeyError(5)") == 2
+    assert link.eval("print(repr(3))") == 3
+    assert "KeyError: 5" in link.t.late_error
+    # a command that ends before printing a line is read to its end, as eval reads it
+    with pytest.raises(board_mod.LinkError, match="ZeroDivisionError"):
+        link.eval_reply("1/0")
+    assert link.t.tail is None
+    st = b.push_texel(dict(TEXEL, seed=9))
+    assert st["mem_free"] is None and st["scene"]["regions"][0]["seed"] == 9
+    assert isinstance(b.status()["mem_free"], int)
+
+
+def test_an_interrupt_after_an_answer_leaves_a_clean_link(b):
+    """Ctrl-C (resync) while the work after an answer still runs: the tail
+    is dropped with the rest of what the board sent, and the link works."""
+    link = b.link
+    assert link.eval_reply("import time\nprint(repr(4))\ntime.sleep_ms(5000)") == 4
+    link.resync()
+    assert link.t.tail is None
+    assert link.eval("print(repr(5))") == 5

@@ -69,7 +69,7 @@ def test_no_platform_checks_outside_the_table():
             if PLATFORM_CHECK.search(line.split("#")[0]):
                 found.append("%s:%d: %s" % (rel, k, line.strip()))
     # texel.app.CONFIG: the unix port's relative power-up file (the table's UNIX_PLATFORMS)
-    assert found == ['device/texel/app.py:144: CONFIG = "texelpad.json" if sys.platform in '
+    assert found == ['device/texel/app.py:145: CONFIG = "texelpad.json" if sys.platform in '
                      'compat.UNIX_PLATFORMS else "/texelpad.json"'], found
 
 

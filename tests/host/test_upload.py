@@ -42,9 +42,9 @@ def board(port):
         sent: list[int] = []
         exec0 = b.link.exec
 
-        def exec_(code, timeout=None):
+        def exec_(code, timeout=None, reply_first=False):
             sent.append(len(code.encode()))
-            return exec0(code, timeout)
+            return exec0(code, timeout, reply_first)
         b.link.exec = exec_
         b.sent_code = sent
         yield b
@@ -208,10 +208,10 @@ def test_ctrl_c_during_the_push_call_says_what_plays(board, delay):
     board.link.t.serial = trip
     exec0 = board.link.exec
 
-    def exec_(code, timeout=None):
-        if "_m.staged(" in code:
+    def exec_(code, timeout=None, reply_first=False):
+        if "_m.reply(" in code:
             trip.at = time.monotonic() + delay
-        return exec0(code, timeout)
+        return exec0(code, timeout, reply_first)
     board.link.exec = exec_
     try:
         board.push(_scene({"kind": "reference", "name": "4sin"}))
@@ -380,15 +380,15 @@ def test_a_scene_crosses_as_json_data_and_comes_back_exactly(board):
     codes = []
     exec0 = board.link.exec
 
-    def exec_(code, timeout=None):
+    def exec_(code, timeout=None, reply_first=False):
         codes.append(code)
-        return exec0(code, timeout)
+        return exec0(code, timeout, reply_first)
     board.link.exec = exec_
     try:
         st = board.push(sc)
     finally:
         board.link.exec = exec0
-    push = [c for c in codes if "_m.staged('push'" in c]
+    push = [c for c in codes if "_m.reply('push'" in c]
     # the scene is a str (JSON text, parsed by the board's json module), not a dict literal
     assert len(push) == 1 and "'{\"regions\"" in push[0] and "{'regions'" not in push[0]
     assert st["scene"]["name"] == name

@@ -206,7 +206,7 @@ class Board:
             args[scene_at] = scene
             if uploads:
                 self._upload([u for _, u in uploads], progress)
-            ans = self.link.eval(protocol.staged_call(
+            ans = self.link.eval_reply(protocol.staged_call(
                 protocol.WIRE, func, args, scene_at, {i: k for k, (i, _) in enumerate(uploads)},
                 kwargs), timeout)
             return check_status(self.port, answer(self.port, ans, func + "()"))

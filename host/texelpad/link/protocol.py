@@ -272,10 +272,12 @@ def staged_call(module: str, func: str, args: Sequence[Any], scene_at: int,
     board: the samples region i gets upload slots[i] (texel.wire.take_upload)
     in place of its values before `func` runs. One statement on the board
     (texel.wire.staged): the compile of an eight-line request took 7-11 ms of
-    every push on an RP2040."""
+    every push on an RP2040. The board prints the answer as one line and
+    then collects (texel.wire.reply): the link reads it with
+    Link.eval_reply, which does not wait for the collection."""
     rest = [a for k, a in enumerate(args) if k != scene_at]
     fill = tuple(sorted((int(i), int(slot)) for i, slot in (slots or {}).items()))
-    return ("import %s as _m\nprint(repr(_m.staged(%s, %s, %s, %s, %d, %s)))\n_m = None"
+    return ("import %s as _m\n_m.reply(%s, %s, %s, %s, %d, %s)\n_m = None"
             % (module, literal(func), repr(scene_text(args[scene_at])), literal(fill),
                literal(tuple(rest)), int(scene_at), literal(kwargs or None)))
 

@@ -247,7 +247,7 @@ class _Transport(SerialTransport):
         finally:
             s.deadline, s.seconds = old
 
-    def enter_raw_repl(self, soft_reset: bool = False, timeout_overall: float = 10) -> None:
+    def _enter_raw_repl(self, soft_reset: bool = False, timeout_overall: float = 10) -> None:
         """Ctrl-C, then Ctrl-A and wait for the raw REPL banner, all within
         timeout_overall: what the port sends meanwhile is read and dropped
         (mpremote's own flush loop never ends on a port that keeps talking,
@@ -281,6 +281,61 @@ class _Transport(SerialTransport):
         with self.deadline(timeout_overall):
             return super().read_until(min_num_bytes, ending, timeout, data_consumer,
                                       timeout_overall)
+
+    # --- answers read before the command ends (texel.wire.reply) ----------------
+    # A command that prints its answer as one line and then goes on working (the
+    # board's collection after a push) is read up to that line only: the rest of
+    # its output and its two end markers (\x04 after the output, \x04 after the
+    # error text) are the tail, read before the next use of the raw REPL.
+    tail: bytes | None = None       # bytes read past the answer; None: nothing pending
+    late_error: str = ""            # error text a tail ended with (the work after an answer)
+
+    def settle(self) -> None:
+        """Read the pending tail (if any) to the command's end; keeps its
+        error text, if it had one, in late_error."""
+        if self.tail is None:
+            return
+        buf, self.tail = self.tail, None
+        with self.deadline(self.op_timeout):
+            while buf.count(b"\x04") < 2:      # byte by byte: the prompt after it stays
+                buf += self.serial.read(1)
+        err = buf.split(b"\x04")[1]
+        if err:
+            self.late_error = err.decode("utf-8", "replace")
+
+    def exec_raw_no_follow(self, command: Any) -> None:
+        self.settle()
+        super().exec_raw_no_follow(command)
+
+    def exec_reply_first(self, command: bytes, timeout: float | None = None
+                         ) -> tuple[bytes, bytes]:
+        """Send and run `command` and return (its output, its error text) as
+        soon as its first line has arrived, leaving the rest as the tail; a
+        command that ends before printing a line returns as exec_raw does."""
+        t = self.op_timeout if timeout is None else timeout
+        with self.deadline(t + len(command) / MIN_BYTES_PER_S, t), redirect_stdout(io.StringIO()):
+            try:
+                self.exec_raw_no_follow(command)
+            except struct.error:
+                raise TransportError("the board's raw-paste answer was cut off") from None
+            # byte by byte, as mpremote's read_until: nothing past the line (or past
+            # the end markers: the next prompt's ">" stays for the next command)
+            buf = bytearray()
+            while True:
+                c = self.serial.read(1)
+                buf += c
+                if c == b"\n":
+                    self.tail = b""
+                    return bytes(buf), b""
+                if c == b"\x04":               # ended without a line: its error text
+                    err = bytearray()
+                    while not err.endswith(b"\x04"):
+                        err += self.serial.read(1)
+                    return bytes(buf[:-1]), bytes(err[:-1])
+
+    def enter_raw_repl(self, soft_reset: bool = False, timeout_overall: float = 10) -> None:
+        self.tail = None        # Ctrl-C and the flush below end whatever was pending
+        self._enter_raw_repl(soft_reset, timeout_overall)
 
     def exec_raw(self, command: bytes, timeout: float | None = None,
                  data_consumer: Any = None) -> tuple[bytes, bytes]:
@@ -343,6 +398,7 @@ class Link:
         if getattr(self, "t", None) is None:
             return
         try:
+            self.t.settle()             # the last answer's tail (a collection) first
             self.t.exit_raw_repl()
         except Exception:
             pass
@@ -373,6 +429,7 @@ class Link:
             raise LinkError("the link to %s is closed" % self.port)
         t = self.timeout if timeout is None else timeout
         try:
+            self.t.settle()
             with self.t.deadline(t):
                 self.t.serial.write(b"\x04")
                 self.t.read_until(1, b"soft reboot\r\n", timeout=t)
@@ -382,15 +439,18 @@ class Link:
             raise LinkTimeout("%s did not come back from a soft reset (%s)"
                               % (self.port, _why(e))) from None
 
-    def exec(self, code: str, timeout: float | None = None) -> str:
+    def exec(self, code: str, timeout: float | None = None, reply_first: bool = False) -> str:
         """Run host-written code on the board; return what it printed.
-        A device exception raises LinkError with the device's traceback."""
+        A device exception raises LinkError with the device's traceback.
+        reply_first: return once the first line has arrived (the code goes
+        on working on the board: eval_reply)."""
         if self.t is None:
             raise LinkError("the link to %s is closed" % self.port)
         data = code.encode("utf-8")
         self.sent += len(data)
+        run = self.t.exec_reply_first if reply_first else self.t.exec_raw
         try:
-            out, err = self.t.exec_raw(data, timeout=self.timeout if timeout is None else timeout)
+            out, err = run(data, timeout=self.timeout if timeout is None else timeout)
         except TransportError as e:
             raise LinkTimeout("%s stopped answering (%s); the board may have reset or been "
                               "unplugged" % (self.port, e)) from None
@@ -402,9 +462,16 @@ class Link:
             raise BoardError(err.decode("utf-8", "replace"))
         return out.decode("utf-8", "replace")
 
-    def eval(self, code: str, timeout: float | None = None) -> Any:
+    def eval_reply(self, code: str, timeout: float | None = None) -> Any:
+        """eval() of code whose first printed line is its answer and which
+        then goes on working (texel.wire.reply: the collection after a push):
+        returns when that line arrives; the next use of the link first reads
+        the rest."""
+        return self.eval(code, timeout, reply_first=True)
+
+    def eval(self, code: str, timeout: float | None = None, reply_first: bool = False) -> Any:
         """Run code whose last printed line is a repr() literal; return its value."""
-        out = self.exec(code, timeout).strip()
+        out = self.exec(code, timeout, reply_first).strip()
         last = out.splitlines()[-1] if out else ""
         try:
             return ast.literal_eval(last)
