@@ -543,7 +543,7 @@ def test_samples_tile():
     q = [int(v * 65535 + 0.5) for v in vals]
     assert q == [0, 6554, 32768, 65535, 21845]
     assert [sc.amp(p) for p in range(2000, 2100)] == [q[i % 5] for i in range(100)]
-    assert len(sc.buffers()[0]) == 100
+    assert sum(len(c) for c in sc.buffers()[0]) == 100      # chunks (samples.fill_chunks)
     # u16 given directly; more values than positions: the first 100
     u = list(range(0, 65535, 50))[:300]
     sc = S.build(_samples_scene({"u16": u, "fit": "tile"}), D)
@@ -619,10 +619,11 @@ def test_memory_per_scene():
                         ("16 small regions", SIXTEEN), ("gaps+constants", GAPS)):
         sc = S.build(scene, D)
         spans = [(s, e, k) for s, e, k, _ in sc.spans()]
-        want_buf = (sum(2 * (e - s) for s, e, k in spans if k == S.K_BUF)
+        want_buf = (sum(2 * (e - s) for s, e, k in spans if k in (S.K_BUF, S.K_CHUNK))
                     + sum(8 * len(pl[0]) for pl in sc.plans()))
-        assert sc.buffer_bytes == want_buf == (sum(2 * len(b) for b in sc.buffers())
-                                               + sum(8 * len(pl[0]) for pl in sc.plans()))
+        assert sc.buffer_bytes == want_buf == (
+            sum(2 * (len(b) if not isinstance(b, tuple) else sum(len(c) for c in b))
+                for b in sc.buffers()) + sum(8 * len(pl[0]) for pl in sc.plans()))
         assert sc.table_bytes == 16 * (len(spans) + 1)
         assert sc.nbytes == want_buf + sc.table_bytes == S.buffer_bytes(scene, D)
         figures[name] = sc.nbytes
@@ -632,7 +633,7 @@ def test_memory_per_scene():
     # 16 regions of 5 mm (943 or 944 positions): 4 constants, 4 texel regions
     # played from their plans, 8 buffers (references and samples)
     sc = S.build(SIXTEEN, D)
-    lens = [e - s for s, e, k, _ in sc.spans() if k == S.K_BUF]
+    lens = [e - s for s, e, k, _ in sc.spans() if k in (S.K_BUF, S.K_CHUNK)]
     texels = [len(pl[0]) for pl in sc.plans()]
     assert len(lens) == 8 and set(lens) <= {943, 944} and len(texels) == 4
     assert figures["16 small regions"] == 2 * sum(lens) + 8 * sum(texels) + 17 * 16
@@ -804,6 +805,10 @@ def check_one(scene, display=SMALL):
         assert 0 <= s < e <= positions
         if kind == S.K_BUF:
             assert len(sc.buffers()[val]) == e - s
+            held += 2 * (e - s)
+        elif kind == S.K_CHUNK:                  # samples: chunks of 512 (1 KB blocks)
+            assert sum(len(c) for c in sc.buffers()[val]) == e - s
+            assert max(len(c) for c in sc.buffers()[val]) <= 512
             held += 2 * (e - s)
         elif kind == S.K_PLAN:
             t28, d28, L, g = sc.plans()[val]
@@ -1135,6 +1140,9 @@ def amp_bsearch(self, pos):
     s = t[j]
     if pos < s:
         return self.idle
+    if t[j + 2] == 3:                 # K_CHUNK
+        o = pos - s
+        return self._bufs[t[j + 3]][o >> 9][o & 511]
     if t[j + 2]:
         return self._bufs[t[j + 3]][pos - s]
     return t[j + 3]

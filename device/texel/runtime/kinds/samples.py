@@ -13,9 +13,9 @@
 # Canonical: {"kind": "samples", "u16": tuple of ints (or the upload's Chunks,
 # as they are), "fit": ...}; "values" become round(v * 65535), half up; a
 # tuple is kept as it is, a list is copied once.
-from ...compat import u16_one_block
+from ...compat import u16_one_block, array
 from ...gen.check import fail, got, num, int_in, check_keys
-from . import K_BUF, K_CHUNK
+from . import K_CHUNK, CHUNK_BITS, CHUNK_MASK
 
 NAME = "samples"
 KEYS = ("kind", "values", "u16", "fit")
@@ -73,20 +73,33 @@ def check(path, tex, n):
 _fast_fill = None           # scene_viper.fill, or False where it does not load
 
 
-def fill_samples(vals, fit, n, buf):
+def _fast():
     global _fast_fill
     if _fast_fill is None:
         from ...compat import native
         _fast_fill = native("texel.runtime.scene_viper", "fill") or False
-    if _fast_fill and _fast_fill(vals, fit, n, buf):
+    return _fast_fill
+
+
+def fill_samples(vals, fit, n, buf, i0=0, count=None):
+    """Positions i0 .. i0+count (default: to the end) of a region of n
+    positions playing vals with `fit`, into buf[0 .. count)."""
+    if count is None:
+        count = n - i0
+    fast = _fast()
+    if fast and fast(vals, fit, n, buf, i0, count):
         return
-    m = len(vals)
+    _loop(vals, 0, len(vals), fit, n, buf, i0, count)
+
+
+def _loop(vals, base, m, fit, n, buf, i0, count):
+    """fill_samples in Python: vals[k - base] is value k of the m."""
     if fit == "tile" or m == 1 or n == 1:
-        # tile: position i plays vals[i mod m] (stretch of one value or onto one
+        # tile: position i plays value i mod m (stretch of one value or onto one
         # position: the first value)
-        k = 0
-        for i in range(n):
-            buf[i] = vals[k]
+        k = i0 % m
+        for i in range(count):
+            buf[i] = vals[k - base]
             k += 1
             if k == m:
                 k = 0
@@ -106,9 +119,9 @@ def fill_samples(vals, fit, n, buf):
     den = n - 1
     step = m - 1
     small = den <= 32768
-    k = 0                         # i*(m-1) = k*(n-1) + r
-    r = 0
-    for i in range(n):
+    k, r = divmod(i0 * step, den)   # i*(m-1) = k*(n-1) + r (once per call: may be long)
+    k -= base
+    for i in range(count):
         a = vals[k]
         if r == 0:
             buf[i] = a
@@ -126,6 +139,78 @@ def fill_samples(vals, fit, n, buf):
             r = r % den
 
 
+def _copy(dst, at, src, a, b):
+    """dst[at .. at+b-a) = src[a .. b) (uint16 arrays): at memcpy speed where
+    a memoryview slice can be assigned, else value by value."""
+    try:
+        memoryview(dst)[at:at + b - a] = memoryview(src)[a:b]
+    except (TypeError, ValueError, NotImplementedError):
+        for i in range(b - a):
+            dst[at + i] = src[a + i]
+
+
+def _gather(chunks, a, b, dst):
+    """Values a .. b of an upload (its chunks) into dst[0 .. b-a)."""
+    at = 0
+    while a < b:
+        c = chunks[a >> CHUNK_BITS]
+        off = a & CHUNK_MASK
+        take = min(b - a, len(c) - off)
+        _copy(dst, at, c, off, off + take)
+        at += take
+        a += take
+
+
+def fill_chunks(vals, fit, n, dest):
+    """fill_samples into dest (upload.Chunks of the region's n values),
+    chunk by chunk: no block of more than 1 KB for any samples region (a
+    tiled or stretched full screen was one 38.4 KB block, which a playing
+    Pico's heap often does not have in one piece). An upload's values are
+    copied in runs (tile) or gathered per chunk (stretch)."""
+    m = len(vals)
+    tile = fit == "tile" or m == 1 or n == 1
+    src = getattr(vals, "chunks", None) if getattr(vals, "CHUNKS", False) else None
+    if src is None and _fast():
+        from ..scene_viper import fill_chunks as fast_chunks
+        if fast_chunks(vals, fit, n, dest.chunks):  # one viper call for every chunk
+            return
+        if type(vals) is tuple and array is not None:
+            vals = array("H", vals)         # once (viper reads arrays): m <= 512 from the host
+    o = 0
+    for c in dest.chunks:
+        L = len(c)
+        if src is not None and tile:
+            at = 0
+            while at < L:                   # runs of the upload: value k at position o + at
+                k = (o + at) % m
+                sc = src[k >> CHUNK_BITS]
+                off = k & CHUNK_MASK
+                take = min(L - at, len(sc) - off)
+                _copy(c, at, sc, off, off + take)
+                at += take
+        elif src is not None:               # stretch: the chunk's span of values, gathered
+            ka = (o * (m - 1)) // (n - 1)
+            kb = min(m - 1, ((o + L - 1) * (m - 1)) // (n - 1) + 1)
+            tmp = u16_one_block(kb - ka + 1)
+            _gather(src, ka, kb + 1, tmp)
+            if not (_fast_stretch(tmp, ka, m, n, c, o, L)):
+                _loop(tmp, ka, m, fit, n, c, o, L)
+            tmp = None
+        else:
+            fill_samples(vals, fit, n, c, o, L)
+        o += L
+
+
+def _fast_stretch(tmp, base, m, n, buf, i0, count):
+    """The viper stretch over a gathered span (value k at tmp[k - base])."""
+    if not _fast() or n - 1 > 32768:
+        return False
+    from ..scene_viper import fill_stretch
+    k, r = divmod(i0 * (m - 1), n - 1)
+    fill_stretch(buf, tmp, m, n, count, k - base, r)
+    return True
+
+
 def plays_as_is(tex, n):
     """An uploaded samples map (upload.Chunks) that tiles a region of exactly
     its length is played from its own chunks: no second copy (38,400 bytes
@@ -140,18 +225,19 @@ def need(tex, n, engine):
 
 
 def block(tex, n, engine):
-    return 0 if getattr(tex["u16"], "CHUNKS", False) else 2 * n
+    return 2 * min(n, 1 << CHUNK_BITS)     # chunks of 512 values (fill_chunks)
 
 
 def store(tex, n, engine):
     if plays_as_is(tex, n):
         return K_CHUNK, tex["u16"].chunks, None     # the upload itself, exactly region-long
-    buf = u16_one_block(n)
-    return K_BUF, buf, buf
+    from ..upload import Chunks
+    ch = Chunks(n)
+    return K_CHUNK, ch.chunks, ch
 
 
-def fill(tex, n, buf, engine, dx_um):
-    fill_samples(tex["u16"], tex["fit"], n, buf)
+def fill(tex, n, target, engine, dx_um):
+    fill_chunks(tex["u16"], tex["fit"], n, target)
 
 
 def describe(tex):
