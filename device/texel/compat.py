@@ -172,6 +172,28 @@ def core():
                 pass                    # ValueError: a .mpy of another format
     return _core or None
 
+
+ENGINES = ("c", "viper", "py")          # fastest first: the same integers on each
+
+
+def fastest(name, viper_module, py_fn, engine=None):
+    """(function, its engine) for a hot loop that has three twins: the C
+    core's `name`, viper_module's `name` and py_fn. engine None: the fastest
+    this runtime has; "c", "viper" or "py": that one, or ValueError where
+    this runtime does not have it (gen/plan_int.py, gen/engine_int.py)."""
+    if engine is not None and engine not in ENGINES:
+        raise ValueError("engine: expected 'c', 'viper' or 'py', got %r" % (engine,))
+    for e in ENGINES if engine is None else (engine,):
+        if e == "c":
+            f = core() and getattr(core(), name, None)
+        elif e == "viper":
+            f = native(viper_module, name)
+        else:
+            f = py_fn
+        if f:
+            return f, e
+    raise ValueError("engine: %r is not on this runtime" % (engine,))
+
 # Microsecond ticks: time.ticks_us/ticks_diff where the port has them
 # (MicroPython); elsewhere the same arithmetic over MicroPython's 2^30 tick
 # period, from perf_counter_ns (CPython) or monotonic_ns (CircuitPython, which

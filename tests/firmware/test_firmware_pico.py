@@ -10,6 +10,7 @@ import json
 import numpy as np
 import pytest
 
+from support import digest
 from support.cli import run_cli
 from support.firmware import built
 from support.pico import emulated_pico
@@ -170,13 +171,7 @@ _CORE_DIGEST = r"""
 import sys, gc, texel
 from texel import compat
 from texel.gen import plan_int as P, engine_int as E
-def _dig(arrs):
-    s = 0
-    for a in arrs:
-        for v in a:
-            s = (s * 31 + (v & 0xFFFFFF)) & 0xFFFFFF
-    return s
-_res = []
+""" + digest.DEVICE + r"""_res = []
 for _p in %r:
     gc.collect()
     _pl = P.PlanInt(texel.validate(_p))

@@ -18,7 +18,6 @@ loops' integers, bit for bit:
 """
 from __future__ import annotations
 
-import json
 import os
 import random
 import shutil
@@ -249,4 +248,3 @@ def test_natmod_says_what_is_missing(monkeypatch):
     monkeypatch.setenv("TEXELPAD_CACHE", "/nonexistent-texelpad-cache")
     assert natmod.native_module("armv6m", said.append) is None
     assert said and "viper" in said[-1]
-    json.dumps(natmod.ARCHS)

@@ -28,6 +28,7 @@ from texelpad.link import protocol
 from texelpad.link.board import host_check
 from texelpad.link.transport import DeviceError, Interrupted
 
+from support import digest
 from support.cli import run_cli
 from support.pico import emulated_pico, group_members, pico, processes_mentioning  # noqa: F401
 
@@ -549,13 +550,7 @@ import gc, texel
 gc.collect()
 from texel.gen.plan_int import PlanInt, ENGINE
 from texel import compat
-def _dig(arrs):
-    s = 0
-    for a in arrs:
-        for v in a:
-            s = (s * 31 + (v & 0xFFFFFF)) & 0xFFFFFF
-    return s
-_res = []
+""" + digest.DEVICE + r"""_res = []
 for _p in %r:
     _pl = PlanInt(texel.validate(_p))
     _res.append(_dig((_pl.t28, _pl.d28, _pl.y)))
@@ -567,12 +562,7 @@ print(repr((ENGINE, compat.core() and compat.core().BUILD, _res)))
 """
 
 
-def _dig(arrs) -> int:
-    s = 0
-    for a in arrs:
-        for v in a:
-            s = (s * 31 + (int(v) & 0xFFFFFF)) & 0xFFFFFF
-    return s
+_dig = digest.dig
 
 
 def test_format2_plan_bit_for_bit_on_the_chip_and_a_refused_push_changes_nothing(capsys, port):
@@ -641,7 +631,7 @@ def test_a_brush_region_paints_on_the_chip_as_on_the_host(capsys, port):
         _say(capsys, "\nbrush half screen (9,600 samples, 204 windows) on the chip: validate "
              "%.1f + build %.1f + swap %.1f ms (its own clock); mem_free %d"
              % (lp["validate_us"] / 1e3, lp["build_us"] / 1e3, lp["swap_us"] / 1e3,
-                st["mem_free"]))
+                b.status()["mem_free"]))        # (a push's answer has none: app.tidy)
         # read back in four pieces of 65, each after a collection: a stock Pico has
         # ~36 KB free with the brush playing, and one 260-value list and its repr
         # (1.3 KB blocks) failed to allocate once in a full run (the heap's layout

@@ -55,14 +55,15 @@ def test_device_tree_and_native_files():
     # the viper modules are loaded through compat.native, which falls back
     # where they do not compile or are not in the image
     src = (DEVICE / "texel" / "gen" / "engine_int.py").read_text()
-    assert 'native("texel.gen.engine_int_viper", "fill") or _fill_py' in src
+    assert 'fastest("fill", "texel.gen.engine_int_viper", _fill_py)' in src
     src = (DEVICE / "texel" / "gen" / "plan_int.py").read_text()
-    assert 'native("texel.gen.plan_int_viper", "texels") or texels_py' in src
+    assert 'fastest("texels", "texel.gen.plan_int_viper", texels_py)' in src
     src = (DEVICE / "texel" / "gen" / "brush.py").read_text()
     assert 'if native("texel.gen.brush_viper", "frames") is None:' in src
     src = (DEVICE / "texel" / "runtime" / "kinds" / "samples.py").read_text()
     assert 'native("texel.runtime.scene_viper", "fill") or False' in src
     src = (DEVICE / "texel" / "compat.py").read_text()
+    assert "f = native(viper_module, name)" in src      # compat.fastest: C, viper, then Python
     assert "except (ImportError, SyntaxError, MemoryError, AttributeError)" in src
     app = (DEVICE / "texel" / "app.py").read_text()
     assert "from .runtime.refresh_viper import FastRefresh, irq_rp2" in app

@@ -16,7 +16,7 @@
 # rounded (<= 0.5 unit per sample, so <= k/2 units after k samples), the start
 # phase t carries <= 0.5 unit per texel boundary; the table adds 2.4e-6 and
 # Q16/Q14 rounding <= 1.5 LSB of 65535 -> see tests/gen/test_precision.py.
-from ..compat import check_u16_out, native, core
+from ..compat import check_u16_out, core, fastest
 from . import sine_table
 
 NAME = "int"
@@ -42,12 +42,7 @@ def _fill_py(out, a, b, t, d, tab, g):
 # The loop that runs: the C core's (compat.core(): the firmware's, or deploy's
 # native module), else viper's, else the Python above - the same integers.
 _C = core()
-if _C:
-    _fill = _C.fill
-    ENGINE = "c"
-else:
-    _fill = native("texel.gen.engine_int_viper", "fill") or _fill_py
-    ENGINE = "py" if _fill is _fill_py else "viper"
+_fill, ENGINE = fastest("fill", "texel.gen.engine_int_viper", _fill_py)
 VIPER = ENGINE == "viper"
 
 

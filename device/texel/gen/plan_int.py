@@ -40,7 +40,7 @@ from . import params as _params
 from .rng import phase_fraction_u28, uniform_of, WARMUP, SEED_CONSTS
 from .plan_int_tables import table, EXP_HI, EXP_MID, NORM
 from .grid import mdb
-from ..compat import native, core
+from ..compat import fastest
 
 FORMAT = 2
 MASK28 = 0x0FFFFFFF
@@ -264,12 +264,7 @@ _ONE = _ints(1)             # where the loop's unkept outputs point (never writt
 # The loop that runs: the C core's (compat.core(): the firmware's built-in
 # module, or the native .mpy deploy installs), else viper's, else texels_py -
 # the same integers (tests/gen/test_texel_core.py compares them).
-if core():
-    _texels = core().texels
-    ENGINE = "c"
-else:
-    _texels = native("texel.gen.plan_int_viper", "texels") or texels_py
-    ENGINE = "py" if _texels is texels_py else "viper"
+_texels, ENGINE = fastest("texels", "texel.gen.plan_int_viper", texels_py)
 VIPER = ENGINE == "viper"
 
 
@@ -278,18 +273,7 @@ def texels_for(engine):
     runs); ValueError where this runtime has no such engine."""
     if engine is None:
         return _texels
-    if engine == "py":
-        return texels_py
-    f = None
-    if engine == "c":
-        f = core() and core().texels
-    elif engine == "viper":
-        f = native("texel.gen.plan_int_viper", "texels")
-    else:
-        raise ValueError("engine: expected 'c', 'viper' or 'py', got %r" % (engine,))
-    if not f:
-        raise ValueError("engine: %r is not on this runtime" % (engine,))
-    return f
+    return fastest("texels", "texel.gen.plan_int_viper", texels_py, engine)[0]
 
 
 class PlanInt:
