@@ -139,6 +139,28 @@ def test_c_fill_and_render_are_the_int_engine_bit_for_bit():
         assert list(out) == list(want), name
 
 
+def test_c_samples_fill_is_the_python_loop_bit_for_bit():
+    """kinds/samples.py's map of a tiled or stretched region (its Python
+    loop, one flat buffer) and the C core's into chunks (tc_samples): the
+    same values on the hard cases - one value, one position, regions not a
+    multiple of 512, a shrink, a stretch past 32,769 positions (int64 there,
+    Python's two exact steps) and random ramps of every sign."""
+    from texel.runtime.kinds import samples as KS
+    r = random.Random(11)
+    cases = [([7], "stretch", 1), ([7], "tile", 600), ([0, 65535], "stretch", 19200),
+             ([65535, 0], "stretch", 40001), ([1, 2, 3], "tile", 1025), ([5, 9], "stretch", 2),
+             ([r.randrange(65536) for _ in range(600)], "stretch", 1),
+             ([r.randrange(65536) for _ in range(19200)], "stretch", 9600),
+             ([r.randrange(65536) for _ in range(513)], "stretch", 65536),
+             ([r.randrange(65536) for _ in range(700)], "tile", 9601)]
+    cases += [([r.randrange(65536) for _ in range(r.randrange(1, 300))], r.choice(KS.FITS),
+               r.randrange(1, 5000)) for _ in range(60)]
+    for vals, fit, n in cases:
+        want = array("H", bytes(2 * n))
+        KS._loop(tuple(vals), 0, len(vals), fit, n, want, 0, n)
+        assert core_c.samples(vals, fit, n) == list(want), (len(vals), fit, n)
+
+
 # --- the native module on the unix port -------------------------------------------------
 
 @pytest.fixture(scope="module")
@@ -187,13 +209,24 @@ u = c.u16(19200)
 u[19199] = 65535
 info["u16"] = [isinstance(u, array), len(u), sum(u), len(bytes(u)), len(c.u16(0)),
                type(compat.u16_one_block(7)) is array, list(compat.u16_buffer(3))]
+from texel.runtime.kinds import samples as KS
+from texel.runtime.upload import Chunks
+info["samples"] = []
+for vals, fit, n in ((tuple(range(0, 65536, 97)), "stretch", 19200), ((1, 2, 3), "tile", 1000),
+                     ((0, 65535), "stretch", 40000)):
+    d = Chunks(n)
+    KS.fill_chunks(vals, fit, n, d)
+    info["samples"].append(bytes(b"".join(bytes(x) for x in d.chunks)).hex())
 tab = E.sine_table.table()
 for call in ("c.fill(bytearray(4), 0, 10, 0, 0, tab, 1)",
              "c.fill(bytearray(40), 0, 10, 0, 0, bytearray(8), 1)",
              "c.texels(P.seeded(1), 50, 1, 0, 0, 0, 0, P.table(), array('i', [0]), array('i', [0] * 50), array('i', [0]), array('i', [0]), 0)",
              "c.texels(P.seeded(1), 5, 0, 0, 0, 0, 0, P.table(), array('i', [0] * 5), array('i', [0] * 5), array('i', [0]), array('i', [0]), 0)",
              "c.render(array('H', [0] * 10), 20, 4, 5, array('i', [0] * 5), array('i', [0] * 5), tab, 1)",
-             "c.u16(-1)", "c.u16(1048577)"):
+             "c.u16(-1)", "c.u16(1048577)",
+             "c.samples((array('H', [0] * 512),), 9, 600, array('H', [1, 2]), 2, 1)",
+             "c.samples((array('H', [0] * 512),), 9, 500, array('H', [1]), 2, 1)",
+             "c.samples((bytearray(10),), 9, 500, array('H', [1]), 1, 0)"):
     try:
         eval(call)
         info["errors"].append((call, None))
@@ -223,6 +256,14 @@ def test_native_module_on_the_unix_port_is_cpythons_plan_and_map(x64_module, tmp
     assert info["brush_same"] is True
     # u16: a zeroed array('H') in one block (compat's buffers take it)
     assert info["u16"] == [True, 19200, 65535, 38400, 0, True, [0, 0, 0]]
+    # samples regions (kinds/samples.py fill_chunks by the C core): CPython's Python loop
+    from texel.runtime.kinds import samples as KS
+    for (vals, fit, n), got in zip(((tuple(range(0, 65536, 97)), "stretch", 19200),
+                                    ((1, 2, 3), "tile", 1000), ((0, 65535), "stretch", 40000)),
+                                   info["samples"]):
+        want = array("H", bytes(2 * n))
+        KS._loop(vals, 0, len(vals), fit, n, want, 0, n)
+        assert bytes.fromhex(got) == bytes(want), (fit, n)
     for call, err in info["errors"]:
         assert err is not None, "accepted: " + call
         assert "_texelcore" in err or "out" in err or "range" in err or "disagree" in err, err

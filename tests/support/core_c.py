@@ -109,3 +109,16 @@ def render(out: array, n: int, L: int, count: int, t28: array, d28: array, tab: 
     """texel.gen.engine_int.render_u16's loop by tc_render."""
     i32 = ctypes.c_int32
     lib().tc_render(_p(out), i32(n), i32(L), i32(count), _p(t28), _p(d28), _p(tab), i32(g))
+
+
+def samples(vals: list[int], fit: str, n: int, chunk_bits: int = 9) -> list[int]:
+    """kinds/samples.py fill_chunks by the C loop (tc_samples), into chunks
+    of 2^chunk_bits values."""
+    size = 1 << chunk_bits
+    chunks = [array("H", bytes(2 * min(size, n - o))) for o in range(0, n, size)]
+    ptrs = (ctypes.c_void_p * len(chunks))(*(_ptr(c) for c in chunks))
+    v = array("H", vals)
+    lib().tc_samples(ptrs, ctypes.c_int32(chunk_bits), ctypes.c_int32(n),
+                     ctypes.c_void_p(_ptr(v)), ctypes.c_int32(len(vals)),
+                     ctypes.c_int32(0 if fit == "tile" else 1))
+    return [x for c in chunks for x in c]

@@ -170,3 +170,60 @@ void tc_render(uint16_t *out, int32_t n, int32_t L, int32_t count, const int32_t
         tc_fill(out, a, b, t28[i], d28[i], tab, g);
     }
 }
+
+void tc_samples(uint16_t **chunks, int32_t bits, int32_t n, const uint16_t *vals, int32_t m,
+                int32_t stretch) {
+    int32_t mask = (1 << bits) - 1;
+    if (!stretch || m == 1 || n == 1) {
+        int32_t k = 0;
+        for (int32_t i = 0; i < n; i++) {
+            chunks[i >> bits][i & mask] = vals[k];
+            if (++k == m) {
+                k = 0;
+            }
+        }
+        return;
+    }
+    int32_t den = n - 1, step = m - 1, k = 0, r = 0;
+    if (den <= 32768) {
+        // floor((r << 15) / den) kept as q + qr/den while r moves (r << 15 < 2^30):
+        // r += step adds (step << 15) / den and its remainder; r -= j * den takes
+        // j << 15 off q exactly. No division per position (an RP2040's divider
+        // is a call away): the same w as Python's (r << 15) // den.
+        int32_t sq = (step << 15) / den, sr = (step << 15) % den, q = 0, qr = 0;
+        for (int32_t i = 0; i < n; i++) {
+            int32_t a = vals[k], v = a;
+            if (r != 0) {
+                v = a + (((vals[k + 1] - a) * ((q + 1) >> 1) + 8192) >> 14);
+            }
+            chunks[i >> bits][i & mask] = (uint16_t)v;
+            r += step;
+            q += sq;
+            qr += sr;
+            if (qr >= den) {
+                q++;
+                qr -= den;
+            }
+            if (r >= den) {
+                int32_t j = r / den;
+                k += j;
+                r -= j * den;
+                q -= j << 15;
+            }
+        }
+        return;
+    }
+    for (int32_t i = 0; i < n; i++) {       // past 32,769 positions: int64
+        int32_t a = vals[k], v = a;
+        if (r != 0) {
+            int32_t w = (int32_t)(((((int64_t)r) << 15) / den + 1) >> 1);
+            v = a + (((vals[k + 1] - a) * w + 8192) >> 14);
+        }
+        chunks[i >> bits][i & mask] = (uint16_t)v;
+        r += step;
+        if (r >= den) {
+            k += r / den;
+            r = r % den;
+        }
+    }
+}

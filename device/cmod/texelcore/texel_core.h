@@ -29,4 +29,12 @@ int32_t tc_fill(uint16_t *out, int32_t a, int32_t b, int32_t t, int32_t d,
 void tc_render(uint16_t *out, int32_t n, int32_t L, int32_t count, const int32_t *t28,
                const int32_t *d28, const uint16_t *tab, int32_t g);
 
+// kinds/samples.py fill_chunks (its _loop, statement for statement): the n
+// positions of a samples region into chunks of 2^bits values, from m values:
+// tile (value i mod m at position i) or, with stretch, linear interpolation
+// with the 14-bit weight round(r * 2^14 / (n-1)) (floor(r * 2^15 / (n-1)),
+// in int64 past 32,769 positions, as Python's two exact steps).
+void tc_samples(uint16_t **chunks, int32_t bits, int32_t n, const uint16_t *vals, int32_t m,
+                int32_t stretch);
+
 #endif

@@ -13,8 +13,9 @@
 
 // The functions and arguments below, as texel.compat.CORE_API expects them:
 // bump both with any change, so a board's older native module is not used.
-#define TC_API 2
+#define TC_API 3
 #define MAX_CHUNKS 128          // 65,536 values of 512 (a full screen is 38 chunks)
+#define TC_U16_VALS 19200       // kinds/samples.py MAX_SAMPLES
 #define TC_TAB_I32 (512 + 32 * 32 + 1)     // plan_int_tables.table(): EXP_HI, EXP_MID, NORM
 #define TC_SINE_U16 1025                  // sine_table.table()
 
@@ -134,6 +135,31 @@ static mp_obj_t tc_render_fn(size_t n_args, const mp_obj_t *args) {
     return mp_const_none;
 }
 static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_render_obj, 8, 8, tc_render_fn);
+
+// samples(chunks, chunk_bits, n, vals, m, stretch): kinds/samples.py fill_chunks
+// from a flat array('H') of m values into a region's chunks (tc_samples)
+static mp_obj_t tc_samples_fn(size_t n_args, const mp_obj_t *args) {
+    size_t nch;
+    mp_obj_t *items;
+    mp_obj_get_array(args[0], &nch, &items);
+    int32_t bits = mp_obj_get_int(args[1]);
+    int32_t n = mp_obj_get_int(args[2]);
+    int32_t m = mp_obj_get_int(args[4]);
+    if (n < 1 || m < 1 || m > TC_U16_VALS || bits < 1 || bits > 30 || nch > MAX_CHUNKS ||
+        (size_t)((n + (1 << bits) - 1) >> bits) > nch) {
+        mp_raise_ValueError(MP_ERROR_TEXT("samples: n, m, chunks and chunk_bits disagree"));
+    }
+    uint16_t *chunks[MAX_CHUNKS];
+    for (size_t i = 0; i < nch; i++) {
+        int32_t left = n - ((int32_t)i << bits);
+        int32_t need = left < (1 << bits) ? left : (1 << bits);
+        chunks[i] = tc_buf(items[i], 2 * (size_t)(need > 0 ? need : 0), MP_BUFFER_WRITE, "chunk");
+    }
+    const uint16_t *vals = tc_buf(args[3], 2 * (size_t)m, MP_BUFFER_READ, "vals");
+    tc_samples(chunks, bits, n, vals, m, mp_obj_get_int(args[5]) != 0);
+    return mp_const_none;
+}
+static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_samples_obj, 6, 6, tc_samples_fn);
 
 // u16(n) -> array('H') of n zeros in one heap block, built at C speed: what
 // texel.compat.u16_one_block makes with array('H', range(n)) (72 ms for a

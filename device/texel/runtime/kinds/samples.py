@@ -13,7 +13,7 @@
 # Canonical: {"kind": "samples", "u16": tuple of ints (or the upload's Chunks,
 # as they are), "fit": ...}; "values" become round(v * 65535), half up; a
 # tuple is kept as it is, a list is copied once.
-from ...compat import u16_one_block, array
+from ...compat import u16_one_block, array, core
 from ...gen.check import fail, got, num, int_in, check_keys
 from . import K_CHUNK, CHUNK_BITS, CHUNK_MASK
 
@@ -170,6 +170,12 @@ def fill_chunks(vals, fit, n, dest):
     m = len(vals)
     tile = fit == "tile" or m == 1 or n == 1
     src = getattr(vals, "chunks", None) if getattr(vals, "CHUNKS", False) else None
+    c = core()
+    if src is None and c and len(dest.chunks) <= 128:
+        # the C core (texel_core.c tc_samples): 1.7 us a position in viper on an RP2040
+        c.samples(dest.chunks, CHUNK_BITS, n, vals if type(vals) is array else
+                  array("H", vals), m, 0 if tile else 1)
+        return
     if src is None and _fast():
         from ..scene_viper import fill_chunks as fast_chunks
         if fast_chunks(vals, fit, n, dest.chunks):  # one viper call for every chunk
