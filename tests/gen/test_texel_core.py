@@ -161,6 +161,62 @@ def test_c_samples_fill_is_the_python_loop_bit_for_bit():
         assert core_c.samples(vals, fit, n) == list(want), (len(vals), fit, n)
 
 
+def _options_cases():
+    from texel.gen import lognormal
+    r = random.Random(17)
+    wide, narrow = ([round(x, 2) for x in lognormal.to_db(4.0, sd)] for sd in (4.3, 1.2))
+    out = [  # seed 001's conditions, the mapping trial's start, a hopeless mean, the tries cap
+        {"pitch_db": wide[0], "irregularity_db": wide[1], "texel_samples": 236,
+         "length_samples": 18868, "seed": 5, "min_cpmm": 1.0},
+        {"pitch_db": narrow[0], "irregularity_db": narrow[1], "texel_samples": 236,
+         "length_samples": 18868, "seed": 5, "min_cpmm": 1.0, "phase": "reset"},
+        {"pitch_db": 2.515, "irregularity_db": -1.922, "texel_samples": 189, "min_cpmm": 1.0,
+         "phase": "reset", "seed": 173254587, "length_samples": 9600},
+        {"pitch_db": -15.0, "irregularity_db": -20.0, "texel_samples": 20, "min_cpmm": 1.0,
+         "seed": 2, "length_samples": 4000},
+        {"pitch_db": -3.0, "irregularity_db": 0.0, "texel_samples": 7, "min_cpmm": 2.0,
+         "seed": 4294967295, "quant_db": 0.5, "length_samples": 3000,
+         "band_limit_cpmm": 40.0}]
+    for _ in range(25):
+        out.append({"pitch_db": round(r.uniform(-8, 12), 2),
+                    "irregularity_db": round(r.uniform(-20, 4), 2),
+                    "texel_samples": r.choice((1, 3, 17, 236)), "seed": r.randrange(2 ** 32),
+                    "min_cpmm": r.choice((0.5, 1.0, 3.0)), "length_samples": 2000,
+                    "phase": r.choice(("reset", "continuous"))})
+    return out
+
+
+@pytest.mark.parametrize("hopeless", [True, False])
+def test_c_options_are_the_python_post_pass_bit_for_bit(hopeless, monkeypatch):
+    """Seed 001's options on a format-2 plan (gen/options.py apply_int: the
+    bound's redraws from the second stream, the tail recomputed, the phase
+    reset) by the C core (tc_options) against the Python post-pass: the same
+    log pitches, t28, d28 and counts - with and without the hopeless skip."""
+    from texel.gen import options
+    monkeypatch.setattr(options, "SKIP_HOPELESS", hopeless)
+    tab = table()
+    seen = [0, 0, 0]                        # redrawn, at the bound, above Nyquist: each met
+    for p in _options_cases():
+        c = texel.validate(dict(p, v=2))
+        want = P.PlanInt(c, engine="py")
+        bare = dict(c)
+        bare.pop("min_cpmm", None)
+        bare.pop("phase", None)
+        pl = P.PlanInt(texel.validate(bare), engine="py")
+        pl.params = c
+        ys = array("i", pl.y)
+        dmin = options.d_min(want.min_mc)
+        hl = options.SKIP_HOPELESS and options._below(options.log_pitch(
+            P.norm_q24(0xFFFF, 0xFFFF, tab), pl.mu, pl.sigma, pl.q), dmin, tab)
+        flags = 1 | (2 if hl else 0) | (4 if c.get("phase") == "reset" else 0)
+        got = core_c.options(pl, ys, dmin, flags, options.MIN_TRIES)
+        assert got == (want.redrawn, want.at_min, want.above_nyquist), p
+        assert (list(ys), list(pl.t28), list(pl.d28)) == (
+            list(want.y), list(want.t28), list(want.d28)), p
+        seen = [a + (b > 0) for a, b in zip(seen, got)]
+    assert min(seen) >= 2, seen
+
+
 # --- the native module on the unix port -------------------------------------------------
 
 @pytest.fixture(scope="module")
@@ -242,6 +298,8 @@ _BRUSH = {"k": [8.0] + [1.5 + 0.1 * (i % 20) for i in range(96)],
 def test_native_module_on_the_unix_port_is_cpythons_plan_and_map(x64_module, tmp_path):
     cases = {k: CASES[k] for k in sorted(CASES) if not k.startswith("random-")
              or int(k.split("-")[1]) < 20}
+    for k, p in enumerate(_options_cases()[:6]):     # seed 001's options: tc_options
+        cases["options-%d" % k] = dict(p, v=2)
     code = NATIVE_SCRIPT % {"out": str(tmp_path), "cases": cases, "brush": _BRUSH}
     info = mpy.run_json(code, exe=toolchain.require_micropython(), heapsize="8M", timeout=300,
                         extra_path=str(x64_module))

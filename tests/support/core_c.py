@@ -122,3 +122,23 @@ def samples(vals: list[int], fit: str, n: int, chunk_bits: int = 9) -> list[int]
                      ctypes.c_void_p(_ptr(v)), ctypes.c_int32(len(vals)),
                      ctypes.c_int32(0 if fit == "tile" else 1))
     return [x for c in chunks for x in c]
+
+
+def options(plan, ys: array, dmin: int, flags: int, tries: int) -> tuple[int, int, int]:
+    """tc_options on a plan the loop made (plan_int.PlanInt without its
+    options; t28, d28 and ys changed in place): (redrawn, at_min, above)."""
+    from texel.gen.options import REDRAW_CONSTS
+    r = Rng(plan.params["seed"], consts=REDRAW_CONSTS)
+    st = array("H", (r.a_hi, r.a_lo, r.b_hi, r.b_lo, r.c_hi, r.c_lo, r.d_hi, r.d_lo))
+    tab = array("i", table())
+    t28, d28 = array("i", plan.t28), array("i", plan.d28)
+    out = array("i", (0, 0, plan.above_nyquist))
+    i32 = ctypes.c_int32
+    lib().tc_options(ctypes.c_void_p(_ptr(st)), i32(plan.count), i32(plan.L), i32(plan.mu),
+                     i32(plan.sigma), i32(plan.q), i32(plan.dcap), i32(dmin), i32(flags),
+                     i32(tries), ctypes.c_void_p(_ptr(tab)), ctypes.c_void_p(_ptr(ys)),
+                     ctypes.c_void_p(_ptr(t28)), ctypes.c_void_p(_ptr(d28)),
+                     ctypes.c_void_p(_ptr(out)))
+    plan.t28[:] = t28
+    plan.d28[:] = d28
+    return out[0], out[1], out[2]

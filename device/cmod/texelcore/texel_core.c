@@ -15,34 +15,140 @@ static int32_t mul28(int32_t a, int32_t b) {
     return ((a1 * b1) << 2) + ((a1 * b0 + a0 * b1 + ((a0 * b0) >> 15) + 4096) >> 13);
 }
 
+// gen/rng.py Rng.next_hi_lo: xoshiro128++ in 16-bit halves; s = a, b, c, d
+// (hi, lo each); the output's halves in *x_hi, *x_lo
+static inline void rng_next(int32_t *s, int32_t *x_hi, int32_t *x_lo) {
+    int32_t a_hi = s[0], a_lo = s[1], b_hi = s[2], b_lo = s[3];
+    int32_t c_hi = s[4], c_lo = s[5], d_hi = s[6], d_lo = s[7];
+    int32_t lo = a_lo + d_lo;
+    int32_t hi = (a_hi + d_hi + (lo >> 16)) & 0xFFFF;
+    lo &= 0xFFFF;
+    int32_t r_hi = ((hi << 7) | (lo >> 9)) & 0xFFFF;
+    int32_t r_lo = ((lo << 7) | (hi >> 9)) & 0xFFFF;
+    lo = r_lo + a_lo;
+    *x_hi = (r_hi + a_hi + (lo >> 16)) & 0xFFFF;
+    *x_lo = lo & 0xFFFF;
+    int32_t u_hi = ((b_hi << 9) | (b_lo >> 7)) & 0xFFFF;
+    int32_t u_lo = (b_lo << 9) & 0xFFFF;
+    c_hi ^= a_hi; c_lo ^= a_lo;
+    d_hi ^= b_hi; d_lo ^= b_lo;
+    b_hi ^= c_hi; b_lo ^= c_lo;
+    a_hi ^= d_hi; a_lo ^= d_lo;
+    c_hi ^= u_hi; c_lo ^= u_lo;
+    hi = d_hi;
+    d_hi = ((hi << 11) | (d_lo >> 5)) & 0xFFFF;
+    d_lo = ((d_lo << 11) | (hi >> 5)) & 0xFFFF;
+    s[0] = a_hi; s[1] = a_lo; s[2] = b_hi; s[3] = b_lo;
+    s[4] = c_hi; s[5] = c_lo; s[6] = d_hi; s[7] = d_lo;
+}
+
+// plan_int.norm_q24: |z| of the output (x_hi, x_lo) in Q24, its sign in *sgn
+static inline int32_t norm_abs(int32_t x_hi, int32_t x_lo, const int32_t *tab, int32_t *sgn) {
+    if (x_hi >= 0x8000) {
+        x_hi = 0xFFFF - x_hi;
+        x_lo = 0xFFFF - x_lo;
+        *sgn = 1;
+    } else {
+        *sgn = -1;
+    }
+    int32_t wh = (x_hi << 1) | (x_lo >> 15);
+    int32_t wl = ((x_lo << 1) & 0xFFFF) | 1;
+    int32_t b, e;
+    if (wh) { b = wh; e = 16; } else { b = wl; e = 0; }
+    if (b >= 0x100) { b >>= 8; e += 8; }
+    if (b >= 0x10) { b >>= 4; e += 4; }
+    if (b >= 0x4) { b >>= 2; e += 2; }
+    if (b >= 0x2) { e += 1; }
+    int32_t top;
+    if (e >= 16) {
+        int32_t k = e - 16;
+        top = ((wh << (16 - k)) | (wl >> k)) & 0xFFFF;
+    } else {
+        top = (wl << (16 - e)) & 0xFFFF;
+    }
+    int32_t j = NORM + (e << 5) + (top >> 11);
+    int32_t t0 = tab[j];
+    return t0 + (((tab[j + 1] - t0) * (top & 0x7FF) + 1024) >> 11);
+}
+
+// options.log_pitch / the loop's y: mu +- round(sigma * |z| / 2^24), clamped,
+// rounded half away from zero to q's grid (s1, s0: sigma's 14-bit limbs)
+static inline int32_t log_pitch(int32_t za, int32_t sgn, int32_t mu, int32_t s1, int32_t s0,
+                                int32_t q) {
+    int32_t z1 = za >> 14, z0 = za & 0x3FFF;
+    int32_t m = s1 * z0 + s0 * z1 + ((s0 * z0 + 0x800000) >> 14);
+    int32_t p = ((s1 * z1) << 4) + (m >> 10);
+    int32_t y = sgn < 0 ? mu - p : mu + p;
+    if (y < Y_LO) {
+        y = Y_LO;
+    } else if (y > Y_HI) {
+        y = Y_HI;
+    }
+    if (q) {
+        if (y < 0) {
+            y = -((q - 2 * y) / (2 * q)) * q;
+        } else {
+            y = ((2 * y + q) / (2 * q)) * q;
+        }
+    }
+    return y;
+}
+
+// plan_int.step_d: (d, a, af, e) of a log pitch y; D = round(2^(y + LOG2_STEP0))
+// in 2^-28 turns
+static inline void step_d(int32_t y, const int32_t *tab, int32_t *dp, int32_t *ap,
+                          int32_t *afp, int32_t *ep) {
+    int32_t w = y + LOG2_STEP0;
+    int32_t e = w >> 24;
+    int32_t r = w & 0xFFFFFF;
+    int32_t mm = mul28(mul28(tab[r >> 16], tab[EXP_MID + ((r >> 8) & 0xFF)]),
+                       (1 << 28) + (((r & 0xFF) * LN2_Q20 + 32768) >> 16));
+    int32_t d, a, af;
+    if (e >= 28) {
+        int32_t k = e - 28;
+        d = (mm & (MASK28 >> k)) << k;
+        a = d;
+        af = 0;
+    } else if (e < -2) {
+        d = 0;
+        a = 0;
+        af = 0;
+    } else {
+        d = (mm + (1 << (27 - e))) >> (28 - e);
+        if (e >= 20) {
+            int32_t k = e - 20;
+            a = mm >> (28 - e);
+            af = (mm & (0xFF >> k)) << k;
+        } else {
+            a = (mm + (1 << (19 - e))) >> (20 - e);
+            af = a & 0xFF;
+            a >>= 8;
+        }
+    }
+    *dp = d; *ap = a; *afp = af; *ep = e;
+}
+
+// t += L * (a + af/256) mod 2^28 (plan_int.mulmod28 and the carry in *tf)
+static inline int32_t advance(int32_t t, int32_t L, int32_t a, int32_t af, int32_t *tf) {
+    *tf += L * af;
+    int32_t ll = L & 0x3FFF, lh = L >> 14, dh = a >> 14, dl = a & 0x3FFF;
+    t = (t + ll * dl + (((ll * dh + lh * dl) & 0x3FFF) << 14) + (*tf >> 8)) & MASK28;
+    *tf &= 0xFF;
+    return t;
+}
+
 int32_t tc_texels(uint16_t st[10], int32_t count, int32_t L, int32_t mu, int32_t sigma,
                   int32_t q, int32_t dcap, const int32_t *tab, int32_t *t28, int32_t *d28,
                   int32_t *ys, int32_t *zs, int32_t keep) {
     int32_t above = 0, t = 0, tf = 0;
-    int32_t a_hi = st[0], a_lo = st[1], b_hi = st[2], b_lo = st[3];
-    int32_t c_hi = st[4], c_lo = st[5], d_hi = st[6], d_lo = st[7];
+    int32_t s[8];
+    for (int k = 0; k < 8; k++) {
+        s[k] = st[k];
+    }
     int32_t s1 = sigma >> 14, s0 = sigma & 0x3FFF;
-    int32_t ll = L & 0x3FFF, lh = L >> 14;
     for (int32_t i = -17; i < count; i++) {     // the warm-up (16), the start phase's draw
-        // xoshiro128++ in 16-bit halves (gen/rng.py Rng.next_hi_lo)
-        int32_t lo = a_lo + d_lo;
-        int32_t hi = (a_hi + d_hi + (lo >> 16)) & 0xFFFF;
-        lo &= 0xFFFF;
-        int32_t r_hi = ((hi << 7) | (lo >> 9)) & 0xFFFF;
-        int32_t r_lo = ((lo << 7) | (hi >> 9)) & 0xFFFF;
-        lo = r_lo + a_lo;
-        int32_t x_hi = (r_hi + a_hi + (lo >> 16)) & 0xFFFF;
-        int32_t x_lo = lo & 0xFFFF;
-        int32_t u_hi = ((b_hi << 9) | (b_lo >> 7)) & 0xFFFF;
-        int32_t u_lo = (b_lo << 9) & 0xFFFF;
-        c_hi ^= a_hi; c_lo ^= a_lo;
-        d_hi ^= b_hi; d_lo ^= b_lo;
-        b_hi ^= c_hi; b_lo ^= c_lo;
-        a_hi ^= d_hi; a_lo ^= d_lo;
-        c_hi ^= u_hi; c_lo ^= u_lo;
-        hi = d_hi;
-        d_hi = ((hi << 11) | (d_lo >> 5)) & 0xFFFF;
-        d_lo = ((d_lo << 11) | (hi >> 5)) & 0xFFFF;
+        int32_t x_hi, x_lo;
+        rng_next(s, &x_hi, &x_lo);
         if (i < 0) {
             if (i == -1) {                      // the start phase (rng.phase_fraction_u28)
                 st[8] = (uint16_t)x_hi;
@@ -51,84 +157,16 @@ int32_t tc_texels(uint16_t st[10], int32_t count, int32_t L, int32_t mu, int32_t
             }
             continue;
         }
-        // inverse normal (plan_int.norm_q24)
-        int32_t sgn;
-        if (x_hi >= 0x8000) {
-            x_hi = 0xFFFF - x_hi;
-            x_lo = 0xFFFF - x_lo;
-            sgn = 1;
-        } else {
-            sgn = -1;
-        }
-        int32_t wh = (x_hi << 1) | (x_lo >> 15);
-        int32_t wl = ((x_lo << 1) & 0xFFFF) | 1;
-        int32_t b, e;
-        if (wh) { b = wh; e = 16; } else { b = wl; e = 0; }
-        if (b >= 0x100) { b >>= 8; e += 8; }
-        if (b >= 0x10) { b >>= 4; e += 4; }
-        if (b >= 0x4) { b >>= 2; e += 2; }
-        if (b >= 0x2) { e += 1; }
-        int32_t top;
-        if (e >= 16) {
-            int32_t k = e - 16;
-            top = ((wh << (16 - k)) | (wl >> k)) & 0xFFFF;
-        } else {
-            top = (wl << (16 - e)) & 0xFFFF;
-        }
-        int32_t j = NORM + (e << 5) + (top >> 11);
-        int32_t t0 = tab[j];
-        int32_t za = t0 + (((tab[j + 1] - t0) * (top & 0x7FF) + 1024) >> 11);
+        int32_t sgn, za = norm_abs(x_hi, x_lo, tab, &sgn);
         if (keep & 1) {
             zs[i] = za * sgn;
         }
-        // y = mu +- round(sigma * |z| / 2^24)
-        int32_t z1 = za >> 14, z0 = za & 0x3FFF;
-        int32_t m = s1 * z0 + s0 * z1 + ((s0 * z0 + 0x800000) >> 14);
-        int32_t p = ((s1 * z1) << 4) + (m >> 10);
-        int32_t y = sgn < 0 ? mu - p : mu + p;
-        if (y < Y_LO) {
-            y = Y_LO;
-        } else if (y > Y_HI) {
-            y = Y_HI;
-        }
-        if (q) {                                // round half away from zero to q's grid
-            if (y < 0) {
-                y = -((q - 2 * y) / (2 * q)) * q;
-            } else {
-                y = ((2 * y + q) / (2 * q)) * q;
-            }
-        }
+        int32_t y = log_pitch(za, sgn, mu, s1, s0, q);
         if (keep & 2) {
             ys[i] = y;
         }
-        // D = round(2^(y + LOG2_STEP0)) in 2^-28 turns (plan_int.step_d)
-        int32_t w = y + LOG2_STEP0;
-        e = w >> 24;
-        int32_t r = w & 0xFFFFFF;
-        int32_t mm = mul28(mul28(tab[r >> 16], tab[EXP_MID + ((r >> 8) & 0xFF)]),
-                           (1 << 28) + (((r & 0xFF) * LN2_Q20 + 32768) >> 16));
-        int32_t d, a, af;
-        if (e >= 28) {
-            int32_t k = e - 28;
-            d = (mm & (MASK28 >> k)) << k;
-            a = d;
-            af = 0;
-        } else if (e < -2) {
-            d = 0;
-            a = 0;
-            af = 0;
-        } else {
-            d = (mm + (1 << (27 - e))) >> (28 - e);
-            if (e >= 20) {
-                int32_t k = e - 20;
-                a = mm >> (28 - e);
-                af = (mm & (0xFF >> k)) << k;
-            } else {
-                a = (mm + (1 << (19 - e))) >> (20 - e);
-                af = a & 0xFF;
-                a >>= 8;
-            }
-        }
+        int32_t d, a, af, e;
+        step_d(y, tab, &d, &a, &af, &e);
         if (e >= 27) {                          // plan_int.NYQ_EXP
             above++;
         }
@@ -139,13 +177,87 @@ int32_t tc_texels(uint16_t st[10], int32_t count, int32_t L, int32_t mu, int32_t
         }
         d28[i] = d & MASK28;
         t28[i] = t;
-        // t += L * (a + af/256) mod 2^28 (plan_int.mulmod28 and the carry)
-        tf += L * af;
-        int32_t dh = a >> 14, dl = a & 0x3FFF;
-        t = (t + ll * dl + (((ll * dh + lh * dl) & 0x3FFF) << 14) + (tf >> 8)) & MASK28;
-        tf &= 0xFF;
+        t = advance(t, L, a, af, &tf);
     }
     return above;
+}
+
+static inline int32_t below(int32_t y, int32_t dmin, const int32_t *tab) {
+    int32_t d, a, af, e;
+    step_d(y, tab, &d, &a, &af, &e);
+    return e < 28 && d < dmin;
+}
+
+void tc_options(uint16_t st[8], int32_t count, int32_t L, int32_t mu, int32_t sigma, int32_t q,
+                int32_t dcap, int32_t dmin, int32_t flags, int32_t tries, const int32_t *tab,
+                int32_t *ys, int32_t *t28, int32_t *d28, int32_t out[3]) {
+    int32_t s[8];
+    for (int k = 0; k < 8; k++) {
+        s[k] = st[k];
+    }
+    int32_t s1 = sigma >> 14, s0 = sigma & 0x3FFF;
+    int32_t redrawn = 0, at_min = 0, above = out[2];
+    if (flags & TC_OPT_BOUND) {
+        for (int32_t i = 0; i < count; i++) {   // options.redraw_int
+            if (d28[i] >= dmin || !below(ys[i], dmin, tab)) {
+                continue;
+            }
+            redrawn++;
+            if (flags & TC_OPT_HOPELESS) {
+                at_min++;
+                continue;
+            }
+            int32_t k;
+            for (k = 0; k < tries; k++) {
+                int32_t x_hi, x_lo, sgn;
+                rng_next(s, &x_hi, &x_lo);
+                int32_t za = norm_abs(x_hi, x_lo, tab, &sgn);
+                int32_t y = log_pitch(za, sgn, mu, s1, s0, q);
+                if (!below(y, dmin, tab)) {
+                    ys[i] = y;
+                    break;
+                }
+            }
+            if (k == tries) {
+                at_min++;
+            }
+        }
+        if (redrawn) {                          // options.tail_int
+            int32_t t = t28[0], tf = 0;
+            above = 0;
+            for (int32_t i = 0; i < count; i++) {
+                int32_t d, a, af, e;
+                step_d(ys[i], tab, &d, &a, &af, &e);
+                if (e >= 27) {
+                    above++;
+                }
+                if (e < 28 && d < dmin) {
+                    d = dmin;
+                    a = dmin;
+                    af = 0;
+                }
+                if (dcap && (e >= 28 || d > dcap)) {
+                    d = dcap;
+                    a = dcap;
+                    af = 0;
+                }
+                d28[i] = d & MASK28;
+                t28[i] = t;
+                t = advance(t, L, a, af, &tf);
+            }
+        }
+    }
+    if (flags & TC_OPT_RESET) {                 // "reset": every texel at the start phase
+        for (int32_t i = 1; i < count; i++) {
+            t28[i] = t28[0];
+        }
+    }
+    for (int k = 0; k < 8; k++) {
+        st[k] = (uint16_t)s[k];
+    }
+    out[0] = redrawn;
+    out[1] = at_min;
+    out[2] = above;
 }
 
 int32_t tc_fill(uint16_t *out, int32_t a, int32_t b, int32_t t, int32_t d,

@@ -19,6 +19,20 @@ int32_t tc_texels(uint16_t st[10], int32_t count, int32_t L, int32_t mu, int32_t
                   int32_t q, int32_t dcap, const int32_t *tab, int32_t *t28, int32_t *d28,
                   int32_t *ys, int32_t *zs, int32_t keep);
 
+// gen/options.py apply_int's integer work on a plan the loop made: with
+// TC_OPT_BOUND, redraw_int (every texel below the bound dmin redrawn from the
+// stream st - Rng(seed, consts=REDRAW_CONSTS) after its warm-up, 8 halves,
+// left where it ends - up to `tries` draws, none with TC_OPT_HOPELESS) and,
+// when any was, tail_int (t28/d28 and the count above Nyquist from ys);
+// with TC_OPT_RESET every t28 = t28[0]. out: redrawn, at_min, above (out[2]
+// comes in as the loop's count, kept when nothing was redrawn).
+#define TC_OPT_BOUND 1
+#define TC_OPT_HOPELESS 2
+#define TC_OPT_RESET 4
+void tc_options(uint16_t st[8], int32_t count, int32_t L, int32_t mu, int32_t sigma, int32_t q,
+                int32_t dcap, int32_t dmin, int32_t flags, int32_t tries, const int32_t *tab,
+                int32_t *ys, int32_t *t28, int32_t *d28, int32_t out[3]);
+
 // engine_int._fill_py: samples a..b-1 of out from phase t (2^-28 turns) and
 // step d; tab = sine_table.table() (1,025 Q16 values); g = gain in Q14.
 // Returns the phase after the last sample.

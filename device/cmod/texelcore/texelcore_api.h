@@ -102,6 +102,29 @@ static mp_obj_t tc_texels_fn(size_t n_args, const mp_obj_t *args) {
 }
 static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_texels_obj, 13, 13, tc_texels_fn);
 
+// options(st, count, L, mu, sigma, q, dcap, dmin, flags, tries, tab, ys, t28, d28, out):
+// texel.gen.options.apply_int's integer work (tc_options)
+static mp_obj_t tc_options_fn(size_t n_args, const mp_obj_t *args) {
+    int32_t count = mp_obj_get_int(args[1]);
+    int32_t L = mp_obj_get_int(args[2]);
+    int32_t tries = mp_obj_get_int(args[9]);
+    if (count < 1 || count > (1 << 24) || L < 1 || L >= (1 << 21) || tries < 0) {
+        mp_raise_ValueError(MP_ERROR_TEXT("options: count, L or tries out of range"));
+    }
+    size_t want = 4 * (size_t)count;
+    uint16_t *st = tc_buf(args[0], 16, MP_BUFFER_RW, "st");
+    const int32_t *tab = tc_buf(args[10], 4 * TC_TAB_I32, MP_BUFFER_READ, "tab");
+    int32_t *ys = tc_buf(args[11], want, MP_BUFFER_RW, "ys");
+    int32_t *t28 = tc_buf(args[12], want, MP_BUFFER_RW, "t28");
+    int32_t *d28 = tc_buf(args[13], want, MP_BUFFER_RW, "d28");
+    int32_t *out = tc_buf(args[14], 12, MP_BUFFER_RW, "out");
+    tc_options(st, count, L, mp_obj_get_int(args[3]), mp_obj_get_int(args[4]),
+               mp_obj_get_int(args[5]), mp_obj_get_int(args[6]), mp_obj_get_int(args[7]),
+               mp_obj_get_int(args[8]), tries, tab, ys, t28, d28, out);
+    return mp_const_none;
+}
+static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_options_obj, 15, 15, tc_options_fn);
+
 // fill(out, a, b, t, d, tab, g) -> t: texel.gen.engine_int._fill_py
 static mp_obj_t tc_fill_fn(size_t n_args, const mp_obj_t *args) {
     mp_buffer_info_t o;

@@ -41,6 +41,7 @@ from .rng import Rng, ppnd16, uniform_of
 from .grid import mdb
 from .plan import UNITS_PER_TURN, PHASE_MASK, _TWO_PI, _DX, _frac_u28, round_half_away
 from .plan_int import step_d, norm_q24, mulmod28, Y_LO, Y_HI, NYQ_EXP, MASK28
+from ..compat import core
 
 MIN_TRIES = 64
 SKIP_HOPELESS = True    # (tests turn it off to prove the skip changes nothing)
@@ -158,15 +159,37 @@ def tail_int(plan, ys, dmin, tab):
     return above
 
 
-def apply_int(plan, ys, tab):
+def _apply_c(c, plan, ys, dmin, tab):
+    """apply_int's bound (and reset) by the C core (device/cmod/texelcore
+    tc_options): the same integers as redraw_int and tail_int
+    (tests/gen/test_texel_core.py)."""
+    from array import array
+    r = Rng(plan.params["seed"], consts=REDRAW_CONSTS)
+    st = array("H", (r.a_hi, r.a_lo, r.b_hi, r.b_lo, r.c_hi, r.c_lo, r.d_hi, r.d_lo))
+    hopeless = SKIP_HOPELESS and _below(
+        log_pitch(norm_q24(0xFFFF, 0xFFFF, tab), plan.mu, plan.sigma, plan.q), dmin, tab)
+    out = array("i", (0, 0, plan.above_nyquist))
+    c.options(st, plan.count, plan.L, plan.mu, plan.sigma, plan.q, plan.dcap, dmin,
+              1 | (2 if hopeless else 0) | (4 if _reset(plan) else 0), MIN_TRIES, tab, ys,
+              plan.t28, plan.d28, out)
+    plan.redrawn, plan.at_min, plan.above_nyquist = out[0], out[1], out[2]
+
+
+def apply_int(plan, ys, tab, engine=None):
     """The options of plan.params on a format-2 plan the loop made
     (plan_int.PlanInt, plan_numpy.PlanIntNumpy); ys: its log pitches (kept
     or not). Sets min_mc, redrawn, at_min; changes ys, t28, d28 and
-    above_nyquist only where the options ask."""
+    above_nyquist only where the options ask. engine: the plan's ("py",
+    "viper": these Python loops; None or "c": the C core where there is one,
+    _apply_c)."""
     lo = plan.params.get("min_cpmm")
+    c = core() if engine in (None, "c") else None
     if lo is not None:
         plan.min_mc = mdb(lo)
         dmin = d_min(plan.min_mc)
+        if c:
+            _apply_c(c, plan, ys, dmin, tab)
+            return
         plan.redrawn, plan.at_min = redraw_int(plan, ys, dmin, tab)
         if plan.redrawn:
             plan.above_nyquist = tail_int(plan, ys, dmin, tab)

@@ -327,7 +327,7 @@ class PlanInt:
         if _params.has_options(p):
             # seed 001's options (gen/options.py: loaded only for them)
             from .options import apply_int
-            apply_int(self, ys, tab)
+            apply_int(self, ys, tab, engine)
         self._f = None
         self._phi = None
 
