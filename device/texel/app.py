@@ -264,6 +264,9 @@ def _start(board, canonical, realtime, fast, hw_opts):
             # a Pico) is no time the refresh ran
             rt.started_us = ticks()
             hw.start(callback, rt.hz)
+            if (callback is not rt.refresh.step and "interrupt" in (getattr(hw, "irq_source", "")
+                                                                   or "")):
+                rt.refresh.irq_code = getattr(callback, "engine", None)
             if realtime and hasattr(hw, "run_realtime"):
                 hw.run_realtime()
     except BaseException:
@@ -365,6 +368,9 @@ def status(collect=True):
         "display": {"positions": rt.board["display"]["positions"],
                     "dx_um": rt.board["display"]["dx_um"]},
         "refresh_mode": rt.board["refresh"]["mode"],
+        # the machine code the RP2040's refresh interrupt calls: "c" (the C
+        # core's refresh) or "viper" (refresh_viper.core); None elsewhere
+        "refresh_code": getattr(rt.refresh, "irq_code", None),
         "carrier_hz": rt.hw.freq_hz if hasattr(rt.hw, "freq_hz") else rt.board["carrier"]["freq_hz"],
         "pwm_top": rt.hw.top, "refresh_hz": rt.hz,
         "refreshes": r.count, "rate_hz": (r.count * 1000000 // elapsed) if elapsed > 0 else 0,

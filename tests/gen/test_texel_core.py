@@ -327,6 +327,93 @@ def test_native_module_on_the_unix_port_is_cpythons_plan_and_map(x64_module, tmp
         assert "_texelcore" in err or "out" in err or "range" in err or "disagree" in err, err
 
 
+# The refresh in C (refresh_core.c) against refresh_viper.core on the same word array W,
+# refresh by refresh: every state word, the CC word and the telemetry ring. A scene with
+# every region kind (constant, a map, a texel plan, an upload's chunks, a gap), the finger
+# sweeping, jumping, dropping out for fewer and for more refreshes than the lift debounce,
+# resting on the ends and beyond them; a telemetry sample every refresh.
+REFRESH_SCRIPT = r"""
+import json, random
+from array import array
+import texel.app as app
+from texel import compat
+from texel.runtime import refresh_viper as RV
+c = compat.core()
+app.start("virtual", %(scene)r)
+r = app._rt.refresh
+app.stream(8333)
+S = r._S
+rings = (S, r.tel_t, r.tel_pos, r.tel_amp)
+def snap():
+    return [list(a) for a in rings] + [r._cc[0]]
+def put(v):
+    for a, b in zip(rings, v):
+        for i in range(len(b)):
+            a[i] = b[i]
+random.seed(7)
+raws = []
+x = 30000
+for k in range(%(n)d):
+    m = k %% 400
+    if m < 150:
+        x = 2000 + (k * 97) %% 61000          # sweeping
+    elif m < 160:
+        x = random.randrange(0, 300)          # a dropout (below the lift level)
+    elif m < 170:
+        x = random.choice((0, 65535, 1999, 63001))
+    elif m < 200:
+        x = random.randrange(65536)           # jumps
+    else:
+        x = max(0, min(65535, x + random.randrange(-900, 901)))
+    raws.append(x)
+same = 0
+first = None
+for k in range(len(raws)):
+    r._clk[0] = (k * 120 + 5) & 0x3FFFFFFF
+    r._adc[1] = raws[k]
+    before = snap()
+    RV.core(RV._WA)
+    a = snap()
+    put(before)
+    r._cc[0] = before[4]
+    c.refresh(RV._W)
+    b = snap()
+    if a == b:
+        same += 1
+    elif first is None:
+        first = (k, raws[k], [i for i in range(len(a[0])) if a[0][i] != b[0][i]])
+print(json.dumps({"same": same, "n": len(raws), "first": first, "code": c.BUILD,
+                  "kinds": sorted(set(r.scene._t[4 * i + 2] for i in range(r.scene.count)))}))
+"""
+
+
+def test_the_c_refresh_is_the_viper_refresh_word_for_word(x64_module):
+    """Issue 32 item 3: the refresh in C (on the firmware it is the RP2040's
+    refresh interrupt) computes what refresh_viper.core computes, on the x64
+    native module under the MicroPython unix port."""
+    from texelpad.bench.link import regions16
+    scene = {"regions": [
+        {"start_mm": 0, "end_mm": 20, "texture": {"kind": "constant", "level": 0.3}},
+        {"start_mm": 20, "end_mm": 40, "texture": {"kind": "reference", "name": "4sin"}},
+        {"start_mm": 40, "end_mm": 60, "texture": {"kind": "texel", "pitch_db": 6.3,
+                                                   "irregularity_db": -12.9, "seed": 7, "v": 2}},
+        {"start_mm": 60, "end_mm": 80, "texture": {"kind": "samples", "fit": "stretch",
+                                                   "u16": [0, 65535, 100]}},
+        {"start_mm": 85, "end_mm": 101.76, "texture": {"kind": "bump", "width_mm": 8}}]}
+    code = REFRESH_SCRIPT % {"scene": scene, "n": 6000}
+    info = mpy.run_json(code, exe=toolchain.require_micropython(), heapsize="8M", timeout=300,
+                        extra_path=str(x64_module))
+    # every way a region plays: K_CONST, K_BUF, K_PLAN, K_CHUNK (runtime/kinds/__init__.py)
+    assert info["code"] == "native" and info["kinds"] == [0, 1, 2, 3], info
+    assert info["same"] == info["n"], info
+    # 16 texel regions: the table walk past many rows
+    info = mpy.run_json(REFRESH_SCRIPT % {"scene": regions16({"positions": 19200,
+                                                               "dx_um": 5.3}, 2, 3), "n": 3000},
+                        exe=toolchain.require_micropython(), heapsize="8M", timeout=300,
+                        extra_path=str(x64_module))
+    assert info["same"] == info["n"], info
+
+
 def test_an_old_native_module_is_not_used(tmp_path):
     """A /lib/_texelcore.mpy of another API (a board deployed by another
     texelpad) is passed over: the viper loops run, with the same plan."""

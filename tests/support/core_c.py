@@ -23,7 +23,7 @@ from texel.gen.rng import Rng
 from . import mpy
 
 CORE = mpy.ROOT / "device" / "cmod" / "texelcore"
-SRCS = (CORE / "brush_core.c", CORE / "texel_core.c")
+SRCS = (CORE / "brush_core.c", CORE / "texel_core.c", CORE / "refresh_core.c")
 _LIB = None
 
 
@@ -35,7 +35,7 @@ def lib() -> ctypes.CDLL:
     global _LIB
     if _LIB is None:
         h = hashlib.sha256()
-        for f in SRCS + (CORE / "brush_core.h", CORE / "texel_core.h"):
+        for f in SRCS + (CORE / "brush_core.h", CORE / "texel_core.h", CORE / "refresh_core.h"):
             h.update(f.read_bytes())
         out = Path(tempfile.gettempdir()) / ("texelpad-core-%s.so" % h.hexdigest()[:16])
         if not out.exists():

@@ -10,10 +10,11 @@
 #include "py/objarray.h"
 #include "brush_core.h"
 #include "texel_core.h"
+#include "refresh_core.h"
 
 // The functions and arguments below, as texel.compat.CORE_API expects them:
 // bump both with any change, so a board's older native module is not used.
-#define TC_API 3
+#define TC_API 4
 #define MAX_CHUNKS 128          // 65,536 values of 512 (a full screen is 38 chunks)
 #define TC_U16_VALS 19200       // kinds/samples.py MAX_SAMPLES
 #define TC_TAB_I32 (512 + 32 * 32 + 1)     // plan_int_tables.table(): EXP_HI, EXP_MID, NORM
@@ -183,6 +184,35 @@ static mp_obj_t tc_samples_fn(size_t n_args, const mp_obj_t *args) {
     return mp_const_none;
 }
 static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_samples_obj, 6, 6, tc_samples_fn);
+
+// refresh(W): one refresh on texel.runtime.refresh_viper's word array W (an
+// array('I') whose words are addresses FastRefresh resolved: trusted, as
+// core() trusts them); what the tests compare with core()
+static mp_obj_t tc_refresh_fn(mp_obj_t w_in) {
+    tc_refresh((const uint32_t *)tc_buf(w_in, 4 * 14, MP_BUFFER_READ, "W"));
+    return mp_const_none;
+}
+static MP_DEFINE_CONST_FUN_OBJ_1(tc_refresh_obj, tc_refresh_fn);
+
+// The RP2040 refresh interrupt's call: hw/rp2.py's trampoline calls it as
+// MicroPython's native code calls refresh_viper.core (r0 a function object,
+// r1 = 1 argument, r2 = 0, r3 the arguments): args[0] is W's address as a
+// small int ((address << 1) | 1, refresh_viper._ARGS). In RAM on the firmware.
+static TC_RAMFUNC mp_obj_t tc_refresh_irq(mp_obj_t fun, size_t n_args, size_t n_kw,
+                                          const mp_obj_t *args) {
+    (void)fun;
+    (void)n_args;
+    (void)n_kw;
+    tc_refresh((const uint32_t *)(uintptr_t)MP_OBJ_SMALL_INT_VALUE(args[0]));
+    return mp_const_none;
+}
+
+// refresh_entry() -> the address of tc_refresh_irq (Thumb bit set on ARM):
+// what refresh_viper.irq_rp2.native_entry hands the trampoline
+static mp_obj_t tc_refresh_entry_fn(void) {
+    return mp_obj_new_int_from_uint((mp_uint_t)(uintptr_t)&tc_refresh_irq);
+}
+static MP_DEFINE_CONST_FUN_OBJ_0(tc_refresh_entry_obj, tc_refresh_entry_fn);
 
 // u16(n) -> array('H') of n zeros in one heap block, built at C speed: what
 // texel.compat.u16_one_block makes with array('H', range(n)) (72 ms for a

@@ -320,7 +320,9 @@ class _Rp2Irq:
     """irq_rp2: the fused refresh as the RP2040's refresh interrupt. Called
     (machine.Timer's hard callback, tests) it runs one refresh; hw/rp2.py's
     Hw.start() asks native_entry() instead and makes the PWM-wrap interrupt
-    call core()'s machine code itself."""
+    call core()'s machine code itself - or the C core's (engine: which)."""
+
+    engine = None
 
     def __call__(self, timer):
         return refresh(timer)
@@ -342,7 +344,25 @@ class _Rp2Irq:
             S = _RP2._S
             S[S_ADC_CS] = (S[S_ADC_CS] & ~4) | 8
         a = id(core)
-        return a, _word(a + 12), uctypes.addressof(_ARGS)
+        code = _word(a + 12)
+        self.engine = "viper"
+        c = _c_core()
+        if c is not None:
+            # the C core's refresh (device/cmod/texelcore/refresh_core.c: this
+            # file's core() in C, on the same W; in RAM on the firmware), called
+            # the same way: the trampoline's function object goes unused
+            code = c.refresh_entry()
+            self.engine = "c"
+        return a, code, uctypes.addressof(_ARGS)
+
+
+def _c_core():
+    """The C core when it has the refresh (compat.core(): the firmware's
+    _texelcore, or deploy's native module), else None: then the interrupt
+    calls core()'s viper machine code."""
+    from ..compat import core as _core
+    c = _core()
+    return c if c is not None and hasattr(c, "refresh_entry") else None
 
 
 def _start_many_is_reset():
