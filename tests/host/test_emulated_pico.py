@@ -589,6 +589,10 @@ def test_format2_plan_bit_for_bit_on_the_chip_and_a_refused_push_changes_nothing
         else:
             assert (engine, build) == ("c", "native")
             assert got == [w for w in want for _ in (0, 1)]
+            # the refresh interrupt calls the native module's C refresh (refresh_core.c):
+            # its entry's first instruction is a load, not a push (hw/rp2.py's check; with
+            # the push-only check this stock Pico fell back to machine.Timer, 33 us a refresh)
+            assert b.status()["refresh_code"] == "c"
         st = b.push_texel(FORMAT2)
         assert st["scene"]["regions"][0]["v"] == 2 and st["faults"] == 0
         lp = st["last_push"]

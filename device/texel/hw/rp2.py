@@ -333,9 +333,13 @@ class Hw:
             div += 1
             if div > 255:
                 return False
+        # a function: push {..., lr} first, or second after one load (the C core's
+        # entry as gcc compiles it for a native module: ldr r0, [r3]; push {r4, lr})
+        c = code & ~1
         ok = (_SRAM <= vtor < _SRAM_END and _SRAM <= fun < _SRAM_END
               and _SRAM <= code < _SRAM_END and _SRAM <= args < _SRAM_END
-              and machine.mem16[code & ~1] & 0xFF00 == 0xB500)    # push {..., lr}: a function
+              and (machine.mem16[c] & 0xFF00 == 0xB500
+                   or machine.mem16[c + 2] & 0xFF00 == 0xB500))
         if not ok:
             return False
         tramp = array("I", [0] * 11)
