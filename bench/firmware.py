@@ -563,6 +563,27 @@ def _fmt(v: Any, unit: str) -> str:
     return str(v)
 
 
+# the table's rows below the goals: (key, label, unit)
+EXTRA_ROWS = [("scene_to_playing_ms_median", "  scenes: -> playing, median", "ms"),
+              ("scene_answers_ms_median", "  scenes: answers, median", "ms"),
+              ("tidy_after_answer_ms", "  after the answer: the old scene's collection, max",
+               "ms"),
+              ("tidy_after_answer_ms_median", "  after the answer: the collection, median", "ms"),
+              ("regions16_answers_ms", "  16 texel regions: answers (max)", "ms"),
+              ("reference_answers_ms", "  full-screen reference: answers (max)", "ms"),
+              ("brush_answers_ms", "  full-screen brush: answers (max)", "ms"),
+              ("first_push_to_playing_ms", "  first push after boot: -> playing", "ms"),
+              ("refresh_us_with_exception", "  refresh + 30 exception cycles not emulated", "us"),
+              ("worst_refresh_body_us", "  refresh body worst (its own clock) while pushing",
+               "us"),
+              ("user_push_ms_median", "  app.push without \"v\": call -> return, median", "ms"),
+              ("user_push_v1_ms", "  app.push with \"v\": 1 (the lab's float plan), max of 2",
+               "ms"),
+              ("heap_free_playing_default_bytes", "heap free playing the power-up scene", "B"),
+              ("heap_free_after_import_bytes", "heap free, texel.app imported, not playing", "B"),
+              ("heap_free_bare_bytes", "heap free at boot before texelpad starts", "B")]
+
+
 def table(out: dict[str, Any]) -> str:
     fw, stock = out["firmware"]["figures"], (out.get("stock") or {}).get("figures")
     lines = ["texelpad firmware bench (issue 19): the emulated Pico (rp2040js @ 125 MHz), every "
@@ -581,25 +602,7 @@ def table(out: dict[str, Any]) -> str:
         verdict = _met(key, v) if key in GOALS else ""
         lines.append("%-*s %12s %12s %12s  %s" % (w, label + (" [%s]" % unit if unit else ""),
                                                   _fmt(v, unit), _fmt(t, unit), goal, verdict))
-    extra = [("scene_to_playing_ms_median", "  scenes: -> playing, median", "ms"),
-             ("scene_answers_ms_median", "  scenes: answers, median", "ms"),
-             ("tidy_after_answer_ms", "  after the answer: the old scene's collection, max",
-              "ms"),
-             ("tidy_after_answer_ms_median", "  after the answer: the collection, median", "ms"),
-             ("regions16_answers_ms", "  16 texel regions: answers (max)", "ms"),
-             ("reference_answers_ms", "  full-screen reference: answers (max)", "ms"),
-             ("brush_answers_ms", "  full-screen brush: answers (max)", "ms"),
-             ("first_push_to_playing_ms", "  first push after boot: -> playing", "ms"),
-             ("refresh_us_with_exception", "  refresh + 30 exception cycles not emulated", "us"),
-             ("worst_refresh_body_us", "  refresh body worst (its own clock) while pushing",
-              "us"),
-             ("user_push_ms_median", "  app.push without \"v\": call -> return, median", "ms"),
-             ("user_push_v1_ms", "  app.push with \"v\": 1 (the lab's float plan), max of 2",
-              "ms"),
-             ("heap_free_playing_default_bytes", "heap free playing the power-up scene", "B"),
-             ("heap_free_after_import_bytes", "heap free, texel.app imported, not playing", "B"),
-             ("heap_free_bare_bytes", "heap free at boot before texelpad starts", "B")]
-    for key, label, unit in extra:
+    for key, label, unit in EXTRA_ROWS:
         v = fw.get(key)
         t = stock.get(key) if stock else None
         lines.append("%-*s %12s %12s" % (w, label + " [%s]" % unit, _fmt(v, unit), _fmt(t, unit)))

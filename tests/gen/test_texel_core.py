@@ -271,7 +271,7 @@ info["samples"] = []
 for vals, fit, n in ((tuple(range(0, 65536, 97)), "stretch", 19200), ((1, 2, 3), "tile", 1000),
                      ((0, 65535), "stretch", 40000)):
     d = Chunks(n)
-    KS.fill_chunks(vals, fit, n, d)
+    KS.fill_chunks(vals, fit, n, d.chunks)
     info["samples"].append(bytes(b"".join(bytes(x) for x in d.chunks)).hex())
 tab = E.sine_table.table()
 for call in ("c.fill(bytearray(4), 0, 10, 0, 0, tab, 1)",

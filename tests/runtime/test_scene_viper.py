@@ -78,7 +78,7 @@ for m, fit, n in %r:
         for fast in (None, False):                 # viper where it loads, then Python only
             KS._fast_fill = fast
             dest = Chunks(n)
-            KS.fill_chunks(src, fit, n, dest)
+            KS.fill_chunks(src, fit, n, dest.chunks)
             ok = True
             for i in range(n):
                 if dest[i] != flat[i]:

@@ -10,9 +10,8 @@
 # only an upload needs them: kept here, the unix port's 176 KB heap test
 # still builds the split screen (compat grown by them, it did not).
 from array import array
-from ..compat import u16_one_block
 from .kinds import CHUNK_BITS, CHUNK_MASK
-from .kinds.samples import MAX_SAMPLES
+from .kinds.samples import MAX_SAMPLES, new_chunks
 
 
 def u16_put_bytes(buf, offset, data):
@@ -71,7 +70,7 @@ class Chunks:
 
     def __init__(self, n):
         self.n = n
-        self.chunks = tuple(u16_one_block(min(CHUNK, n - o)) for o in range(0, n, CHUNK))
+        self.chunks = new_chunks(n)
 
     def __len__(self):
         return self.n

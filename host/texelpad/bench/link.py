@@ -153,7 +153,9 @@ def _soak(b: Any, pushes: int, say: Callable[[str], None] | None
         if (st["pushes"] == i + 2 and len(reg) == 1 and reg[0]["seed"] == i
                 and reg[0]["pitch_db"] == params["pitch_db"] and st["faults"] == 0):
             acked += 1
-        mem.append(st["mem_free"])
+        # the heap after the old scene's collection, which comes after the push's answer
+        # (texel.wire.reply): the answer itself carries no figure (mem_free None)
+        mem.append(b.status()["mem_free"])
         if st.get("last_push"):             # the board's own clock
             build.append(st["last_push"]["build_us"] + st["last_push"]["swap_us"])
         if say and (i + 1) % max(1, pushes // 10) == 0:

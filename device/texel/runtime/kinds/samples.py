@@ -161,8 +161,15 @@ def _gather(chunks, a, b, dst):
         a += take
 
 
-def fill_chunks(vals, fit, n, dest):
-    """fill_samples into dest (upload.Chunks of the region's n values),
+def new_chunks(n):
+    """n uint16 values as a tuple of array('H') of 2^CHUNK_BITS each (the
+    last shorter): a map with no block above 1 KB (upload.Chunks holds one)."""
+    size = 1 << CHUNK_BITS
+    return tuple(u16_one_block(min(size, n - o)) for o in range(0, n, size))
+
+
+def fill_chunks(vals, fit, n, chunks):
+    """fill_samples into chunks (new_chunks(n): the region's n values),
     chunk by chunk: no block of more than 1 KB for any samples region (a
     tiled or stretched full screen was one 38.4 KB block, which a playing
     Pico's heap often does not have in one piece). An upload's values are
@@ -171,19 +178,19 @@ def fill_chunks(vals, fit, n, dest):
     tile = fit == "tile" or m == 1 or n == 1
     src = getattr(vals, "chunks", None) if getattr(vals, "CHUNKS", False) else None
     c = core()
-    if src is None and c and len(dest.chunks) <= 128:
+    if src is None and c and len(chunks) <= 128:
         # the C core (texel_core.c tc_samples): 1.7 us a position in viper on an RP2040
-        c.samples(dest.chunks, CHUNK_BITS, n, vals if type(vals) is array else
+        c.samples(chunks, CHUNK_BITS, n, vals if type(vals) is array else
                   array("H", vals), m, 0 if tile else 1)
         return
     if src is None and _fast():
         from ..scene_viper import fill_chunks as fast_chunks
-        if fast_chunks(vals, fit, n, dest.chunks):  # one viper call for every chunk
+        if fast_chunks(vals, fit, n, chunks):       # one viper call for every chunk
             return
         if type(vals) is tuple and array is not None:
             vals = array("H", vals)         # once (viper reads arrays): m <= 512 from the host
     o = 0
-    for c in dest.chunks:
+    for c in chunks:
         L = len(c)
         if src is not None and tile:
             at = 0
@@ -237,9 +244,8 @@ def block(tex, n, engine):
 def store(tex, n, engine):
     if plays_as_is(tex, n):
         return K_CHUNK, tex["u16"].chunks, None     # the upload itself, exactly region-long
-    from ..upload import Chunks
-    ch = Chunks(n)
-    return K_CHUNK, ch.chunks, ch
+    ch = new_chunks(n)
+    return K_CHUNK, ch, ch
 
 
 def fill(tex, n, target, engine, dx_um):
