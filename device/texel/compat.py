@@ -154,7 +154,7 @@ def native(module, name):
 # texelpad deploy puts in /lib on a stock board of its architecture. CORE_API
 # is what this package calls; another module (a board deployed by an older
 # texelpad) is not used: the viper and Python twins give the same integers.
-CORE_API = 4
+CORE_API = 5
 _core = None
 
 

@@ -215,6 +215,18 @@ def test_the_firmware_plans_and_renders_format_2_in_c_as_cpython_does(pico):
     assert got == want and viper == []
 
 
+def test_the_firmware_texel_check_is_the_python_check_in_float32(pico):
+    """The firmware's texel_check (the C core's fast path for a scene's texel
+    regions, in the RP2040's float32) gives the Python check's canonical
+    texture - keys, values, types - or leaves the texture to it."""
+    from support import texel_check
+    with _connect(pico.port) as b:
+        out = b.link.exec(texel_check.script(texel_check.cases(300, seed=3)), timeout=300)
+    info = json.loads(out.strip().splitlines()[-1])
+    assert info["build"] == "firmware" and info["bad"] == [], info["bad"][:3]
+    assert info["fast"] > 60 and info["fallback_ok"] <= 3, info
+
+
 def test_a_bad_push_is_refused_and_the_scene_kept(pico):
     from texelpad.link.transport import LinkError
     good = {"regions": [{"start_mm": 0, "end_mm": 50.88,

@@ -414,6 +414,48 @@ def test_the_c_refresh_is_the_viper_refresh_word_for_word(x64_module):
     assert info["same"] == info["n"], info
 
 
+def test_c_grid_is_grid_py_where_it_decides():
+    """check_core.h tc_grid (the texel check's fast path) against gen/grid.py
+    on CPython's double: where it gives a point, on_grid gives it without
+    refusing and _in_range keeps it; it leaves to Python every tie within
+    GRID_TIE and every point outside the range - and only those."""
+    from texel.gen.grid import GRID_TIE, on_grid, _in_range
+    r = random.Random(11)
+    vals = [0.0, -0.0, 19.747, -20.0, 94.339, 94.3396, 94.3394, 0.0105, 0.0095, 12.3455,
+            -12.3455, 12.34549, 12.34551, 12.3459, 1e-9, 999.9995]
+    vals += [round(r.uniform(-30, 95), r.choice((2, 3, 4, 5, 7))) for _ in range(20000)]
+    vals += [k / 1000.0 + d for k in range(-30000, 95000, 7) for d in (0.0, 0.00049, 0.0000051)]
+    lo, hi = -20.0, 94.339
+    decided = 0
+    for v in vals:
+        got = core_c.grid(v, GRID_TIE, lo, hi)
+        try:
+            want: float | None = on_grid("k", v)
+        except ValueError:
+            want = None
+        if want is not None and _in_range(want, lo, hi) != want:
+            want = None                 # _in_range moves it: Python's to decide
+        assert got == want, v
+        decided += got is not None
+    assert decided > 0.6 * len(vals)       # (a third of the swept values sit on ties)
+
+
+def test_native_texel_check_is_the_python_check(x64_module, tmp_path):
+    """The x64 native module's texel_check (a scene's texel regions) on the
+    unix port: the same canonical dict, keys, values and types as the Python
+    check, or None and the Python check decides - over the hard cases and
+    3,000 mixed textures; every valid texture but a grid point _in_range
+    moves takes the fast path."""
+    from support import texel_check
+    lit = tmp_path / "cases.txt"
+    lit.write_text(repr(texel_check.cases(3000)))
+    info = mpy.run_json(texel_check.script(path=str(lit)),
+                        exe=toolchain.require_micropython(), heapsize="8M", timeout=300,
+                        extra_path=str(x64_module))
+    assert info["build"] == "native" and info["bad"] == [], info["bad"][:3]
+    assert info["fast"] > 500 and info["fallback_ok"] <= 0.01 * info["n"], info
+
+
 def test_an_old_native_module_is_not_used(tmp_path):
     """A /lib/_texelcore.mpy of another API (a board deployed by another
     texelpad) is passed over: the viper loops run, with the same plan."""

@@ -607,6 +607,23 @@ def test_format2_plan_bit_for_bit_on_the_chip_and_a_refused_push_changes_nothing
         assert st2["refreshes"] > n0 and st2["overruns"] == st["overruns"]
 
 
+def test_the_native_texel_check_is_the_python_check_in_float32(port):
+    """The armv6m native module's texel_check (a scene's texel regions,
+    libgcc's float32 on a stock Pico) gives the Python check's canonical
+    texture, or leaves the texture to it: hard cases and mixed textures."""
+    import json
+    from texelpad.firmware import natmod
+    from support import texel_check
+    if natmod.missing("armv6m") and not os.environ.get("CI"):
+        pytest.skip("deploy could not build the native module here")
+    _playing(port)
+    with texelpad.connect(port, timeout=60) as b:
+        out = b.link.exec(texel_check.script(texel_check.cases(120, seed=9)), timeout=300)
+    info = json.loads(out.strip().splitlines()[-1])
+    assert info["build"] == "native" and info["bad"] == [], info["bad"][:3]
+    assert info["fast"] > 20 and info["fallback_ok"] <= 2, info
+
+
 _BRUSH = {"k": [8.0] + [1.5 + 0.1 * (i % 20) for i in range(96)],
           "lam": [0.5] + [0.05 / (1 + 0.04 * i) for i in range(96)], "range": [0.0, 1.0]}
 

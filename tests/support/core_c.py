@@ -23,7 +23,8 @@ from texel.gen.rng import Rng
 from . import mpy
 
 CORE = mpy.ROOT / "device" / "cmod" / "texelcore"
-SRCS = (CORE / "brush_core.c", CORE / "texel_core.c", CORE / "refresh_core.c")
+SRCS = (CORE / "brush_core.c", CORE / "texel_core.c", CORE / "refresh_core.c",
+        CORE / "check_core.c")
 _LIB = None
 
 
@@ -35,7 +36,8 @@ def lib() -> ctypes.CDLL:
     global _LIB
     if _LIB is None:
         h = hashlib.sha256()
-        for f in SRCS + (CORE / "brush_core.h", CORE / "texel_core.h", CORE / "refresh_core.h"):
+        for f in SRCS + (CORE / "brush_core.h", CORE / "texel_core.h", CORE / "refresh_core.h",
+                         CORE / "check_core.h"):
             h.update(f.read_bytes())
         out = Path(tempfile.gettempdir()) / ("texelpad-core-%s.so" % h.hexdigest()[:16])
         if not out.exists():
@@ -142,3 +144,12 @@ def options(plan, ys: array, dmin: int, flags: int, tries: int) -> tuple[int, in
     plan.t28[:] = t28
     plan.d28[:] = d28
     return out[0], out[1], out[2]
+
+
+def grid(value: float, tie: float, lo: float, hi: float) -> float | None:
+    """check_core.h tc_grid (CPython's double): the grid point, or None where
+    it leaves the value to gen/grid.py."""
+    out = ctypes.c_double()
+    f = lib().tc_grid_c
+    f.argtypes = [ctypes.c_double] * 4 + [ctypes.POINTER(ctypes.c_double)]
+    return out.value if f(value, tie, lo, hi, ctypes.byref(out)) else None

@@ -8,6 +8,8 @@
                       (int)(have), (int)(need))
 #define TC_FREE(ptr, bytes) m_del(uint8_t, ptr, bytes)
 #define TC_ARRAY_TYPE (&mp_type_array)
+#define TC_FLOAT_TYPE (&mp_type_float)
+#define TC_INT_TYPE (&mp_type_int)
 
 #include "texelcore_api.h"
 
@@ -23,6 +25,7 @@ static const mp_rom_map_elem_t texelcore_globals_table[] = {
     { MP_ROM_QSTR(MP_QSTR_options), MP_ROM_PTR(&tc_options_obj) },
     { MP_ROM_QSTR(MP_QSTR_refresh), MP_ROM_PTR(&tc_refresh_obj) },
     { MP_ROM_QSTR(MP_QSTR_refresh_entry), MP_ROM_PTR(&tc_refresh_entry_obj) },
+    { MP_ROM_QSTR(MP_QSTR_texel_check), MP_ROM_PTR(&tc_texel_check_obj) },
     { MP_ROM_QSTR(MP_QSTR_BUILD), MP_ROM_QSTR(MP_QSTR_firmware) },
     { MP_ROM_QSTR(MP_QSTR_API), MP_ROM_INT(TC_API) },
 };

@@ -12,6 +12,10 @@
 #define TC_ARRAY_TYPE ((const mp_obj_type_t *)MP_OBJ_TO_PTR(mp_load_attr( \
     mp_import_name(MP_QSTR_array, mp_const_none, MP_OBJ_NEW_SMALL_INT(0)), MP_QSTR_array)))
 
+// the float and int types, from the builtins (a native module has no &mp_type_float)
+#define TC_FLOAT_TYPE ((const mp_obj_type_t *)MP_OBJ_TO_PTR(mp_load_global(MP_QSTR_float)))
+#define TC_INT_TYPE ((const mp_obj_type_t *)MP_OBJ_TO_PTR(mp_load_global(MP_QSTR_int)))
+
 #include "texelcore_api.h"
 
 // gcc emits memset/memcpy calls for the C core's zeroed arrays and copies; a
@@ -36,6 +40,7 @@ mp_obj_t mpy_init(mp_obj_fun_bc_t *self, size_t n_args, size_t n_kw, mp_obj_t *a
     mp_store_global(MP_QSTR_options, MP_OBJ_FROM_PTR(&tc_options_obj));
     mp_store_global(MP_QSTR_refresh, MP_OBJ_FROM_PTR(&tc_refresh_obj));
     mp_store_global(MP_QSTR_refresh_entry, MP_OBJ_FROM_PTR(&tc_refresh_entry_obj));
+    mp_store_global(MP_QSTR_texel_check, MP_OBJ_FROM_PTR(&tc_texel_check_obj));
     mp_store_global(MP_QSTR_BUILD, MP_OBJ_NEW_QSTR(MP_QSTR_native));
     mp_store_global(MP_QSTR_API, MP_OBJ_NEW_SMALL_INT(TC_API));
     MP_DYNRUNTIME_INIT_EXIT

@@ -11,10 +11,12 @@
 #include "brush_core.h"
 #include "texel_core.h"
 #include "refresh_core.h"
+#define TC_FLOAT mp_float_t
+#include "check_core.h"
 
 // The functions and arguments below, as texel.compat.CORE_API expects them:
 // bump both with any change, so a board's older native module is not used.
-#define TC_API 4
+#define TC_API 5
 #define MAX_CHUNKS 128          // 65,536 values of 512 (a full screen is 38 chunks)
 #define TC_U16_VALS 19200       // kinds/samples.py MAX_SAMPLES
 #define TC_TAB_I32 (512 + 32 * 32 + 1)     // plan_int_tables.table(): EXP_HI, EXP_MID, NORM
@@ -234,3 +236,211 @@ static mp_obj_t tc_u16_fn(mp_obj_t n_in) {
     return MP_OBJ_FROM_PTR(o);
 }
 static MP_DEFINE_CONST_FUN_OBJ_1(tc_u16_obj, tc_u16_fn);
+
+// texel_check(tex, spec) -> the canonical texel texture, or None: the fast path
+// of texel/runtime/kinds/texel.py check (through gen/params.py validate and
+// gen/grid.py), for the textures it accepts as they come - floats and ints in
+// range, None where allowed, the phase words. Anything else (an unknown key,
+// a bool, a string where a number goes, a value out of range or on a grid
+// tie, min_cpmm not below the band limit, a float key given a huge int)
+// returns None, and the Python path words the refusal or decides: one place
+// holds the messages. tex: a dict (the caller checks type(tex) is dict).
+// spec: kinds/texel.py _c_spec(): (tie, quant_min, then lo, hi, default for
+// each of TC_CK_NUM keys in TC_CK_NAMES' order from pitch_db) - Python's own
+// objects, so bounds compare as Python compares them.
+#define TC_CK_KIND 0
+#define TC_CK_QUANT 4
+#define TC_CK_GAIN 6
+#define TC_CK_V 7
+#define TC_CK_BAND 8
+#define TC_CK_MIN 9
+#define TC_CK_PHASE 10
+#define TC_CK_NUM 9                     // pitch_db .. min_cpmm
+#define TC_CK_KEYS 11
+// the keys, NUL-separated in index order (no pointer table: a native module's
+// data holds no relocated pointers; no libc strlen/memcmp there either)
+static const char tc_ck_names[] = "kind\0pitch_db\0irregularity_db\0texel_samples\0quant_db\0"
+    "seed\0gain\0v\0band_limit_cpmm\0min_cpmm\0phase\0";
+// 'f' a number (int accepted, made a float), 'i' an int, 'n' a number or None
+static const char tc_ck_kinds[TC_CK_KEYS + 1] = "?ffififinnw";
+
+static qstr tc_ck_qstr(int i) {
+    switch (i) {
+        case 1: return MP_QSTR_pitch_db;
+        case 2: return MP_QSTR_irregularity_db;
+        case 3: return MP_QSTR_texel_samples;
+        case 4: return MP_QSTR_quant_db;
+        case 5: return MP_QSTR_seed;
+        case 6: return MP_QSTR_gain;
+        case 7: return MP_QSTR_v;
+        case 8: return MP_QSTR_band_limit_cpmm;
+        default: return MP_QSTR_min_cpmm;
+    }
+}
+
+// s (n bytes) is the NUL-terminated word w
+static int tc_ck_is(const char *s, size_t n, const char *w) {
+    size_t k = 0;
+    while (k < n && w[k] != 0 && w[k] == s[k]) {
+        k++;
+    }
+    return k == n && w[k] == 0;
+}
+
+// index of key k in tc_ck_names, or -1
+static int tc_ck_key(mp_obj_t k) {
+    if (!mp_obj_is_str(k)) {
+        return -1;
+    }
+    size_t n;
+    const char *s = mp_obj_str_get_data(k, &n);
+    const char *w = tc_ck_names;
+    for (int i = 0; i < TC_CK_KEYS; i++) {
+        if (tc_ck_is(s, n, w)) {
+            return i;
+        }
+        while (*w++ != 0) {
+        }
+    }
+    return -1;
+}
+
+static int tc_ck_word(mp_obj_t v, const char *w) {
+    if (!mp_obj_is_str(v)) {
+        return 0;
+    }
+    size_t n;
+    const char *s = mp_obj_str_get_data(v, &n);
+    return tc_ck_is(s, n, w);
+}
+
+static mp_obj_t tc_texel_check_fn(mp_obj_t tex_in, mp_obj_t spec_in) {
+    size_t ns;
+    mp_obj_t *spec;
+    mp_obj_get_array(spec_in, &ns, &spec);
+    if (ns != 2 + 3 * TC_CK_NUM) {
+        mp_raise_ValueError(MP_ERROR_TEXT("texel_check: spec has the wrong length"));
+    }
+    const mp_obj_type_t *float_type = TC_FLOAT_TYPE;
+    const mp_obj_type_t *int_type = TC_INT_TYPE;
+    mp_obj_t val[TC_CK_KEYS];
+    for (int i = 0; i < TC_CK_KEYS; i++) {
+        val[i] = MP_OBJ_NULL;
+    }
+    mp_map_t *map = &((mp_obj_dict_t *)MP_OBJ_TO_PTR(tex_in))->map;
+    for (size_t j = 0; j < map->alloc; j++) {
+        if (!mp_map_slot_is_filled(map, j)) {
+            continue;
+        }
+        int i = tc_ck_key(map->table[j].key);
+        if (i < 0) {
+            return mp_const_none;       // unknown (length_samples too): Python words it
+        }
+        val[i] = map->table[j].value;
+    }
+    if (val[1] == MP_OBJ_NULL || val[2] == MP_OBJ_NULL) {
+        return mp_const_none;           // a required key missing
+    }
+    mp_float_t tie = mp_obj_get_float(spec[0]);
+    mp_float_t quant_min = mp_obj_get_float(spec[1]);
+    mp_obj_t out[TC_CK_KEYS];
+    mp_float_t f[TC_CK_KEYS];           // the float keys' values, as floats
+    for (int i = 1; i <= TC_CK_NUM; i++) {
+        mp_obj_t lo = spec[2 + 3 * (i - 1)], hi = spec[3 + 3 * (i - 1)];
+        mp_obj_t v = val[i];
+        char kind = tc_ck_kinds[i];
+        if (v == MP_OBJ_NULL) {
+            v = spec[4 + 3 * (i - 1)];  // the default (None for the bounds)
+            out[i] = v;
+            if (v != mp_const_none && kind != 'i') {
+                f[i] = mp_obj_get_float(v);
+            }
+            continue;
+        }
+        if (kind == 'i') {
+            // an int (small or big; a bool is neither) in [lo, hi], kept as is
+            if (!(mp_obj_is_small_int(v) || mp_obj_get_type(v) == int_type)) {
+                return mp_const_none;
+            }
+            if (mp_obj_is_small_int(v) && mp_obj_is_small_int(lo) && mp_obj_is_small_int(hi)) {
+                mp_int_t x = MP_OBJ_SMALL_INT_VALUE(v);
+                if (x < MP_OBJ_SMALL_INT_VALUE(lo) || x > MP_OBJ_SMALL_INT_VALUE(hi)) {
+                    return mp_const_none;
+                }
+            } else if (mp_binary_op(MP_BINARY_OP_LESS_EQUAL, lo, v) != mp_const_true ||
+                       mp_binary_op(MP_BINARY_OP_LESS_EQUAL, v, hi) != mp_const_true) {
+                return mp_const_none;
+            }
+            out[i] = v;
+            continue;
+        }
+        if (v == mp_const_none && kind == 'n') {
+            out[i] = v;
+            continue;
+        }
+        mp_float_t x;
+        if (mp_obj_get_type(v) == float_type) {
+            x = mp_obj_get_float(v);
+            out[i] = v;                 // params.check_value returns a float as is
+        } else if (mp_obj_is_small_int(v)) {
+            x = (mp_float_t)MP_OBJ_SMALL_INT_VALUE(v);
+            out[i] = MP_OBJ_NULL;       // float(value), made below
+        } else {
+            return mp_const_none;       // a bool, a big int, a str, None ...
+        }
+        // in range (NaN fails both); quant_db: 0 (off) or >= QUANT_DB_MIN
+        if (!(x >= mp_obj_get_float(lo) && x <= mp_obj_get_float(hi))) {
+            return mp_const_none;
+        }
+        if (i == TC_CK_QUANT && x != 0 && !(x >= quant_min)) {
+            return mp_const_none;
+        }
+        f[i] = x;
+        if (out[i] == MP_OBJ_NULL) {
+            out[i] = mp_obj_new_float(x);
+        }
+    }
+    // the phase: one of its words; the default ("continuous") is left out
+    int reset = 0;
+    if (val[TC_CK_PHASE] != MP_OBJ_NULL) {
+        if (tc_ck_word(val[TC_CK_PHASE], "reset")) {
+            reset = 1;
+        } else if (!tc_ck_word(val[TC_CK_PHASE], "continuous")) {
+            return mp_const_none;
+        }
+    }
+    // format 2: the grid (gen/grid.py to_grid: its keys that are not None)
+    if (mp_obj_is_small_int(out[TC_CK_V]) && MP_OBJ_SMALL_INT_VALUE(out[TC_CK_V]) == 2) {
+        static const uint8_t grid_keys[5] = {1, 2, TC_CK_QUANT, TC_CK_BAND, TC_CK_MIN};
+        for (int j = 0; j < 5; j++) {
+            int i = grid_keys[j];
+            if (out[i] == mp_const_none) {
+                continue;
+            }
+            mp_float_t g;
+            if (!tc_grid(f[i], tie, mp_obj_get_float(spec[2 + 3 * (i - 1)]),
+                         mp_obj_get_float(spec[3 + 3 * (i - 1)]), &g)) {
+                return mp_const_none;   // a tie (refused) or moved into range: Python
+            }
+            f[i] = g;
+            out[i] = mp_obj_new_float(g);
+        }
+    }
+    if (out[TC_CK_MIN] != mp_const_none && out[TC_CK_BAND] != mp_const_none &&
+        !(f[TC_CK_MIN] < f[TC_CK_BAND])) {
+        return mp_const_none;           // min_cpmm not below the band limit: refused
+    }
+    mp_obj_t d = mp_obj_new_dict(TC_CK_KEYS);
+    mp_obj_dict_store(d, MP_OBJ_NEW_QSTR(MP_QSTR_kind), MP_OBJ_NEW_QSTR(MP_QSTR_texel));
+    for (int i = 1; i <= TC_CK_BAND; i++) {
+        mp_obj_dict_store(d, MP_OBJ_NEW_QSTR(tc_ck_qstr(i)), out[i]);
+    }
+    if (out[TC_CK_MIN] != mp_const_none) {
+        mp_obj_dict_store(d, MP_OBJ_NEW_QSTR(MP_QSTR_min_cpmm), out[TC_CK_MIN]);
+    }
+    if (reset) {
+        mp_obj_dict_store(d, MP_OBJ_NEW_QSTR(MP_QSTR_phase), val[TC_CK_PHASE]);
+    }
+    return d;
+}
+static MP_DEFINE_CONST_FUN_OBJ_2(tc_texel_check_obj, tc_texel_check_fn);

@@ -34,7 +34,7 @@ from .. import image, toolchain
 ARCHS = {"armv6m": "rp2 (RP2040)", "armv7emsp": "stm32 (STM32F4)", "x64": "the virtual board"}
 SOURCE_DIR = image.PACKAGE_DIR.parent / "cmod" / "texelcore"
 SOURCES = ("natmod.c", "texelcore_api.h", "brush_core.c", "brush_core.h", "texel_core.c",
-           "texel_core.h", "refresh_core.c", "refresh_core.h", "Makefile")
+           "texel_core.h", "refresh_core.c", "refresh_core.h", "check_core.h", "Makefile")
 SHIPPED_DIR = image.PACKAGE_DIR / "native"      # a wheel's prebuilt files, if any
 REMOTE = image.LIB + "/_texelcore.mpy"           # on the board: sys.path has /lib
 # Bump when the way the module is built changes: part of the cache key.

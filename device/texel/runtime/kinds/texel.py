@@ -29,7 +29,45 @@ SHARED = False              # rendered by an engine: the same texture may be ask
 PLAN_MAX_L = 65535
 
 
+# The C core's fast path (texelcore_api.h texel_check): the canonical texture of
+# a texture it accepts as it comes, else None and the checks below decide and
+# word the refusal. 0.2 of a Pico's 2.6 ms a region (bench/firmware.py);
+# tests/gen/test_texel_check.py holds the two to the same dicts.
+_fast = None                # the core's texel_check, False where there is none
+_spec = None                # its spec: Python's own bounds and defaults (_c_spec)
+C_KEYS = ("pitch_db", "irregularity_db", "texel_samples", "quant_db", "seed", "gain", "v",
+          "band_limit_cpmm", "min_cpmm")        # texelcore_api.h tc_ck_names' order
+
+
+def _c_spec():
+    from ...gen import params as P
+    from ...gen.grid import GRID_TIE
+    out = [GRID_TIE, P.QUANT_DB_MIN]
+    for k in C_KEYS:
+        kind, default, lo, hi = P.SPEC[k] if k in P.SPEC else P.OPTION_SPEC[k]
+        out += [lo, hi, default]
+    return tuple(out)
+
+
+def fast_check(tex):
+    """The C core's canonical texture of tex (a dict), or None: none there,
+    or one it leaves to check() (every refusal)."""
+    global _fast, _spec
+    if _fast is None:
+        from ...compat import core
+        c = core()
+        _fast = (c and getattr(c, "texel_check", None)) or False
+        if _fast:
+            _spec = _c_spec()
+    if _fast and type(tex) is dict:
+        return _fast(tex, _spec)
+    return None
+
+
 def check(path, tex, n):
+    c = fast_check(tex)
+    if c is not None:
+        return c
     if "length_samples" in tex:
         fail(path + ".length_samples", "set by the region (here %d samples); remove it" % n)
     # (the unknown-key message lists KEYS and the options: tests/runtime/

@@ -1,0 +1,102 @@
+"""The C core's texel_check (device/cmod/texelcore/texelcore_api.h) against
+the Python checks it stands in for (runtime/kinds/texel.py check): textures
+that test both, and the script that runs both on a MicroPython with the core
+(the unix port with the x64 native module, the firmware on the emulated
+Pico: its float32) and prints what it found.
+
+Every texture either gets the same canonical dict from both - the same keys,
+values and types - or the fast path returns None and the Python path decides.
+The cases: the hard ones by hand (range edges, grid ties within GRID_TIE,
+format 2's Nyquist point, ints in float keys, bools, big ints, None, NaN,
+words) and random ones that mix them."""
+from __future__ import annotations
+
+import random
+
+_EDGES = [0, 1, -1, 2, 0.0, 1.0, -0.5, 19.747, 19.7475, 19.748, -20.0, -20.0005, 5.0, -30.0,
+          20.0, 0.001, 0.0005, 0.0009999, 94.339, 94.3396, 94.34, 0.01, 0.0099, True, False,
+          None, "x", "reset", "continuous", "nan", "inf", 1 << 29, 1 << 30, 1 << 31,
+          (1 << 32) - 1, 1 << 32, 1 << 70, 50, 1048576, 1048577, 3.0, 2.5, 1.5, 12.3455,
+          12.3445, 12.3450000001, 12.34549, 12.34551, -12.9, 0.0125, 0.0115, [1.0], {}]
+_KEYS = ["pitch_db", "irregularity_db", "texel_samples", "quant_db", "seed", "gain", "v",
+         "band_limit_cpmm", "min_cpmm", "phase", "length_samples", "bogus", 7]
+_FLOATS = ("band_limit_cpmm", "min_cpmm", "quant_db", "gain", "pitch_db", "irregularity_db")
+
+
+def _value(r: random.Random, k) -> object:
+    if r.random() < 0.6:
+        return r.choice(_EDGES)
+    if k in _FLOATS:
+        return round(r.uniform(0.01, 94.339), r.choice((2, 3, 4, 6)))
+    return r.choice((1, 2, 7, 50, 4096, r.randrange(1 << 32)))
+
+
+def cases(n: int, seed: int = 5) -> list[dict]:
+    """n textures (dicts as a scene's region holds them; "nan"/"inf" stand
+    for the floats, which a literal cannot carry: the script makes them)."""
+    r = random.Random(seed)
+    out = [{"kind": "texel", "pitch_db": 6.0, "irregularity_db": -12.9, "seed": 7, "v": 2},
+           {"kind": "texel", "pitch_db": 6.0, "irregularity_db": -12.9, "v": 1},
+           {"kind": "texel", "pitch_db": 19.747, "irregularity_db": 5.0, "texel_samples": 1,
+            "quant_db": 0.001, "seed": 4294967295, "gain": 0, "band_limit_cpmm": 94.339,
+            "min_cpmm": 94.338, "phase": "reset"},
+           {"kind": "texel", "pitch_db": -20, "irregularity_db": -30, "min_cpmm": None,
+            "band_limit_cpmm": None, "phase": "continuous"},
+           {"kind": "texel", "pitch_db": 1.0, "irregularity_db": -3.0, "min_cpmm": 5.0,
+            "band_limit_cpmm": 5.0}]
+    while len(out) < n:
+        t = {"kind": "texel",
+             "pitch_db": round(r.uniform(-20, 19.747), r.choice((0, 1, 2, 3, 4, 6))),
+             "irregularity_db": round(r.uniform(-30, 5), r.choice((1, 3, 5)))}
+        for k in r.sample(_KEYS, r.randrange(0, 5)):
+            t[k] = _value(r, k)
+        if len(out) % 3 == 0:
+            t["v"] = r.choice((1, 2, 2))
+        if len(out) % 11 == 0:
+            t.pop("pitch_db")
+        out.append(t)
+    return out
+
+
+# Runs on MicroPython with texel importable; %(cases)s is cases()' list as a
+# literal, or an expression that reads one (script(path=)).
+SCRIPT = r"""
+import json
+from texel.runtime.kinds import texel as KT
+from texel import compat
+_F = {"nan": float("nan"), "inf": float("inf")}
+def real(t):
+    return dict((k, _F.get(v, v) if isinstance(v, str) else v) for k, v in t.items())
+def slow(tex):
+    f = KT._fast
+    KT._fast = False
+    try:
+        return ("ok", KT.check("t", tex, 5000))
+    except ValueError as e:
+        return ("err", str(e))
+    finally:
+        KT._fast = f
+c = compat.core()
+info = {"build": c and c.BUILD, "n": 0, "fast": 0, "fallback_ok": 0, "bad": []}
+for t in %(cases)s:
+    tex = real(t)
+    f = KT.fast_check(tex)
+    s = slow(tex)
+    info["n"] += 1
+    if f is None:
+        info["fallback_ok"] += s[0] == "ok"
+        continue
+    info["fast"] += 1
+    if s[0] != "ok" or s[1] != f or sorted(f) != sorted(s[1]) or \
+            [type(f[k]).__name__ for k in sorted(f)] != [type(s[1][k]).__name__ for k in sorted(f)]:
+        info["bad"].append([repr(t), repr(f), repr(s)])
+print(json.dumps(info))
+"""
+
+
+def script(cases_: list[dict] | None = None, path: str | None = None) -> str:
+    """SCRIPT over cases_ inline, or over the literal in the file at path
+    (a long list: a command line has a length limit)."""
+    if path is not None:
+        return SCRIPT % {"cases": "eval(open(%r).read())" % path}
+    return SCRIPT % {"cases": repr(cases_)}
