@@ -215,16 +215,22 @@ def test_the_firmware_plans_and_renders_format_2_in_c_as_cpython_does(pico):
     assert got == want and viper == []
 
 
-def test_the_firmware_texel_check_is_the_python_check_in_float32(pico):
-    """The firmware's texel_check (the C core's fast path for a scene's texel
-    regions, in the RP2040's float32) gives the Python check's canonical
-    texture - keys, values, types - or leaves the texture to it."""
+def test_the_firmware_texel_and_region_checks_are_the_python_checks_in_float32(pico):
+    """The firmware's texel_check and region_check (the C core's fast paths
+    for a scene's regions, in the RP2040's float32) give the Python checks'
+    canonical texture and scene - keys, values, types - or leave them to it."""
     from support import texel_check
     with _connect(pico.port) as b:
         out = b.link.exec(texel_check.script(texel_check.cases(300, seed=3)), timeout=300)
     info = json.loads(out.strip().splitlines()[-1])
     assert info["build"] == "firmware" and info["bad"] == [], info["bad"][:3]
     assert info["fast"] > 60 and info["fallback_ok"] <= 3, info
+    # and scene.py's region_check: the same canonical scenes or refusals
+    with _connect(pico.port) as b:
+        out = b.link.exec(texel_check.scene_script(texel_check.scenes(60, seed=4)), timeout=300)
+    info = json.loads(out.strip().splitlines()[-1])
+    assert info["fast_region"] and info["bad"] == [], info["bad"][:3]
+    assert info["ok"] > 10, info
 
 
 def test_a_bad_push_is_refused_and_the_scene_kept(pico):

@@ -440,6 +440,25 @@ def test_c_grid_is_grid_py_where_it_decides():
     assert decided > 0.6 * len(vals)       # (a third of the swept values sit on ties)
 
 
+def test_c_plan_constants_are_plan_ints():
+    """texelcore_api.h plan's integers on CPython: tc_mdb is grid.mdb,
+    tc_plan_consts PlanInt's mu, sigma, q and dcap, tc_seeded plan_int.seeded
+    - over the hard cases and the random sets (the seeds' whole range)."""
+    from texel.gen.grid import mdb
+    for name, p in CASES.items():
+        pl = P.PlanInt(texel.validate(p))
+        c = pl.params
+        ms = [core_c.mdb(c[k]) for k in ("pitch_db", "irregularity_db", "quant_db")]
+        assert ms == [mdb(c[k]) for k in ("pitch_db", "irregularity_db", "quant_db")], name
+        cap = core_c.mdb(c["band_limit_cpmm"]) if c["band_limit_cpmm"] is not None else 0
+        assert core_c.plan_consts(*ms, cap) == [pl.mu, pl.sigma, pl.q, pl.dcap], name
+        assert core_c.seeded(c["seed"]) == list(P.seeded(c["seed"])), name
+    r = random.Random(3)
+    for v in [0.0, -0.0, 0.0005, -0.0005, 19.747, -20.0, 94.339] + \
+            [round(r.uniform(-30, 95), 3) for _ in range(5000)]:
+        assert core_c.mdb(v) == mdb(v), v
+
+
 def test_native_texel_check_is_the_python_check(x64_module, tmp_path):
     """The x64 native module's texel_check (a scene's texel regions) on the
     unix port: the same canonical dict, keys, values and types as the Python
@@ -454,6 +473,23 @@ def test_native_texel_check_is_the_python_check(x64_module, tmp_path):
                         extra_path=str(x64_module))
     assert info["build"] == "native" and info["bad"] == [], info["bad"][:3]
     assert info["fast"] > 500 and info["fallback_ok"] <= 0.01 * info["n"], info
+    assert info["plans"] > 200, info            # plan_of in one C call: PlanInt's
+
+
+def test_native_region_check_is_the_python_scene_check(x64_module, tmp_path):
+    """scene.py's checks with the x64 native module's region_check and
+    texel_check and without them (the unix port): the same canonical scene,
+    spans and types, or the same refusal word for word - over 1,000 scenes
+    of edges (boundaries as ints, bools, NaN, at and past the display's end,
+    rounding to no position, extra and missing keys, overlaps)."""
+    from support import texel_check
+    lit = tmp_path / "scenes.txt"
+    lit.write_text(repr(texel_check.scenes(1000)))
+    info = mpy.run_json(texel_check.scene_script(path=str(lit)),
+                        exe=toolchain.require_micropython(), heapsize="16M", timeout=300,
+                        extra_path=str(x64_module))
+    assert info["fast_region"] and info["bad"] == [], info["bad"][:3]
+    assert info["ok"] > 150, info
 
 
 def test_an_old_native_module_is_not_used(tmp_path):

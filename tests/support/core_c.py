@@ -153,3 +153,28 @@ def grid(value: float, tie: float, lo: float, hi: float) -> float | None:
     f = lib().tc_grid_c
     f.argtypes = [ctypes.c_double] * 4 + [ctypes.POINTER(ctypes.c_double)]
     return out.value if f(value, tie, lo, hi, ctypes.byref(out)) else None
+
+
+def plan_consts(pitch_mdb: int, irreg_mdb: int, quant_mdb: int, cap_mc: int) -> list[int]:
+    """texel_core.c tc_plan_consts: PlanInt's mu, sigma, q, dcap."""
+    out = (ctypes.c_int32 * 4)()
+    tab = array("i", table())
+    lib().tc_plan_consts(ctypes.c_int32(pitch_mdb), ctypes.c_int32(irreg_mdb),
+                         ctypes.c_int32(quant_mdb), ctypes.c_int32(cap_mc),
+                         ctypes.c_void_p(_ptr(tab)), out)
+    return list(out)
+
+
+def seeded(seed: int) -> list[int]:
+    """texel_core.c tc_seeded: plan_int.seeded's 10 halves."""
+    st = (ctypes.c_uint16 * 10)()
+    lib().tc_seeded(ctypes.c_uint32(seed), st)
+    return list(st)
+
+
+def mdb(value: float) -> int:
+    """check_core.h tc_mdb (double): gen/grid.py mdb."""
+    f = lib().tc_mdb_c
+    f.argtypes = [ctypes.c_double]
+    f.restype = ctypes.c_int32
+    return f(value)

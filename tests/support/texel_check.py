@@ -77,7 +77,7 @@ def slow(tex):
     finally:
         KT._fast = f
 c = compat.core()
-info = {"build": c and c.BUILD, "n": 0, "fast": 0, "fallback_ok": 0, "bad": []}
+info = {"build": c and c.BUILD, "n": 0, "fast": 0, "fallback_ok": 0, "plans": 0, "bad": []}
 for t in %(cases)s:
     tex = real(t)
     f = KT.fast_check(tex)
@@ -90,6 +90,18 @@ for t in %(cases)s:
     if s[0] != "ok" or s[1] != f or sorted(f) != sorted(s[1]) or \
             [type(f[k]).__name__ for k in sorted(f)] != [type(s[1][k]).__name__ for k in sorted(f)]:
         info["bad"].append([repr(t), repr(f), repr(s)])
+        continue
+    # and plan_of: the C core's plan in one call against PlanInt's
+    n = 700 if f["texel_samples"] < 3 else 5000
+    a = KT.plan_of(f, n)
+    p, KT._plan_c = KT._plan_c, False
+    try:
+        b = KT.plan_of(f, n)
+    finally:
+        KT._plan_c = p
+    info["plans"] += 1
+    if [bytes(a[0]), bytes(a[1]), a[2], a[3]] != [bytes(b[0]), bytes(b[1]), b[2], b[3]]:
+        info["bad"].append([repr(t), "plan_of", repr(a[2:]), repr(b[2:])])
 print(json.dumps(info))
 """
 
@@ -100,3 +112,89 @@ def script(cases_: list[dict] | None = None, path: str | None = None) -> str:
     if path is not None:
         return SCRIPT % {"cases": "eval(open(%r).read())" % path}
     return SCRIPT % {"cases": repr(cases_)}
+
+
+def scenes(n: int, seed: int = 7) -> list[dict]:
+    """n scenes for scene.py's region fast path (region_check): touching and
+    overlapping regions, boundaries as floats, ints, bools, out of range, at
+    the display's end and past it by less than half a position, regions that
+    round to no position, extra and missing keys, every kind's textures."""
+    r = random.Random(seed)
+    texs = [{"kind": "texel", "pitch_db": 4.0, "irregularity_db": -12.9, "seed": 7, "v": 2},
+            {"kind": "constant", "level": 0.5}, {"kind": "reference", "name": "4sin"},
+            {"kind": "texel", "pitch_db": "x", "irregularity_db": 0.0}, {"kind": "bogus"}, 5]
+    edges = [0, 0.0, 1, 50.88, 101.76, 101.7626, 101.7627, 101.77, 102, -0.0, -1, True,
+             None, "1", "nan", 0.0026, 0.0027, 0.00265, 50.8826, 1 << 40, 7.5]
+    out = []
+    while len(out) < n:
+        if len(out) % 2:                # a partition of the display: mostly valid
+            k = r.randrange(1, 17)
+            cuts = sorted(round(r.uniform(0, 101.76), r.choice((1, 2, 3, 4))) for _ in range(k - 1))
+            cuts = [r.choice((0, 0.0))] + cuts + [r.choice((101.76, 101.7626, 101.77))]
+            out.append({"regions": [{"start_mm": cuts[j], "end_mm": cuts[j + 1],
+                                     "texture": dict(texs[r.choice((0,) * 12 + (1, 2, 3))])}
+                                    for j in range(k)]})
+            continue
+        regs = []
+        for _ in range(r.randrange(1, 5)):
+            a = r.choice(edges) if r.random() < 0.4 else round(r.uniform(0, 101.76), 3)
+            b = r.choice(edges) if r.random() < 0.4 else round(r.uniform(0, 101.76), 3)
+            if isinstance(a, float) and isinstance(b, float) and a > b and r.random() < 0.8:
+                a, b = b, a
+            t = r.choice(texs)
+            reg = {"start_mm": a, "end_mm": b, "texture": dict(t) if isinstance(t, dict) else t}
+            if r.random() < 0.05:
+                reg["extra"] = 1
+            if r.random() < 0.05:
+                del reg[r.choice(["start_mm", "end_mm", "texture"])]
+            regs.append(reg)
+        out.append({"regions": regs})
+    return out
+
+
+# scene.py's _check with the C core's fast paths and without: the same
+# canonical scene and spans, or the same refusal
+SCENE_SCRIPT = r"""
+import json
+from texel.runtime import scene as S
+from texel.runtime.kinds import texel as KT
+from texel import compat
+_F = {"nan": float("nan")}
+def real(sc):
+    for reg in sc["regions"]:
+        for k in ("start_mm", "end_mm"):
+            if reg.get(k) == "nan":
+                reg[k] = _F["nan"]
+    return sc
+def run(sc, fast):
+    f, g = S._fast, KT._fast
+    if not fast:
+        S._fast = KT._fast = False
+    try:
+        c, spans, pos, dx = S._check(sc, {"positions": 19200, "dx_um": 5.3})
+        return ("ok", repr(sorted((k, v) for k, v in c.items() if k != "regions")),
+                repr([(sorted(x), x["start_mm"], x["end_mm"], sorted(x["texture"].items()))
+                      for x in c["regions"]]), repr(spans),
+                repr([(type(x["start_mm"]).__name__, type(x["end_mm"]).__name__)
+                      for x in c["regions"]]))
+    except ValueError as e:
+        return ("err", str(e))
+    finally:
+        S._fast, KT._fast = f, g
+info = {"fast_region": bool(S._fast_region()), "n": 0, "ok": 0, "bad": []}
+for sc in %(scenes)s:
+    sc = real(sc)
+    a = run(sc, True)
+    b = run(sc, False)
+    info["n"] += 1
+    info["ok"] += a[0] == "ok"
+    if a != b:
+        info["bad"].append([repr(sc), a, b])
+print(json.dumps(info))
+"""
+
+
+def scene_script(scenes_: list[dict] | None = None, path: str | None = None) -> str:
+    if path is not None:
+        return SCENE_SCRIPT % {"scenes": "eval(open(%r).read())" % path}
+    return SCENE_SCRIPT % {"scenes": repr(scenes_)}

@@ -5,3 +5,7 @@
 int tc_grid_c(TC_FLOAT value, TC_FLOAT tie, TC_FLOAT lo, TC_FLOAT hi, TC_FLOAT *out) {
     return tc_grid(value, tie, lo, hi, out);
 }
+
+int32_t tc_mdb_c(TC_FLOAT value) {
+    return tc_mdb(value);
+}

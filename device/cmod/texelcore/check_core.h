@@ -48,7 +48,14 @@ static inline int tc_grid(TC_FLOAT value, TC_FLOAT tie, TC_FLOAT lo, TC_FLOAT hi
     return 1;
 }
 
+// grid.py mdb: value * 1000.0 rounded half away from zero (|value| < 10^6)
+static inline int32_t tc_mdb(TC_FLOAT value) {
+    TC_FLOAT v = value * (TC_FLOAT)1000.0;
+    return v >= 0 ? (int32_t)(v + (TC_FLOAT)0.5) : -(int32_t)(-v + (TC_FLOAT)0.5);
+}
+
 // For the CPython build (ctypes cannot call a static inline): the same.
 int tc_grid_c(TC_FLOAT value, TC_FLOAT tie, TC_FLOAT lo, TC_FLOAT hi, TC_FLOAT *out);
+int32_t tc_mdb_c(TC_FLOAT value);
 
 #endif

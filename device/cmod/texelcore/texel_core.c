@@ -339,3 +339,43 @@ void tc_samples(uint16_t **chunks, int32_t bits, int32_t n, const uint16_t *vals
         }
     }
 }
+
+// plan_int._round_q: Q24 octaves of mdb millidecibels, round half up (C_DB:
+// log2(10) / 10000 * 2^40; the product needs 43 bits)
+#define C_DB 365249857
+#define LOG2_LOG2_10 29058488   // plan_int.LOG2_LOG2_10
+static int32_t round_q(int32_t mdb) {
+    return (int32_t)(((int64_t)mdb * C_DB + 32768) >> 16);
+}
+
+// plan_int.exp2_q24: round(2^(y / 2^24) * 2^24)
+static int32_t exp2_q24(int32_t y, const int32_t *tab) {
+    int32_t e = y >> 24, r = y & 0xFFFFFF;
+    int32_t m = mul28(mul28(tab[r >> 16], tab[EXP_MID + ((r >> 8) & 0xFF)]),
+                      (1 << 28) + (((r & 0xFF) * LN2_Q20 + 32768) >> 16));
+    if (e >= 4) {
+        return m << (e - 4);
+    }
+    return (m + (1 << (3 - e))) >> (4 - e);
+}
+
+void tc_plan_consts(int32_t pitch_mdb, int32_t irreg_mdb, int32_t quant_mdb, int32_t cap_mc,
+                    const int32_t *tab, int32_t out[4]) {
+    out[0] = round_q(pitch_mdb);
+    out[1] = exp2_q24(LOG2_LOG2_10 + round_q(irreg_mdb), tab);
+    out[2] = round_q(quant_mdb);         // 0 for 0 (quantization off)
+    // (cap_mc * 53 * 2^28 + 5000000) // 10^7, 0 without a band limit
+    out[3] = (int32_t)(((int64_t)cap_mc * 53 * (1 << 28) + 5000000) / 10000000);
+}
+
+// plan_int.seeded with gen/rng.py SEED_CONSTS
+void tc_seeded(uint32_t seed, uint16_t st[10]) {
+    static const uint16_t c[6] = {0x9E37, 0x79B9, 0x243F, 0x6A88, 0xB7E1, 0x5162};
+    st[0] = (uint16_t)(seed >> 16);
+    st[1] = (uint16_t)(seed & 0xFFFF);
+    for (int i = 0; i < 6; i++) {
+        st[2 + i] = c[i];
+    }
+    st[8] = 0;
+    st[9] = 0;
+}

@@ -19,6 +19,14 @@ int32_t tc_texels(uint16_t st[10], int32_t count, int32_t L, int32_t mu, int32_t
                   int32_t q, int32_t dcap, const int32_t *tab, int32_t *t28, int32_t *d28,
                   int32_t *ys, int32_t *zs, int32_t keep);
 
+// PlanInt.__init__'s integers (gen/plan_int.py) from the parameters' grid
+// integers (gen/grid.py mdb: millidecibels; cap_mc the band limit in
+// milli-c/mm, 0 for none): out = mu, sigma, q, dcap. And seeded(seed)'s 10
+// halves into st (gen/rng.py SEED_CONSTS; the last two 0).
+void tc_plan_consts(int32_t pitch_mdb, int32_t irreg_mdb, int32_t quant_mdb, int32_t cap_mc,
+                    const int32_t *tab, int32_t out[4]);
+void tc_seeded(uint32_t seed, uint16_t st[10]);
+
 // gen/options.py apply_int's integer work on a plan the loop made: with
 // TC_OPT_BOUND, redraw_int (every texel below the bound dmin redrawn from the
 // stream st - Rng(seed, consts=REDRAW_CONSTS) after its warm-up, 8 halves,

@@ -444,3 +444,136 @@ static mp_obj_t tc_texel_check_fn(mp_obj_t tex_in, mp_obj_t spec_in) {
     return d;
 }
 static MP_DEFINE_CONST_FUN_OBJ_2(tc_texel_check_obj, tc_texel_check_fn);
+
+// region_check(r, lim, positions, dx_um) -> (start_mm, end_mm, start, end, texture),
+// or None: the fast path of texel/runtime/scene.py's per-region checks for a
+// region as it comes - a dict of exactly start_mm, end_mm and texture, both
+// boundaries floats or ints in [0, lim] whose positions are at most
+// `positions`, start before end, at least one position between them. The
+// positions as scene.to_position rounds them, int(mm * 1000.0 / dx_um + 0.5)
+// in the runtime's float; start_mm/end_mm as _mm_in returns them (a float as
+// is, an int made a float). Anything else: None, and the Python checks decide
+// and word the refusal. r: a dict (the caller checks type(r) is dict); lim:
+// scene.py's total_mm + 1.0 + dx_um / 500.0, a Python float.
+static int tc_rc_pos(mp_float_t x, mp_float_t dx_um, mp_int_t *pos) {
+    mp_float_t t = x * (mp_float_t)1000.0;
+    t = t / dx_um;
+    t = t + (mp_float_t)0.5;
+    if (!(t >= 0 && t < (mp_float_t)(1 << 29))) {
+        return 0;
+    }
+    *pos = (mp_int_t)t;
+    return 1;
+}
+
+static int tc_rc_mm(mp_obj_t v, mp_float_t lim, mp_int_t positions, mp_float_t dx_um,
+                    const mp_obj_type_t *float_type, mp_float_t *x, mp_int_t *pos) {
+    if (mp_obj_is_small_int(v)) {
+        *x = (mp_float_t)MP_OBJ_SMALL_INT_VALUE(v);
+    } else if (mp_obj_get_type(v) == float_type) {
+        *x = mp_obj_get_float(v);
+    } else {
+        return 0;
+    }
+    return *x >= 0 && *x <= lim && tc_rc_pos(*x, dx_um, pos) && *pos <= positions;
+}
+
+static mp_obj_t tc_region_check_fn(size_t n_args, const mp_obj_t *args) {
+    mp_map_t *map = &((mp_obj_dict_t *)MP_OBJ_TO_PTR(args[0]))->map;
+    if (map->used != 3) {
+        return mp_const_none;
+    }
+    mp_obj_t v[3] = {MP_OBJ_NULL, MP_OBJ_NULL, MP_OBJ_NULL};
+    for (size_t j = 0; j < map->alloc; j++) {
+        if (!mp_map_slot_is_filled(map, j)) {
+            continue;
+        }
+        mp_obj_t k = map->table[j].key;
+        if (!mp_obj_is_str(k)) {
+            return mp_const_none;
+        }
+        size_t n;
+        const char *s = mp_obj_str_get_data(k, &n);
+        int i = tc_ck_is(s, n, "start_mm") ? 0 : tc_ck_is(s, n, "end_mm") ? 1 :
+                tc_ck_is(s, n, "texture") ? 2 : -1;
+        if (i < 0) {
+            return mp_const_none;
+        }
+        v[i] = map->table[j].value;
+    }
+    if (v[0] == MP_OBJ_NULL || v[1] == MP_OBJ_NULL || v[2] == MP_OBJ_NULL) {
+        return mp_const_none;
+    }
+    const mp_obj_type_t *float_type = TC_FLOAT_TYPE;
+    mp_float_t lim = mp_obj_get_float(args[1]);
+    mp_int_t positions = mp_obj_get_int(args[2]);
+    mp_float_t dx_um = mp_obj_get_float(args[3]);
+    mp_float_t a, b;
+    mp_int_t s, e;
+    if (!tc_rc_mm(v[0], lim, positions, dx_um, float_type, &a, &s) ||
+        !tc_rc_mm(v[1], lim, positions, dx_um, float_type, &b, &e) || !(a < b) || s >= e) {
+        return mp_const_none;
+    }
+    mp_obj_t out[5] = {
+        mp_obj_is_small_int(v[0]) ? mp_obj_new_float(a) : v[0],
+        mp_obj_is_small_int(v[1]) ? mp_obj_new_float(b) : v[1],
+        mp_obj_new_int(s), mp_obj_new_int(e), v[2],
+    };
+    return mp_obj_new_tuple(5, out);
+}
+static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_region_check_obj, 4, 4, tc_region_check_fn);
+
+// plan(tex, n, tab) -> (both, count, L, gain_q14), or None: kinds/texel.py
+// plan_of for a canonical format-2 texture without options (texel_check's
+// or the Python check's dict), n positions long, in one call: the grid
+// integers (gen/grid.py mdb in the runtime's float), PlanInt.__init__'s
+// integers (tc_plan_consts), the seed's state (tc_seeded), the per-texel loop
+// (tc_texels, nothing kept) into both = array('i') of t28 then d28 (count
+// each, one block as PlanInt allocates them), and engine_int.gain_q14
+// (int(gain * 16384 + 0.5)). None where the texture has options or is not
+// format 2 (PlanInt and gen/options.py do those); tab: plan_int_tables.table().
+static mp_float_t tc_pl_float(mp_obj_t d, qstr k) {
+    return mp_obj_get_float(mp_obj_subscr(d, MP_OBJ_NEW_QSTR(k), MP_OBJ_SENTINEL));
+}
+
+static mp_obj_t tc_plan_fn(mp_obj_t tex, mp_obj_t n_in, mp_obj_t tab_in) {
+    mp_map_t *map = &((mp_obj_dict_t *)MP_OBJ_TO_PTR(tex))->map;
+    if (map->used != 9) {
+        return mp_const_none;           // the options (min_cpmm, phase): PlanInt
+    }
+    mp_obj_t v = mp_obj_subscr(tex, MP_OBJ_NEW_QSTR(MP_QSTR_v), MP_OBJ_SENTINEL);
+    if (!mp_obj_is_small_int(v) || MP_OBJ_SMALL_INT_VALUE(v) != 2) {
+        return mp_const_none;
+    }
+    int32_t n = mp_obj_get_int(n_in);
+    int32_t L = mp_obj_get_int(mp_obj_subscr(tex, MP_OBJ_NEW_QSTR(MP_QSTR_texel_samples),
+                                             MP_OBJ_SENTINEL));
+    if (n < 1 || n > TC_U16_MAX || L < 1 || L >= (1 << 21)) {
+        mp_raise_ValueError(MP_ERROR_TEXT("plan: n or texel_samples out of range"));
+    }
+    const int32_t *tab = tc_buf(tab_in, 4 * TC_TAB_I32, MP_BUFFER_READ, "tab");
+    mp_obj_t cap = mp_obj_subscr(tex, MP_OBJ_NEW_QSTR(MP_QSTR_band_limit_cpmm), MP_OBJ_SENTINEL);
+    int32_t k[4];
+    tc_plan_consts(tc_mdb(tc_pl_float(tex, MP_QSTR_pitch_db)),
+                   tc_mdb(tc_pl_float(tex, MP_QSTR_irregularity_db)),
+                   tc_mdb(tc_pl_float(tex, MP_QSTR_quant_db)),
+                   cap == mp_const_none ? 0 : tc_mdb(mp_obj_get_float(cap)), tab, k);
+    uint16_t st[10];
+    tc_seeded((uint32_t)mp_obj_get_int_truncated(
+        mp_obj_subscr(tex, MP_OBJ_NEW_QSTR(MP_QSTR_seed), MP_OBJ_SENTINEL)), st);
+    int32_t count = (n + L - 1) / L;
+    mp_obj_array_t *o = (mp_obj_array_t *)m_malloc(sizeof(mp_obj_array_t));
+    o->base.type = TC_ARRAY_TYPE;
+    o->typecode = 'i';
+    o->free = 0;
+    o->len = 2 * (size_t)count;
+    o->items = m_malloc(8 * (size_t)count);
+    int32_t *t28 = (int32_t *)o->items;
+    int32_t none;
+    tc_texels(st, count, L, k[0], k[1], k[2], k[3], tab, t28, t28 + count, &none, &none, 0);
+    mp_float_t g = tc_pl_float(tex, MP_QSTR_gain) * (mp_float_t)16384 + (mp_float_t)0.5;
+    mp_obj_t out[4] = {MP_OBJ_FROM_PTR(o), mp_obj_new_int(count), mp_obj_new_int(L),
+                       mp_obj_new_int((mp_int_t)g)};
+    return mp_obj_new_tuple(4, out);
+}
+static MP_DEFINE_CONST_FUN_OBJ_3(tc_plan_obj, tc_plan_fn);

@@ -138,6 +138,49 @@ def _texture(path, tex, n):
     return kinds.get(kind).check(path, tex, n)     # its keys, values, canonical form
 
 
+# --- regions ---------------------------------------------------------------------
+# The C core's fast paths (texelcore_api.h region_check, texel_check): a
+# region and a texel texture as they come, checked at C speed; None for
+# anything else, which _region and the kinds' checks decide and word. About
+# 1.2 + 2.4 ms a texel region on a Pico (bench/firmware.py);
+# tests/gen/test_texel_core.py and tests/support/texel_check.py hold them to
+# the same canonical scenes.
+_fast = None
+
+
+def _fast_region():
+    global _fast
+    if _fast is None:
+        from ..compat import core
+        c = core()
+        _fast = (c and getattr(c, "region_check", None)) or False
+    return _fast
+
+
+def fast_texel(tex):
+    return kinds.get("texel").fast_check(tex)
+
+
+def _region(i, r, total_mm, positions, dx_um):
+    """Region i checked: (start_mm, end_mm, start, end, canonical texture)."""
+    path = "regions[%d]" % i
+    r = _dict(path, r, "a region dict with 'start_mm', 'end_mm', 'texture'")
+    _check_keys(path, r, REGION_KEYS)
+    for k in REGION_KEYS:
+        if k not in r:
+            fail(path, "missing required key %r" % (k,))
+    s_mm = _mm_in(path + ".start_mm", r["start_mm"], total_mm, positions, dx_um)
+    e_mm = _mm_in(path + ".end_mm", r["end_mm"], total_mm, positions, dx_um)
+    if not s_mm < e_mm:
+        fail(path + ".end_mm", "%r is not after start_mm %r" % (e_mm, s_mm))
+    s = to_position(s_mm, dx_um)
+    e = to_position(e_mm, dx_um)
+    if s >= e:
+        fail(path, "%r .. %r mm rounds to no position (one position is %r um)"
+             % (s_mm, e_mm, dx_um))
+    return s_mm, e_mm, s, e, _texture(path + ".texture", r["texture"], e - s)
+
+
 # --- scene -----------------------------------------------------------------------
 def _check(scene, display):
     """validate() plus the positions: (canonical, [(start, end), ...] in the
@@ -167,23 +210,18 @@ def _check(scene, display):
             out[k] = v
     spans = []
     canon = []
+    fast = _fast_region()
+    lim = total_mm + 1.0 + dx_um / 500.0        # (_mm_in's)
     for i in range(len(regs)):
-        path = "regions[%d]" % i
-        r = _dict(path, regs[i], "a region dict with 'start_mm', 'end_mm', 'texture'")
-        _check_keys(path, r, REGION_KEYS)
-        for k in REGION_KEYS:
-            if k not in r:
-                fail(path, "missing required key %r" % (k,))
-        s_mm = _mm_in(path + ".start_mm", r["start_mm"], total_mm, positions, dx_um)
-        e_mm = _mm_in(path + ".end_mm", r["end_mm"], total_mm, positions, dx_um)
-        if not s_mm < e_mm:
-            fail(path + ".end_mm", "%r is not after start_mm %r" % (e_mm, s_mm))
-        s = to_position(s_mm, dx_um)
-        e = to_position(e_mm, dx_um)
-        if s >= e:
-            fail(path, "%r .. %r mm rounds to no position (one position is %r um)"
-                 % (s_mm, e_mm, dx_um))
-        tex = _texture(path + ".texture", r["texture"], e - s)
+        r = regs[i]
+        f = fast(r, lim, positions, dx_um) if fast and type(r) is dict else None
+        if f is None:
+            s_mm, e_mm, s, e, tex = _region(i, r, total_mm, positions, dx_um)
+        else:
+            s_mm, e_mm, s, e, tx = f
+            tex = fast_texel(tx) if type(tx) is dict and tx.get("kind") == "texel" else None
+            if tex is None:
+                tex = _texture("regions[%d].texture" % i, tx, e - s)
         canon.append({"start_mm": s_mm, "end_mm": e_mm, "texture": tex})
         spans.append((s, e, i))
     order = sorted(spans)
