@@ -59,50 +59,54 @@ def cases(n: int, seed: int = 5) -> list[dict]:
 
 
 # Runs on MicroPython with texel importable; %(cases)s is cases()' list as a
-# literal, or an expression that reads one (script(path=)).
+# literal, or an expression that reads one (script(path=)). One function, run
+# and deleted: a board keeps none of its names (a stock Pico's heap is tight).
 SCRIPT = r"""
-import json
-from texel.runtime.kinds import texel as KT
-from texel import compat
-_F = {"nan": float("nan"), "inf": float("inf")}
-def real(t):
-    return dict((k, _F.get(v, v) if isinstance(v, str) else v) for k, v in t.items())
-def slow(tex):
-    f = KT._fast
-    KT._fast = False
-    try:
-        return ("ok", KT.check("t", tex, 5000))
-    except ValueError as e:
-        return ("err", str(e))
-    finally:
-        KT._fast = f
-c = compat.core()
-info = {"build": c and c.BUILD, "n": 0, "fast": 0, "fallback_ok": 0, "plans": 0, "bad": []}
-for t in %(cases)s:
-    tex = real(t)
-    f = KT.fast_check(tex)
-    s = slow(tex)
-    info["n"] += 1
-    if f is None:
-        info["fallback_ok"] += s[0] == "ok"
-        continue
-    info["fast"] += 1
-    if s[0] != "ok" or s[1] != f or sorted(f) != sorted(s[1]) or \
-            [type(f[k]).__name__ for k in sorted(f)] != [type(s[1][k]).__name__ for k in sorted(f)]:
-        info["bad"].append([repr(t), repr(f), repr(s)])
-        continue
-    # and plan_of: the C core's plan in one call against PlanInt's
-    n = 700 if f["texel_samples"] < 3 else 5000
-    a = KT.plan_of(f, n)
-    p, KT._plan_c = KT._plan_c, False
-    try:
-        b = KT.plan_of(f, n)
-    finally:
-        KT._plan_c = p
-    info["plans"] += 1
-    if [bytes(a[0]), bytes(a[1]), a[2], a[3]] != [bytes(b[0]), bytes(b[1]), b[2], b[3]]:
-        info["bad"].append([repr(t), "plan_of", repr(a[2:]), repr(b[2:])])
-print(json.dumps(info))
+def _tc_run():
+    import json
+    from texel.runtime.kinds import texel as KT
+    from texel import compat
+    _F = {"nan": float("nan"), "inf": float("inf")}
+    def real(t):
+        return dict((k, _F.get(v, v) if isinstance(v, str) else v) for k, v in t.items())
+    def slow(tex):
+        f = KT._fast
+        KT._fast = False
+        try:
+            return ("ok", KT.check("t", tex, 5000))
+        except ValueError as e:
+            return ("err", str(e))
+        finally:
+            KT._fast = f
+    c = compat.core()
+    info = {"build": c and c.BUILD, "n": 0, "fast": 0, "fallback_ok": 0, "plans": 0, "bad": []}
+    for t in %(cases)s:
+        tex = real(t)
+        f = KT.fast_check(tex)
+        s = slow(tex)
+        info["n"] += 1
+        if f is None:
+            info["fallback_ok"] += s[0] == "ok"
+            continue
+        info["fast"] += 1
+        if s[0] != "ok" or s[1] != f or sorted(f) != sorted(s[1]) or \
+                [type(f[k]).__name__ for k in sorted(f)] != [type(s[1][k]).__name__ for k in sorted(f)]:
+            info["bad"].append([repr(t), repr(f), repr(s)])
+            continue
+        # and plan_of: the C core's plan in one call against PlanInt's
+        n = 700 if f["texel_samples"] < 3 else 5000
+        a = KT.plan_of(f, n)
+        p, KT._plan_c = KT._plan_c, False
+        try:
+            b = KT.plan_of(f, n)
+        finally:
+            KT._plan_c = p
+        info["plans"] += 1
+        if [bytes(a[0]), bytes(a[1]), a[2], a[3]] != [bytes(b[0]), bytes(b[1]), b[2], b[3]]:
+            info["bad"].append([repr(t), "plan_of", repr(a[2:]), repr(b[2:])])
+    print(json.dumps(info))
+_tc_run()
+del _tc_run
 """
 
 
@@ -155,42 +159,45 @@ def scenes(n: int, seed: int = 7) -> list[dict]:
 # scene.py's _check with the C core's fast paths and without: the same
 # canonical scene and spans, or the same refusal
 SCENE_SCRIPT = r"""
-import json
-from texel.runtime import scene as S
-from texel.runtime.kinds import texel as KT
-from texel import compat
-_F = {"nan": float("nan")}
-def real(sc):
-    for reg in sc["regions"]:
-        for k in ("start_mm", "end_mm"):
-            if reg.get(k) == "nan":
-                reg[k] = _F["nan"]
-    return sc
-def run(sc, fast):
-    f, g = S._fast, KT._fast
-    if not fast:
-        S._fast = KT._fast = False
-    try:
-        c, spans, pos, dx = S._check(sc, {"positions": 19200, "dx_um": 5.3})
-        return ("ok", repr(sorted((k, v) for k, v in c.items() if k != "regions")),
-                repr([(sorted(x), x["start_mm"], x["end_mm"], sorted(x["texture"].items()))
-                      for x in c["regions"]]), repr(spans),
-                repr([(type(x["start_mm"]).__name__, type(x["end_mm"]).__name__)
-                      for x in c["regions"]]))
-    except ValueError as e:
-        return ("err", str(e))
-    finally:
-        S._fast, KT._fast = f, g
-info = {"fast_region": bool(S._fast_region()), "n": 0, "ok": 0, "bad": []}
-for sc in %(scenes)s:
-    sc = real(sc)
-    a = run(sc, True)
-    b = run(sc, False)
-    info["n"] += 1
-    info["ok"] += a[0] == "ok"
-    if a != b:
-        info["bad"].append([repr(sc), a, b])
-print(json.dumps(info))
+def _tc_run():
+    import json
+    from texel.runtime import scene as S
+    from texel.runtime.kinds import texel as KT
+    from texel import compat
+    _F = {"nan": float("nan")}
+    def real(sc):
+        for reg in sc["regions"]:
+            for k in ("start_mm", "end_mm"):
+                if reg.get(k) == "nan":
+                    reg[k] = _F["nan"]
+        return sc
+    def run(sc, fast):
+        f, g = S._fast, KT._fast
+        if not fast:
+            S._fast = KT._fast = False
+        try:
+            c, spans, pos, dx = S._check(sc, {"positions": 19200, "dx_um": 5.3})
+            return ("ok", repr(sorted((k, v) for k, v in c.items() if k != "regions")),
+                    repr([(sorted(x), x["start_mm"], x["end_mm"], sorted(x["texture"].items()))
+                          for x in c["regions"]]), repr(spans),
+                    repr([(type(x["start_mm"]).__name__, type(x["end_mm"]).__name__)
+                          for x in c["regions"]]))
+        except ValueError as e:
+            return ("err", str(e))
+        finally:
+            S._fast, KT._fast = f, g
+    info = {"fast_region": bool(S._fast_region()), "n": 0, "ok": 0, "bad": []}
+    for sc in %(scenes)s:
+        sc = real(sc)
+        a = run(sc, True)
+        b = run(sc, False)
+        info["n"] += 1
+        info["ok"] += a[0] == "ok"
+        if a != b:
+            info["bad"].append([repr(sc), a, b])
+    print(json.dumps(info))
+_tc_run()
+del _tc_run
 """
 
 
@@ -198,3 +205,20 @@ def scene_script(scenes_: list[dict] | None = None, path: str | None = None) -> 
     if path is not None:
         return SCENE_SCRIPT % {"scenes": "eval(open(%r).read())" % path}
     return SCENE_SCRIPT % {"scenes": repr(scenes_)}
+
+
+def run_batches(exec_, script_fn, items: list, size: int) -> dict:
+    """script_fn over items in batches of `size` through exec_ (a link's
+    exec: one compile per batch, small enough for a playing board's heap);
+    the batches' reports summed (counts added, "bad" lists joined)."""
+    import json
+    total: dict = {}
+    for i in range(0, len(items), size):
+        out = exec_(script_fn(items[i:i + size]))
+        info = json.loads(out.strip().splitlines()[-1])
+        for k, v in info.items():
+            if isinstance(v, bool) or not isinstance(v, (int, list)):
+                total[k] = v
+            else:
+                total[k] = total.get(k, [] if isinstance(v, list) else 0) + v
+    return total

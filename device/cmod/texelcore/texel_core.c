@@ -340,6 +340,9 @@ void tc_samples(uint16_t **chunks, int32_t bits, int32_t n, const uint16_t *vals
     }
 }
 
+// (only texelcore_api.h's plan uses these, which a native module for a core
+// without a float unit leaves out: TC_NO_FLOAT)
+#ifndef TC_NO_FLOAT
 // plan_int._round_q: Q24 octaves of mdb millidecibels, round half up (C_DB:
 // log2(10) / 10000 * 2^40; the product needs 43 bits)
 #define C_DB 365249857
@@ -379,3 +382,4 @@ void tc_seeded(uint32_t seed, uint16_t st[10]) {
     st[8] = 0;
     st[9] = 0;
 }
+#endif  // TC_NO_FLOAT

@@ -237,6 +237,13 @@ static mp_obj_t tc_u16_fn(mp_obj_t n_in) {
 }
 static MP_DEFINE_CONST_FUN_OBJ_1(tc_u16_obj, tc_u16_fn);
 
+// The checks and the plan below do float arithmetic in the runtime's float.
+// A native module for a core without a float unit (armv6m: a stock RP2040)
+// would carry libgcc's soft-float routines in RAM beside them (7 KB: its .mpy
+// grew from 9.1 to 16.3 KB, and a stock Pico's heap could no longer paint a
+// quarter-screen brush): there the Makefile leaves them out (TC_NO_FLOAT) and
+// the Python checks run. The firmware links the port's own float routines.
+#ifndef TC_NO_FLOAT
 // texel_check(tex, spec) -> the canonical texel texture, or None: the fast path
 // of texel/runtime/kinds/texel.py check (through gen/params.py validate and
 // gen/grid.py), for the textures it accepts as they come - floats and ints in
@@ -577,3 +584,4 @@ static mp_obj_t tc_plan_fn(mp_obj_t tex, mp_obj_t n_in, mp_obj_t tab_in) {
     return mp_obj_new_tuple(4, out);
 }
 static MP_DEFINE_CONST_FUN_OBJ_3(tc_plan_obj, tc_plan_fn);
+#endif  // TC_NO_FLOAT
