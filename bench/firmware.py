@@ -594,7 +594,7 @@ EXTRA_ROWS = [("scene_to_playing_ms_median", "  scenes: -> playing, median", "ms
 
 def table(out: dict[str, Any]) -> str:
     fw, stock = out["firmware"]["figures"], (out.get("stock") or {}).get("figures")
-    lines = ["texelpad firmware bench (issue 19): the emulated Pico (rp2040js @ 125 MHz), every "
+    lines = ["texelpad firmware bench (issues 19 and 32): the emulated Pico (rp2040js @ 125 MHz), every "
              "figure on the board's own clock (ticks_us)",
              "uf2 %s: firmware %s bytes, ROMFS %s bytes of %s" % (
                  out["uf2"], format(out["firmware_bytes"], ","), format(out["romfs_bytes"], ","),
@@ -618,7 +618,9 @@ def table(out: dict[str, Any]) -> str:
     if out.get("stock_error"):
         lines.append("today's path failed: %s" % out["stock_error"][:300])
     lines.append("* today = stock MicroPython 1.28 + ulab + `texelpad deploy`, the same scenes on the "
-                 "same emulator (--stock)%s" % ("" if stock else ": not run (pass --stock)"))
+                 "same emulator (--stock)%s" % (
+                     "" if stock else ": failed (above)" if out.get("stock_error")
+                     else ": not run (pass --stock)"))
     lines.append("")
     lines.append("refresh cost per region kind (median / max us over %d windows, finger sweeping):"
                  % IRQ_REPS)

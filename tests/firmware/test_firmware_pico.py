@@ -225,11 +225,11 @@ def test_the_firmware_texel_and_region_checks_are_the_python_checks_in_float32(p
             return b.link.exec(code, timeout=300)
         info = texel_check.run_batches(ex, texel_check.script, texel_check.cases(300, seed=3), 50)
         assert info["build"] == "firmware" and info["bad"] == [], info["bad"][:3]
-        assert info["fast"] > 60 and info["fallback_ok"] <= 3, info
+        assert info["fast"] > 60 and info["fallback_ok"] <= 3 and info["c_plans"] > 20, info
         # and scene.py's region_check: the same canonical scenes or refusals
         info = texel_check.run_batches(ex, texel_check.scene_script,
                                        texel_check.scenes(60, seed=4), 15)
-    assert info["ok"] >= 5, info
+    assert info["fast_region"] and info["ok"] >= 5 and info["fast_regions"] > 50, info
 
 
 def test_a_bad_push_is_refused_and_the_scene_kept(pico):

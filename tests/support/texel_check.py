@@ -79,7 +79,7 @@ def _tc_run():
         finally:
             KT._fast = f
     c = compat.core()
-    info = {"build": c and c.BUILD, "n": 0, "fast": 0, "fallback_ok": 0, "plans": 0, "bad": []}
+    info = {"build": c and c.BUILD, "n": 0, "fast": 0, "fallback_ok": 0, "plans": 0, "c_plans": 0, "bad": []}
     for t in %(cases)s:
         tex = real(t)
         f = KT.fast_check(tex)
@@ -90,12 +90,15 @@ def _tc_run():
             continue
         info["fast"] += 1
         if s[0] != "ok" or s[1] != f or sorted(f) != sorted(s[1]) or \
+                [repr(f[k]) for k in sorted(f)] != [repr(s[1][k]) for k in sorted(f)] or \
                 [type(f[k]).__name__ for k in sorted(f)] != [type(s[1][k]).__name__ for k in sorted(f)]:
             info["bad"].append([repr(t), repr(f), repr(s)])
             continue
         # and plan_of: the C core's plan in one call against PlanInt's
         n = 700 if f["texel_samples"] < 3 else 5000
         a = KT.plan_of(f, n)
+        if KT._plan_c and KT._plan_c(f, n, KT._table()) is not None:
+            info["c_plans"] += 1        # (format 2 without options: the C plan ran)
         p, KT._plan_c = KT._plan_c, False
         try:
             b = KT.plan_of(f, n)
@@ -186,13 +189,18 @@ def _tc_run():
             return ("err", str(e))
         finally:
             S._fast, KT._fast = f, g
-    info = {"fast_region": bool(S._fast_region()), "n": 0, "ok": 0, "bad": []}
+    info = {"fast_region": bool(S._fast_region()), "n": 0, "ok": 0, "fast_regions": 0, "bad": []}
+    lim = 19200 * 5.3 / 1000.0 + 1.0 + 5.3 / 500.0          # scene._check's
     for sc in %(scenes)s:
         sc = real(sc)
         a = run(sc, True)
         b = run(sc, False)
         info["n"] += 1
         info["ok"] += a[0] == "ok"
+        if info["fast_region"]:
+            for reg in sc["regions"]:
+                if type(reg) is dict and S._fast(reg, lim, 19200, 5.3) is not None:
+                    info["fast_regions"] += 1
         if a != b:
             info["bad"].append([repr(sc), a, b])
     print(json.dumps(info))

@@ -8,8 +8,7 @@
                       (int)(have), (int)(need))
 #define TC_FREE(ptr, bytes) m_del(uint8_t, ptr, bytes)
 #define TC_ARRAY_TYPE (&mp_type_array)
-#define TC_FLOAT_TYPE (&mp_type_float)
-#define TC_INT_TYPE (&mp_type_int)
+#define TC_DICT_TYPE (&mp_type_dict)
 
 #include "texelcore_api.h"
 

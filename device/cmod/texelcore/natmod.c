@@ -12,9 +12,8 @@
 #define TC_ARRAY_TYPE ((const mp_obj_type_t *)MP_OBJ_TO_PTR(mp_load_attr( \
     mp_import_name(MP_QSTR_array, mp_const_none, MP_OBJ_NEW_SMALL_INT(0)), MP_QSTR_array)))
 
-// the float and int types, from the builtins (a native module has no &mp_type_float)
-#define TC_FLOAT_TYPE ((const mp_obj_type_t *)MP_OBJ_TO_PTR(mp_load_global(MP_QSTR_float)))
-#define TC_INT_TYPE ((const mp_obj_type_t *)MP_OBJ_TO_PTR(mp_load_global(MP_QSTR_int)))
+// the dict type, from the runtime's table (a native module has no &mp_type_dict)
+#define TC_DICT_TYPE (mp_fun_table.type_dict)
 
 #include "texelcore_api.h"
 

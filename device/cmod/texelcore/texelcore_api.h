@@ -251,7 +251,7 @@ static MP_DEFINE_CONST_FUN_OBJ_1(tc_u16_obj, tc_u16_fn);
 // a bool, a string where a number goes, a value out of range or on a grid
 // tie, min_cpmm not below the band limit, a float key given a huge int)
 // returns None, and the Python path words the refusal or decides: one place
-// holds the messages. tex: a dict (the caller checks type(tex) is dict).
+// holds the messages. tex: a dict (anything else: None).
 // spec: kinds/texel.py _c_spec(): (tie, quant_min, then lo, hi, default for
 // each of TC_CK_NUM keys in TC_CK_NAMES' order from pitch_db) - Python's own
 // objects, so bounds compare as Python compares them.
@@ -328,8 +328,13 @@ static mp_obj_t tc_texel_check_fn(mp_obj_t tex_in, mp_obj_t spec_in) {
     if (ns != 2 + 3 * TC_CK_NUM) {
         mp_raise_ValueError(MP_ERROR_TEXT("texel_check: spec has the wrong length"));
     }
-    const mp_obj_type_t *float_type = TC_FLOAT_TYPE;
-    const mp_obj_type_t *int_type = TC_INT_TYPE;
+    // the float and int types from the arguments (spec[0] is a float, an int's
+    // type is int's): no name lookup, which would see the caller's globals
+    const mp_obj_type_t *float_type = mp_obj_get_type(spec[0]);
+    const mp_obj_type_t *int_type = mp_obj_get_type(MP_OBJ_NEW_SMALL_INT(0));
+    if (mp_obj_get_type(tex_in) != TC_DICT_TYPE) {
+        return mp_const_none;
+    }
     mp_obj_t val[TC_CK_KEYS];
     for (int i = 0; i < TC_CK_KEYS; i++) {
         val[i] = MP_OBJ_NULL;
@@ -460,7 +465,7 @@ static MP_DEFINE_CONST_FUN_OBJ_2(tc_texel_check_obj, tc_texel_check_fn);
 // positions as scene.to_position rounds them, int(mm * 1000.0 / dx_um + 0.5)
 // in the runtime's float; start_mm/end_mm as _mm_in returns them (a float as
 // is, an int made a float). Anything else: None, and the Python checks decide
-// and word the refusal. r: a dict (the caller checks type(r) is dict); lim:
+// and word the refusal. r: a dict (anything else: None); lim:
 // scene.py's total_mm + 1.0 + dx_um / 500.0, a Python float.
 static int tc_rc_pos(mp_float_t x, mp_float_t dx_um, mp_int_t *pos) {
     mp_float_t t = x * (mp_float_t)1000.0;
@@ -486,6 +491,9 @@ static int tc_rc_mm(mp_obj_t v, mp_float_t lim, mp_int_t positions, mp_float_t d
 }
 
 static mp_obj_t tc_region_check_fn(size_t n_args, const mp_obj_t *args) {
+    if (mp_obj_get_type(args[0]) != TC_DICT_TYPE) {
+        return mp_const_none;
+    }
     mp_map_t *map = &((mp_obj_dict_t *)MP_OBJ_TO_PTR(args[0]))->map;
     if (map->used != 3) {
         return mp_const_none;
@@ -511,7 +519,7 @@ static mp_obj_t tc_region_check_fn(size_t n_args, const mp_obj_t *args) {
     if (v[0] == MP_OBJ_NULL || v[1] == MP_OBJ_NULL || v[2] == MP_OBJ_NULL) {
         return mp_const_none;
     }
-    const mp_obj_type_t *float_type = TC_FLOAT_TYPE;
+    const mp_obj_type_t *float_type = mp_obj_get_type(args[1]);     // lim: a float
     mp_float_t lim = mp_obj_get_float(args[1]);
     mp_int_t positions = mp_obj_get_int(args[2]);
     mp_float_t dx_um = mp_obj_get_float(args[3]);
@@ -544,6 +552,9 @@ static mp_float_t tc_pl_float(mp_obj_t d, qstr k) {
 }
 
 static mp_obj_t tc_plan_fn(mp_obj_t tex, mp_obj_t n_in, mp_obj_t tab_in) {
+    if (mp_obj_get_type(tex) != TC_DICT_TYPE) {
+        return mp_const_none;
+    }
     mp_map_t *map = &((mp_obj_dict_t *)MP_OBJ_TO_PTR(tex))->map;
     if (map->used != 9) {
         return mp_const_none;           // the options (min_cpmm, phase): PlanInt

@@ -112,6 +112,7 @@ def check(path, tex, n):
 _plan_int = None            # gen.plan_int.PlanInt, imported at the first format-2 region
 _gain_q14 = None            # gen.engine_int.gain_q14, imported at the first plan
 _plan_c = None              # the C core's plan, False where there is none
+_table = None               # gen.plan_int_tables.table, for it
 
 
 def plan_of(tex, n):
@@ -121,16 +122,18 @@ def plan_of(tex, n):
     keys, without its log pitches and without a second validation; its class
     is looked up once (an import statement runs the import machinery on every
     call: with the parameter copy, 2 of a Pico's 11.5 ms here)."""
-    global _plan_int, _gain_q14, _plan_c
+    global _plan_int, _gain_q14, _plan_c, _table
     if _plan_c is None:
         from ...compat import core
         c = core()
         _plan_c = (c and getattr(c, "plan", None)) or False
+        if _plan_c:
+            from ...gen.plan_int_tables import table
+            _table = table
     if _plan_c:
         # the C core's plan in one call (texelcore_api.h plan: format 2
-        # without options, else None): 0.3 of a Pico's 2.2 ms here
-        from ...gen.plan_int_tables import table
-        r = _plan_c(tex, n, table())
+        # without options, else None): 0.65 of a Pico's 2.2 ms here
+        r = _plan_c(tex, n, _table())
         if r is not None:
             both, count, L, g = r
             mv = memoryview(both)
