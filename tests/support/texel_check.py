@@ -190,7 +190,7 @@ def _tc_run():
         finally:
             S._fast, KT._fast = f, g
     info = {"fast_region": bool(S._fast_region()), "n": 0, "ok": 0, "fast_regions": 0, "bad": []}
-    lim = 19200 * 5.3 / 1000.0 + 1.0 + 5.3 / 500.0          # scene._check's
+    lim = S._lim(19200 * 5.3 / 1000.0, 5.3)                  # scene._check's
     for sc in %(scenes)s:
         sc = real(sc)
         a = run(sc, True)
@@ -199,7 +199,7 @@ def _tc_run():
         info["ok"] += a[0] == "ok"
         if info["fast_region"]:
             for reg in sc["regions"]:
-                if type(reg) is dict and S._fast(reg, lim, 19200, 5.3) is not None:
+                if S._fast(reg, lim, 19200, 5.3) is not None:
                     info["fast_regions"] += 1
         if a != b:
             info["bad"].append([repr(sc), a, b])

@@ -113,12 +113,17 @@ def _mm_in(path, v, total_mm, positions, dx_um):
     significand), and a position is total_mm / positions >= total_mm * 2^-20."""
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         return _num(path, v, 0.0, total_mm)
-    lim = total_mm + 1.0 + dx_um / 500.0
+    lim = _lim(total_mm, dx_um)
     if isinstance(v, int) and (v < 0 or v > lim):
         return _num(path, v, 0.0, total_mm)          # refused without float overflow
     if v == v and 0.0 <= v <= lim and to_position(v, dx_um) <= positions:
         return float(v)
     return _num(path, v, 0.0, total_mm)
+
+
+def _lim(total_mm, dx_um):
+    """The pre-check's bound on a boundary in mm (_mm_in; region_check gets it too)."""
+    return total_mm + 1.0 + dx_um / 500.0
 
 
 def _mm(pos, dx_um):
@@ -211,10 +216,10 @@ def _check(scene, display):
     spans = []
     canon = []
     fast = _fast_region()
-    lim = total_mm + 1.0 + dx_um / 500.0        # (_mm_in's)
+    lim = _lim(total_mm, dx_um)
     for i in range(len(regs)):
         r = regs[i]
-        f = fast(r, lim, positions, dx_um) if fast and type(r) is dict else None
+        f = fast(r, lim, positions, dx_um) if fast else None      # (None for a non-dict)
         if f is None:
             s_mm, e_mm, s, e, tex = _region(i, r, total_mm, positions, dx_um)
         else:

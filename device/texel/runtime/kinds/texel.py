@@ -32,7 +32,8 @@ PLAN_MAX_L = 65535
 # The C core's fast path (texelcore_api.h texel_check): the canonical texture of
 # a texture it accepts as it comes, else None and the checks below decide and
 # word the refusal. 0.2 of a Pico's 2.6 ms a region (bench/firmware.py);
-# tests/gen/test_texel_check.py holds the two to the same dicts.
+# tests/gen/test_texel_core.py and tests/support/texel_check.py hold the two
+# to the same dicts.
 _fast = None                # the core's texel_check, False where there is none
 _spec = None                # its spec: Python's own bounds and defaults (_c_spec)
 C_KEYS = ("pitch_db", "irregularity_db", "texel_samples", "quant_db", "seed", "gain", "v",
@@ -59,8 +60,8 @@ def fast_check(tex):
         _fast = (c and getattr(c, "texel_check", None)) or False
         if _fast:
             _spec = _c_spec()
-    if _fast and type(tex) is dict:
-        return _fast(tex, _spec)
+    if _fast:
+        return _fast(tex, _spec)    # (None for a non-dict)
     return None
 
 
