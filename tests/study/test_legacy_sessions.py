@@ -18,8 +18,10 @@ from texelpad.study.session import FORMAT, Session
 
 LEGACY = Path(__file__).with_name("data") / "legacy"
 DISPLAY = {"positions": 19200, "dx_um": 5.3}
-FILES = sorted(p.name for p in LEGACY.glob("*.jsonl") if not p.name.startswith("quant-v2"))
+FILES = sorted(p.name for p in LEGACY.glob("*.jsonl")
+               if not p.name.startswith(("quant-v2", "v3-")))
 V2_FILES = sorted(p.name for p in LEGACY.glob("quant-v2-*.jsonl"))
+V3_FILES = sorted(p.name for p in LEGACY.glob("v3-*.jsonl"))
 
 
 def test_there_is_an_old_session_of_every_protocol_that_was():
@@ -127,3 +129,41 @@ def test_a_v2_quant_session_replays_as_it_ran(name):
         differ += _digested(q.options[0]) != rec["scene"]
         protocols.apply("quant", now, rec["answer"])
     assert differ > 0
+
+
+@pytest.mark.parametrize("name", V3_FILES)
+def test_a_v3_session_replays_as_it_ran(name):
+    # format /3, made by texelpad at 8c349e6 (make_v3.py) before issue 31 made the lab's apps'
+    # ways the defaults: the similarity matrix on a split display in a seeded order, the
+    # pursuit's points above Nyquist clamped. Every scene every question offered plays again.
+    s = Session.open(LEGACY / name)
+    h = s.header
+    assert h["format"] == "texelpad-session/3" and h["legacy"]
+    proto = h["protocol"]
+    if proto == "quant":
+        assert h["config"]["presentation"] == "split" and h["config"]["order"] == "seeded"
+    else:
+        assert h["config"]["above_nyquist"] == "clamp"
+    state = protocols.start(proto, h["config"], h["seed"])
+    records = list(s.answers())
+    assert len(records) == (9 if proto == "quant" else 20)
+    for k, rec in enumerate(records):
+        q = questions.ask(proto, state, h, DISPLAY)
+        assert q.options == rec["scenes"], (name, k)
+        detail = json.loads(json.dumps(q.detail))
+        assert {key: detail.get(key) for key in rec["state"]} == rec["state"], (name, k)
+        protocols.apply(proto, state, rec["answer"])
+    assert state.done and len(rows(s)) == len(records)
+    # today's defaults play it otherwise: the app's order one texture at a time, or the
+    # points above Nyquist aliased (the fixture's pursuit always chose the higher pitch)
+    fresh = {k: v for k, v in h["config"].items()
+             if k not in ("presentation", "order", "above_nyquist")}
+    now = protocols.start(proto, fresh, h["seed"])
+    differ = 0
+    for rec in records:
+        q = questions.ask(proto, now, h, DISPLAY)
+        differ += q.options != rec["scenes"]
+        protocols.apply(proto, now, rec["answer"])
+    above = sum(max(rec["state"]["A"]["pitch_db"], rec["state"]["B"]["pitch_db"]) > 19.747
+                for rec in records) if proto == "pursuit" else None
+    assert differ == (9 if proto == "quant" else above) and differ > 0

@@ -181,14 +181,26 @@ def test_the_similarity_matrix_rates_each_exemplar_against_each_pursuit_match(la
     qid = r.json()["id"]
     st = lab.lab.live[qid].state
     assert st.config.matches["pink"]["pitch_db"] == round(-15 + 40 * ends["pink"].u, 3)
-    pairs = set()
+    assert st.config.order == "lab" and st.config.presentation == "whole"
+    pairs = []
     for _ in range(9):
-        tex = _playing(lab)["regions"][1]["texture"]
-        pairs.add((st.current[0], st.current_match))
+        # the guided app's way: the reference, then the rendering, one at a time, whole display
+        assert _playing(lab)["regions"] == [{"start_mm": 0.0, "end_mm": 101.76, "texture": {
+            "kind": "reference", "name": st.current[0]}}]
+        assert lab.post("/api/sessions/%s/feel" % qid, json={"option": 1}).json() == \
+            {"playing": 1}
+        (region,) = _playing(lab)["regions"]
+        tex = region["texture"]
+        pairs.append((st.current_match, st.current[0]))
         assert tex["pitch_db"] == st.config.matches[st.current_match]["pitch_db"]
+        assert tex["texel_samples"] == 50           # the app's texelLength (the pursuit's too)
         assert lab.post("/api/sessions/%s/answer" % qid,
                         json={"answer": 3, "question": _n(lab, qid)}).status_code == 200
-    assert len(pairs) == 9 and st.done
+    # the app's ratingorder [3,1; 2,1; 1,1; 3,2; ...] as (match, reference)
+    ex = ("4sin", "pink", "sawtooth")
+    assert pairs == [(ex[m - 1], ex[r - 1]) for m, r in ((3, 1), (2, 1), (1, 1), (3, 2), (2, 2),
+                                                         (1, 2), (3, 3), (2, 3), (1, 3))]
+    assert st.done
 
 
 def test_search_and_staircase_sessions_and_resume_from_the_file(lab, port):
@@ -242,6 +254,7 @@ def test_search_and_staircase_sessions_and_resume_from_the_file(lab, port):
     ("/api/sessions", {"protocol": "quant", "participant": "p"}, "give matches_from"),
 ])
 def test_refused_requests_say_why_and_change_nothing(lab, port, path, body, fragment):
+    lab.lab.owner.display()     # (the board started, as any earlier test of the file leaves it)
     before = _playing(lab)
     r = lab.post(path, json=body)
     assert r.status_code == 400 and fragment in r.json()["error"], r.text

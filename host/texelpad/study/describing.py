@@ -50,3 +50,11 @@ def split(name: str, left: dict[str, Any], right: dict[str, Any],
     regs = scene(sc, display)
     regs[0]["texture"], regs[1]["texture"] = left, right
     return {"option": name, "regions": regs}
+
+
+def whole(name: str, texture: dict[str, Any], display: dict[str, Any]) -> dict[str, Any]:
+    """An option of one described texture on the whole display (scenes.whole's
+    geometry)."""
+    regs = scene(S.whole({"kind": "reference", "name": "-"}, display), display)
+    regs[0]["texture"] = texture
+    return {"option": name, "regions": regs}

@@ -11,7 +11,13 @@
   paired reference k with data row k; the app's reference rows were read in
   the family order. Reading such a header turns its rater_rows into what
   played (study/rater.py LEGACY_ROWS) and fills in lab_rows "family_order".
-Headers written since (format /3) hold every field of the protocol's
+- Format "texelpad-session/3" (before the protocols took the lab's apps'
+  ways as defaults where they differed, issue 31): its headers hold every
+  field of the protocol's resolved Config as it was, so only the fields added
+  since are missing; reading fills in what played (ADDED_SINCE_V3: the
+  similarity matrix on a split display in a seeded order, the pursuit's
+  points above Nyquist clamped). Every older format gets the same fills.
+Headers written since (format /4) hold every field of the protocol's
 resolved Config (protocols.resolved), so nothing needs filling.
 
 The fixtures in tests/study/data/legacy/ were made by the old code
@@ -26,7 +32,14 @@ from typing import Any
 
 OLD_FORMAT = "texelpad-session/1"
 V2_FORMAT = "texelpad-session/2"
-OLD_FORMATS = (OLD_FORMAT, V2_FORMAT)
+V3_FORMAT = "texelpad-session/3"
+OLD_FORMATS = (OLD_FORMAT, V2_FORMAT, V3_FORMAT)
+# per protocol: the fields added after format /3 and what every older session played
+# (their defaults changed to the lab's apps' ways, docs/lab.md "As the papers ran them")
+ADDED_SINCE_V3: dict[str, dict[str, Any]] = {
+    "quant": {"order": "seeded", "presentation": "split"},
+    "pursuit": {"above_nyquist": "clamp"},
+}
 # /1 and /2 quantization sessions: what their rater_rows played (study/rater.py)
 V2_RATER_ROWS = {"by_texture": "statistics-2026", "app": "index-2026"}
 # per protocol: the field and what a /1 session played when its config did not say
@@ -52,6 +65,11 @@ def effective_header(header: dict[str, Any]) -> dict[str, Any]:
     if out.get("format") == OLD_FORMAT:
         for key, value in OLD_DEFAULTS.get(str(out.get("protocol")), {}).items():
             config.setdefault(key, copy.deepcopy(value))
+    for key, value in ADDED_SINCE_V3.get(str(out.get("protocol")), {}).items():
+        config.setdefault(key, copy.deepcopy(value))
+    if out.get("format") == V3_FORMAT:
+        out["legacy"] = True
+        return out
     if out.get("protocol") == "quant":
         rows = config.get("rater_rows", "by_texture")
         config["rater_rows"] = V2_RATER_ROWS.get(rows, rows) if isinstance(rows, str) else rows

@@ -31,6 +31,16 @@ square (clamped after each step); the order and the A/B sides come from the
 session's seeded random generator, so a session replays exactly; a
 reference's row (9,600 samples) on the whole display continues mirrored
 (texel.gen.reference), where the app played the row twice.
+
+Points above the display's Nyquist pitch (19.747 dB, u > 0.8687; reachable:
+the app's pitch axis runs to 10^2.5 c/mm, 25 dB): `above_nyquist` "alias"
+(the default: the app's buildFine5 renders any pitch, and its samples alias)
+plays such a point as display samples rendered on the host with the texel
+generator's own plan at the point's pitch (texelpad.space.aliased_samples);
+"clamp" plays the texel texture at Nyquist (what texelpad did before, and
+what sessions of format /3 and older played: study/legacy.py). The end point
+a finished exploration gives as a match is the texel texture it plays when
+clamped (a match is a texel texture: study/question.py played_db).
 """
 from __future__ import annotations
 
@@ -38,7 +48,7 @@ import math
 import random
 from dataclasses import asdict, dataclass, field
 
-from .space import Point
+from .space import Point, check_above_nyquist
 
 _R2 = 1.0 / math.sqrt(2.0)
 # N, NE, E, SE as unit vectors in (u, v): u = pitch (east), v = irregularity (north)
@@ -58,6 +68,7 @@ class Config:
     clamp_centre: bool = True
     presentation: str = "whole"     # "whole": one texture at a time; "split": reference | option
     fresh: bool = True              # new texture seeds for every comparison
+    above_nyquist: str = "alias"    # "alias": the app's (docstring); "clamp": at Nyquist
 
     def __post_init__(self) -> None:
         if self.presentation not in ("whole", "split"):
@@ -65,6 +76,7 @@ class Config:
                              "whole display, the lab's) or 'split', got %r" % (self.presentation,))
         if not isinstance(self.fresh, bool):
             raise ValueError("fresh: expected true or false, got %r" % (self.fresh,))
+        check_above_nyquist(self.above_nyquist)
 
     def seeds(self, session_seed: int, trial: int, index: int) -> tuple[int, int]:
         """The texture seeds of A and B in comparison (trial, index)."""

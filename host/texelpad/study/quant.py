@@ -53,6 +53,25 @@ own matches at each of levels_db, 12 trials) and "matrix" (seed 000's 3 x 3
 similarity ratings after the guided exploration: every reference against
 every reference's match, at q = levels_db[0]).
 
+The matrix design runs as the lab's guided_exploration_test_app ran its nine
+rating trials (NU-Haptics-Lab/SinglePitchTexel; the app's code read from the
+.mlapp archive): texture A (the match's rendering, 384 texels of
+`texelLength = 50` samples) and texture B (the reference row) each on the
+whole display, one at a time as the participant presses their buttons
+(loadData of 19,200 samples), in the fixed `ratingorder` = [3,1; 2,1; 1,1;
+3,2; 2,2; 1,2; 3,3; 2,3; 1,3] ([match, reference], ratingsLog(match,
+reference)). So by default:
+- `presentation` "whole" (the reference and the rendering, one at a time on
+  the whole display; "split": reference left, rendering right, the design
+  before, and the quantization app's layout, the default of the other designs);
+- `order` "lab": the references' positions 1..3 in the app's ratingorder
+  (MATRIX_LAB_ORDER; "seeded" draws it from the session's seed);
+- texel_samples 50 (the shipped similarity-matrix config said 47, while the
+  guided exploration the matches come from plays 50).
+Noticed, not followed: the app builds texture A from the trained rater's
+pitches (refPitch), not from the participant's end points the paper's Fig.
+14 rates; texelpad plays the participant's matches (matches_from).
+
 Answers: the similarity rating on `scale` (1..5): any number kept to 0.01
 with `rating` "slider" (the app's continuous slider, starting at 3), a whole
 number with "buttons". Pure logic.
@@ -98,6 +117,9 @@ def lab_exemplars(rows: str = "test_order") -> tuple[str, ...]:
     return tuple(names[r - 1] for r in (2, 5, 9))
 
 
+# the guided app's ratingorder: (match, reference) rows, 1-based positions in `references`
+MATRIX_LAB_ORDER = ((3, 1), (2, 1), (1, 1), (3, 2), (2, 2), (1, 2), (3, 3), (2, 3), (1, 3))
+PRESENTATIONS = ("whole", "split")
 LAB_ORDER = lab_order()
 LAB_EXEMPLARS = lab_exemplars()         # 4sin, blue, sawtooth (test order)
 RATINGS = ("slider", "buttons")
@@ -140,7 +162,8 @@ class Config:
     exemplars: tuple[str, ...] = EXEMPLARS      # paper: the quantized ones
     levels_db: tuple[float, ...] = ()       # () = paper (1, 3, 5); levels (0, 1, 3, 5); matrix (0,)
     quantized_source: str = "rater"
-    order: str = "seeded"
+    order: str = ""                     # "" = the design's: matrix "lab", else "seeded"
+    presentation: str = ""              # "" = the design's: matrix "whole", else "split"
     lab_rows: str = "test_order"        # what the app's reference rows name (docstring)
     rater_rows: str = "by_texture"      # (older sessions: rater.LEGACY_ROWS, study/legacy.py)
     repeats: int = 1
@@ -157,6 +180,11 @@ class Config:
                                                                       self.design))
         if not self.references:
             object.__setattr__(self, "references", NINE if self.design == "paper" else EXEMPLARS)
+        if not self.order:
+            object.__setattr__(self, "order", "lab" if self.design == "matrix" else "seeded")
+        if not self.presentation:
+            object.__setattr__(self, "presentation",
+                               "whole" if self.design == "matrix" else "split")
         if not self.levels_db:
             object.__setattr__(self, "levels_db", {"paper": (1.0, 3.0, 5.0),
                                                    "levels": (0.0, 1.0, 3.0, 5.0),
@@ -201,6 +229,10 @@ class Config:
         if self.order not in ("seeded", "lab"):
             raise ValueError("order: expected 'seeded' or 'lab' (the app's fixed order), got %r"
                              % (self.order,))
+        if self.presentation not in PRESENTATIONS:
+            raise ValueError("presentation: expected 'whole' (the reference and the rendering "
+                             "one at a time on the whole display, the guided app's) or 'split' "
+                             "(reference left, rendering right), got %r" % (self.presentation,))
         if self.design == "paper":
             check_references(self.exemplars)
             if any(e not in self.references for e in self.exemplars):
@@ -210,9 +242,13 @@ class Config:
                 raise ValueError("levels_db: the paper's design quantizes at 1, 3, 5 dB (its "
                                  "unquantized trials are the 18); 0 is not a level here")
         if self.order == "lab" and self.repeats != 1:
-            raise ValueError("repeats: order 'lab' plays the app's 27 trials once, got %r"
-                             % (self.repeats,))
-        if self.order == "lab" and (self.design != "paper" or tuple(self.references) != NINE
+            raise ValueError("repeats: order 'lab' plays the app's %s trials once, got %r"
+                             % ("9" if self.design == "matrix" else "27", self.repeats))
+        if self.order == "lab" and self.design == "matrix":
+            if len(self.references) != 3:
+                raise ValueError("order 'lab' plays the guided app's nine rating trials: three "
+                                 "references, got %d" % len(self.references))
+        elif self.order == "lab" and (self.design != "paper" or tuple(self.references) != NINE
                                     or tuple(self.exemplars) != lab_exemplars(self.lab_rows)
                                     or tuple(self.levels_db) != (1.0, 3.0, 5.0)):
             raise ValueError("order 'lab' plays the app's 27 trials as they were: design "
@@ -231,8 +267,11 @@ class Config:
         elif self.design == "levels":
             t = [(r, r, "own", float(q)) for r in self.references for q in self.levels_db]
         else:
-            t = [(r, m, "own", float(self.levels_db[0])) for r in self.references
-                 for m in self.references]
+            q = float(self.levels_db[0])
+            if self.order == "lab":     # the guided app's ratingorder, nothing drawn
+                refs = self.references
+                return [(refs[r - 1], refs[m - 1], "own", q) for m, r in MATRIX_LAB_ORDER]
+            t = [(r, m, "own", q) for r in self.references for m in self.references]
         t = t * self.repeats
         rng.shuffle(t)
         return t

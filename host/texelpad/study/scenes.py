@@ -39,6 +39,15 @@ def _total_mm(display: dict[str, Any]) -> float:
     return round(display["positions"] * display["dx_um"] / 1000.0, 6)
 
 
+def positions(display: dict[str, Any], whole: bool = True) -> int:
+    """How many display samples the whole display (or split's right half) holds,
+    rounded as the board maps millimetres to positions (texel/runtime/scene.py)."""
+    total = _total_mm(display)
+    start = 0.0 if whole else round(total / 2, 6)
+    at = lambda mm: min(display["positions"], int(mm * 1000.0 / display["dx_um"] + 0.5))  # noqa: E731
+    return at(total) - at(start)
+
+
 def split(reference: dict[str, Any], texel: dict[str, Any], display: dict[str, Any],
           name: str = "") -> dict[str, Any]:
     """Reference on the left half, a rendering on the right half: texel

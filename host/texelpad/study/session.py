@@ -38,7 +38,7 @@ from .. import __version__
 from .legacy import OLD_FORMATS, effective_header
 
 NAME = re.compile(r"^[A-Za-z0-9_-]{1,40}$")
-FORMAT = "texelpad-session/3"          # /1, /2: older (study/legacy.py reads them)
+FORMAT = "texelpad-session/4"          # /1, /2, /3: older (study/legacy.py reads them)
 
 
 class SessionError(ValueError):

@@ -9,8 +9,16 @@ from .. import pursuit as PV
 from .. import scenes as S
 from ..describing import option
 from ..question import Question, played_db, db_of, format_of, reference_of
-from ..space import irregularity_db, pitch_db, texel_params
+from ..space import aliased_samples, irregularity_db, is_above_nyquist, pitch_db, texel_params
 from .base import Protocol, tuples
+
+
+def _texture(c: Any, p: Any, seed: int, v: int, n: int) -> dict[str, Any]:
+    """A point's texture: its texel texture, or above Nyquist with
+    above_nyquist "alias" the n display samples the app's way plays (texelpad.space)."""
+    if c.above_nyquist == "alias" and is_above_nyquist(p):
+        return aliased_samples(p, n, seed=seed, v=v)
+    return texel_params(p, seed=seed, v=v)
 
 
 def _ask(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
@@ -22,7 +30,8 @@ def _ask(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
     v = format_of(header)
     c = st.config
     sa, sb = c.seeds(header["seed"], q.trial, q.index)
-    ta, tb = texel_params(q.a, seed=sa, v=v), texel_params(q.b, seed=sb, v=v)
+    n = S.positions(display, whole=c.presentation == "whole")
+    ta, tb = (_texture(c, p, s, v, n) for p, s in ((q.a, sa), (q.b, sb)))
     if c.presentation == "whole":
         names = ["reference", "A", "B"]
         options = [S.whole(ref, display, name="reference"), S.whole(ta, display, name="A"),
@@ -36,7 +45,8 @@ def _ask(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
                     options,
                     {"reference": ref, "centre": db_of(st.centre), "edge": st.edge,
                      "direction": q.direction, "A": db_of(q.a), "B": db_of(q.b),
-                     "A_is_plus": q.a_is_plus, "seeds": [sa, sb]})
+                     "A_is_plus": q.a_is_plus, "seeds": [sa, sb],
+                     "aliased": [t.get("kind") == "samples" for t in (ta, tb)]})
 
 
 def _trials(st: Any, header: dict[str, Any], display: dict[str, Any],
@@ -74,7 +84,11 @@ def _trials(st: Any, header: dict[str, Any], display: dict[str, Any],
         "answers move the centre: centre += (sum r_k d_k) * %.6f (r_k = +1 / -1 / 0 for the "
         "+d_k point, its opposite, unsure), clamped to the unit square; edge -= %g; A and B "
         "are centre +- edge/4 * d_k; it stops when edge < %g (5 trials, 20 comparisons)"
-        % (c.step, c.edge_step, c.stop_below)]}
+        % (c.step, c.edge_step, c.stop_below),
+        "above_nyquist %r: a point above 19.747 dB (the display's Nyquist pitch) %s"
+        % (c.above_nyquist, "plays aliased, as the app's: display samples the host renders "
+           "from the texel generator's plan at the point's pitch" if c.above_nyquist == "alias"
+           else "plays the texel texture at 19.747 dB")]}
 
 
 def _plot(fig: Any, ax: Any, state: Any) -> None:

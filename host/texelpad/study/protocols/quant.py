@@ -8,7 +8,7 @@ from typing import Any
 from .. import quant as QT
 from .. import rater
 from .. import scenes as S
-from ..describing import split
+from ..describing import split, whole
 from ..question import Question, format_of
 from .base import Protocol, tuples
 
@@ -26,10 +26,18 @@ def _ask(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
     if st.config.rating == "slider":    # the app's slider: continuous, at the middle (3) to start
         rating = {"answers": None, "slider": {"range": [lo, hi], "start": (lo + hi) / 2,
                                               "step": 0.01}}
+    reference = {"kind": "reference", "name": ref}
+    if st.config.presentation == "whole":   # the guided app's: one at a time, whole display
+        names = ["reference", "rendering"]
+        scenes = [S.whole(reference, display, name="reference"),
+                  S.whole(tex, display, name="rendering")]
+    else:
+        names = ["rendering"]
+        scenes = [S.split(reference, tex, display, name="rendering")]
     return Question(dict({"done": False, "kind": "rate", "trial": st.trial,
-                          "of": len(st.trials), "options": ["rendering"]}, **rating),
-                    [S.split({"kind": "reference", "name": ref}, tex, display,
-                             name="rendering")],
+                          "of": len(st.trials), "options": names,
+                          "presentation": st.config.presentation}, **rating),
+                    scenes,
                     {"reference": ref, "match_of": st.current_match, "source": st.current_source,
                      "quant_db": level, "texture": shown, "match_source": st.config.match_source})
 
@@ -59,12 +67,21 @@ def _trials(st: Any, header: dict[str, Any], display: dict[str, Any],
                      "seed": "the felt texture's (else %d)" % st.texture_seeds[of]}
         else:
             right = dict(st.own_texture(of, q, v), kind="texel")
+        if c.presentation == "whole":
+            options = [whole("reference", left, display), whole("rendering", right, display)]
+        else:
+            options = [split("rendering", left, right, display)]
         trials.append({"trial": k, "reference": ref, "match_of": of, "source": src,
-                       "quant_db": q, "options": [split("rendering", left, right, display)],
+                       "quant_db": q, "options": options,
                        "answer": "similarity %d .. %d" % tuple(c.scale)})
     rules = ["design %r, order %r: the trial order is drawn from the session's seed"
              % (c.design, c.order) if c.order == "seeded" else
+             "design 'matrix', order 'lab': the guided app's fixed ratingorder" if
+             c.design == "matrix" else
              "design %r, order 'lab': the app's fixed compareOrder" % c.design]
+    rules.append("presentation %r: %s" % (c.presentation, "the reference and the rendering one "
+                 "at a time on the whole display" if c.presentation == "whole" else
+                 "the reference on the left half, the rendering on the right"))
     if c.matches is None:
         rules.append("no matches in the config: the lab starts it with matches_from (the "
                      "participant's free exploration); each own trial plays the texture felt "

@@ -145,7 +145,8 @@ function show(res) {
     ? "Feel the reference, A and B (one at a time, on the whole display). Which of A and B is " +
       "closer to the reference?"
     : q.kind === "rate"
-    ? PROMPTS.rate + " (" + (q.slider ? q.slider.range[0] : q.answers[0]) +
+    ? (q.presentation === "whole" ? "Feel the reference and the rendering (one at a time, on " +
+       "the whole display). How similar do they feel?" : PROMPTS.rate) + " (" + (q.slider ? q.slider.range[0] : q.answers[0]) +
       " = completely different, " +
       (q.slider ? q.slider.range[1] : q.answers[q.answers.length - 1]) + " = identical)"
     : PROMPTS[q.kind] || "";
