@@ -81,7 +81,8 @@ def screens(data: Path) -> None:
 
 def _run(data: Path, name: str, participant: str, seed: int, n: int, sim, config=None):
     """A session of config `name` answered by the simulated participant."""
-    from texelpad.study import configs, protocols
+    from texelpad.study import configs, finger, protocols
+    from texelpad.study.describe import TPAD_DISPLAY
     from texelpad.study.references import target_point
     from texelpad.study.session import Session
     c = configs.load(name)
@@ -91,11 +92,15 @@ def _run(data: Path, name: str, participant: str, seed: int, n: int, sim, config
     proto = c["protocol"]
     s = Session.create(data, proto, participant, dict(config, config_file=name), seed)
     st = protocols.start(proto, config, seed)
-    for _ in range(n):
+    for k in range(n):
         if st.done:
             break
         if proto == "free":             # the simulated participant aims at each reference
             sim.target = target_point(st.reference)
+        hz = protocols.get(proto).finger_hz(st)
+        if hz:                          # the finger, as the lab records it (study/finger.py)
+            s.append(finger.record(k, k, 0, sim.finger(4.0, hz, TPAD_DISPLAY), 0, hz,
+                                   TPAD_DISPLAY["dx_um"]))
         a = sim.answer(proto, st)
         protocols.apply(proto, st, a)
         scene = {"regions": [{"start_mm": 0, "end_mm": 1, "texture": dict(
@@ -136,7 +141,8 @@ def paper_figures(data: Path) -> None:
     for k in range(8):
         who = "sim%02d" % k
         sim = SimulatedParticipant(target_point("pink"), noise=0.01 + 0.005 * k, seed=k,
-                                   threshold_mm=3.0 + k)
+                                   threshold_mm=3.0 + k, swipe_mm_s=60.0 + 10.0 * k,
+                                   one_way=k % 3 == 0)
         s, st = _run(data, "free-nine", who, k, 9, sim)
         _run(data, "quant-paper", who, k, 27, sim, {"matches": matches.from_free(s, st)})
         _run(data, "similarity-matrix", who, k, 9, sim)

@@ -13,11 +13,14 @@ import pytest
 
 from texelpad import cli
 from texelpad.study import configs as C
+from texelpad.study import finger as F
 from texelpad.study import protocols
 from texelpad.study import questions as Q
 from texelpad.study.describe import TPAD_DISPLAY
 from texelpad.study.export import export
 from texelpad.study.mapping import MEAN_BASE_CPMM, MEAN_RATIO
+from texelpad.study.participant import SimulatedParticipant
+from texelpad.study.space import Point
 from texelpad.study.quant import NINE
 from texelpad.study.rater import match
 from texelpad.study.session import Session
@@ -29,13 +32,18 @@ BP = ("bp-1-0.05", "bp-1-0.5", "bp-1-5", "bp-4-0.05", "bp-4-0.5", "bp-4-5", "bp-
       "bp-20-0.5", "bp-20-5")
 
 
-def _run(data, proto, participant, config, seed, answer, n=None):
+def _run(data, proto, participant, config, seed, answer, n=None, finger=None):
     """A session answered by answer(state) until done (or n answers); each
-    record holds the scene its question played."""
+    record holds the scene its question played; with finger (a simulated
+    participant), each question's 4 s of finger at 100 Hz as the lab writes
+    it (study/finger.py) before its answer."""
     s = Session.create(data, proto, participant, dict(config), seed)
     st = protocols.start(proto, config, seed)
     k = 0
     while not st.done and (n is None or k < n):
+        if finger is not None:
+            s.append(F.record(k, k, 0, finger.finger(4.0, 100, TPAD_DISPLAY), 0, 100,
+                              TPAD_DISPLAY["dx_um"]))
         if Q.sliding(proto, st):
             sc, _ = Q.slider_scene(st, s.header, TPAD_DISPLAY, *st.config.start, 0)
         else:
@@ -88,8 +96,12 @@ def exported(tmp_path_factory):
          else 2)
     _run(data, "quant", "p2", matrix, 6, lambda st: 4 if st.current_match == st.current[0]
          else 1)
-    _run(data, "staircase", "p1", {}, 7, _staircase_pattern())
-    _run(data, "staircase", "p2", {"condition": "wide"}, 8, lambda st: True, n=5)
+    # the finger: p1 swipes rightward only (lifted back), p2 both ways, 91.76 mm/s - one
+    # 91.76-mm span (5 mm from each end of the 101.76-mm display) a second
+    one_way = SimulatedParticipant(Point(0.5, 0.5), swipe_mm_s=91.76, one_way=True)
+    both = SimulatedParticipant(Point(0.5, 0.5), swipe_mm_s=91.76)
+    _run(data, "staircase", "p1", {}, 7, _staircase_pattern(), finger=one_way)
+    _run(data, "staircase", "p2", {"condition": "wide"}, 8, lambda st: True, n=5, finger=both)
     _, mapping_state = _run(data, "mapping", "p1", {}, 9, _mapping_answer)
     res = export(data, out)
     return res, out, mapping_state
@@ -101,6 +113,7 @@ def test_every_paper_figure_is_written_from_its_sessions(exported):
     assert sorted(res["study_figures"]) == sorted([
         "seed000_fig10_matches.png", "seed000_fig15_quantization.png",
         "seed000_fig14c_similarity.png", "seed001_fig2_staircase.png",
+        "seed001_fig3_direction.png",
         "seed001_fig4_mapping.png", "seed001_fig5_ratings.png"])
     for name, (path, _) in res["study_figures"].items():
         assert path == out / name and path.stat().st_size > 5000
@@ -203,3 +216,51 @@ def test_a_figure_is_written_only_when_its_sessions_exist(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "and 1 figures" in printed and "papers' figures" not in printed
     assert list((tmp_path / "o2").glob("seed*.png")) == []
+
+
+def test_fig3_plots_each_subjects_directional_proportion_against_its_convergent_length(exported):
+    """Each trial: 4 s at 100 Hz = 400 samples, 1-s swipes. p1 (rightward, lifted back):
+    samples 1..99 and 201..299 swipe right (0 and 200 follow a lift) = 198, none left:
+    proportion 198/400 = 0.495 every trial. p2 (both ways): right 1..100 and 201..300 =
+    200, left 101..200 and 301..399 = 199: 1/400 = 0.0025. Every swiping sample moves
+    0.9176 mm in 10 ms: 91.76 mm/s, to the position's rounding (5.3 um in 0.92 mm)."""
+    res, out, _ = exported
+    d = res["study_figures"]["seed001_fig3_direction.png"][1]
+    p1, p2 = d["subjects"]
+    assert (p1["participant"], p2["participant"]) == ("p1", "p2")
+    assert p1["per_trial"] == [0.495] * p1["trials"]
+    assert p1["directional_proportion"] == pytest.approx(0.495, abs=1e-12)
+    assert p2["per_trial"] == [0.0025] * 5
+    assert p2["directional_proportion"] == pytest.approx(0.0025, abs=1e-12)
+    assert abs(p1["speed_mm_s"] - 91.76) < 0.05 and p1["speed_sd_mm_s"] < 0.3
+    assert p1["convergent_mm"] is not None and p2["convergent_mm"] is None
+    assert d["r"] == {"speed_mm_s": None, "speed_sd_mm_s": None,       # (one subject plotted)
+                      "directional_proportion": None}
+    with open(out / "sessions.csv") as f:
+        rows = [r for r in csv.DictReader(f) if r["protocol"] == "staircase"]
+    assert {r["finger_samples"] for r in rows} == {"400"}
+    assert {r["directional_proportion"] for r in rows} == {"0.495", "0.0025"}
+
+
+def test_fig3_r_is_pearsons_over_the_subjects_with_both(tmp_path):
+    # three subjects with convergent lengths: DP 0.495 (one way) at three speeds against
+    # lengths from three answer patterns; R of the speeds worked out with numpy here
+    import numpy as np
+    from texelpad.study.export import fig3_data
+    loaded = []
+    # (each pattern ends its staircase: thresholds 24.33, 33.5 and 13.5 mm)
+    for k, (pattern, speed, one_way) in enumerate((([True] * 3 + [False], 60.0, True),
+                                                   ([True] * 3 + [False] * 2, 90.0, False),
+                                                   ([True] * 6 + [False], 120.0, True))):
+        sim = SimulatedParticipant(Point(0.5, 0.5), swipe_mm_s=speed, one_way=one_way)
+        s, st = _run(tmp_path, "staircase", "s%d" % k, {}, 3,
+                     (lambda pat: lambda st: pat[len(st.track) % len(pat)])(pattern),
+                     n=60, finger=sim)
+        assert st.done
+        loaded.append((Session.open(s.path), st))
+    d = fig3_data(loaded)
+    xs = [x["convergent_mm"] for x in d["subjects"]]
+    assert None not in xs and len(set(xs)) == 3
+    for key in ("speed_mm_s", "directional_proportion"):
+        ys = [x[key] for x in d["subjects"]]
+        assert d["r"][key] == round(float(np.corrcoef(xs, ys)[0, 1]), 4)

@@ -3,7 +3,7 @@ summary figure per session (pursuit: the centre's path on the pitch -
 irregularity plane; staircase: the track with its reversals and threshold;
 search: the mean's path and step size; mapping: the matches against the
 references' central frequencies) and the papers' figures over all sessions
-(PAPER_FIGURES: seed 000 Fig. 10, 15, 14c; seed 001 Fig. 2, 4, 5), each
+(PAPER_FIGURES: seed 000 Fig. 10, 15, 14c; seed 001 Fig. 2, 3, 4, 5), each
 written only when the data has sessions of its kind. Reads the files only
 (never a board).
 
@@ -21,6 +21,7 @@ import os
 from pathlib import Path
 from typing import Any, Sequence
 
+from . import finger as F
 from . import protocols
 from .session import Session, SessionError, sessions
 
@@ -31,7 +32,11 @@ COLUMNS = ("participant", "protocol", "session", "config_file", "seed", "n", "ti
            "quant_db", "match_of", "correct", "length_mm", "chosen",
            # (added with the paper's quantization test and seed 001's mapping: after the
            # columns above, so a reader by position still finds those)
-           "source", "pitch_slider", "irregularity_slider")
+           "source", "pitch_slider", "irregularity_slider",
+           # (added with the finger's record, issue 31: seed 001's swipe measures of the
+           # question's finger records, study/finger.py; empty where none was recorded)
+           "finger_samples", "directional_proportion", "swipe_speed_mm_s",
+           "swipe_speed_sd_mm_s")
 
 
 def _texel(scene: dict[str, Any] | None) -> dict[str, Any]:
@@ -73,6 +78,14 @@ def rows(s: Session) -> list[dict[str, Any]]:
                    played_texel_samples=tex.get("texel_samples", ""),
                    played_quant_db=tex.get("quant_db", "") if tex else "",
                    option_played="" if rec.get("playing") is None else rec["playing"])
+        recs = F.of_question(s.records, k)
+        if recs:
+            m = F.measures(recs)
+            row.update(finger_samples=m["samples"],
+                       **{c: "" if m[f] is None else round(m[f], 6) for c, f in (
+                           ("directional_proportion", "directional_proportion"),
+                           ("swipe_speed_mm_s", "speed_mm_s"),
+                           ("swipe_speed_sd_mm_s", "speed_sd_mm_s"))})
         row.update(p.columns(state, a))            # (from the state before the answer)
         row.update(p.columns_after(protocols.apply(proto, state, a)))
         out.append(row)
@@ -313,6 +326,41 @@ def fig2_data(loaded: Loaded) -> dict[str, Any] | None:
             "convergent_mm": [by_cond[c] for c in order]}
 
 
+def fig3_data(loaded: Loaded) -> dict[str, Any] | None:
+    """Seed 001 Fig. 3: per staircase session with a finger record (a
+    subject), its mean |directional proportion| over its trials against its
+    convergent texel length (threshold_mm; sessions without one are listed,
+    not plotted), the per-trial proportions (the inset: the first two
+    sessions), the mean and SD of its swipe speed, and Pearson's R of each
+    against the convergent length over the sessions that have both (seed
+    001: speed 0.2419, SD 0.3171, directional proportion -0.867)."""
+    from scipy.stats import pearsonr
+    subjects = []
+    for s, st in _of(loaded, "staircase"):
+        trials = [F.measures(F.of_question(s.records, k)) for k in range(len(st.track))]
+        trials = [m for m in trials if m["samples"]]
+        if not trials:
+            continue
+        sub = F.subject(trials)
+        subjects.append({"participant": s.header["participant"], "session": s.path.stem,
+                         "convergent_mm": st.threshold_mm(), "trials": len(trials),
+                         "directional_proportion": sub["directional_proportion"],
+                         "signed_directional_proportion": sub["signed_directional_proportion"],
+                         "per_trial": [round(x, 6) for x in sub["per_trial"]],
+                         "speed_mm_s": sub["speed_mm_s"], "speed_sd_mm_s": sub["speed_sd_mm_s"]})
+    if not subjects:
+        return None
+    r: dict[str, float | None] = {}
+    for key in ("speed_mm_s", "speed_sd_mm_s", "directional_proportion"):
+        pts = [(x["convergent_mm"], x[key]) for x in subjects
+               if x["convergent_mm"] is not None and x[key] is not None]
+        ok = len(pts) >= 3 and len({a for a, _ in pts}) > 1 and len({b for _, b in pts}) > 1
+        r[key] = round(float(pearsonr(*zip(*pts))[0]), 4) if ok else None
+    return {"subjects": subjects, "r": r, "paper_r": {"speed_mm_s": 0.2419,
+                                                      "speed_sd_mm_s": 0.3171,
+                                                      "directional_proportion": -0.867}}
+
+
 def fig4_data(loaded: Loaded) -> dict[str, Any] | None:
     """Seed 001 Fig. 4 from the mapping sessions (mapping.summary): a) the
     chosen pitch (the lognormal's mean, c/mm) per reference central
@@ -484,6 +532,41 @@ def plot_fig2(d: dict[str, Any], out: Path) -> Path:
     return _save(fig, out)
 
 
+def plot_fig3(d: dict[str, Any], out: Path) -> Path:
+    plt = _pyplot()
+    fig, (ax, inset) = plt.subplots(1, 2, figsize=(11, 4.4),
+                                    gridspec_kw={"width_ratios": [1.6, 1]})
+    pts = [x for x in d["subjects"] if x["convergent_mm"] is not None
+           and x["directional_proportion"] is not None]
+    ax.plot([x["directional_proportion"] for x in pts], [x["convergent_mm"] for x in pts],
+            "o", color="C0")
+    for x in pts:
+        ax.annotate(x["participant"], (x["directional_proportion"], x["convergent_mm"]),
+                    fontsize=7, xytext=(3, 3), textcoords="offset points")
+    ax.set_xlabel("average directional proportion (mean |proportion| over trials)")
+    ax.set_ylabel("convergent texel length (mm)")
+    ax.set_xlim(-0.02, 1.0)
+    r = d["r"]
+    ax.set_title("a) each subject: R = %s (paper -0.867); swipe speed R = %s (0.242), its SD "
+                 "R = %s (0.317)" % tuple("-" if r[k] is None else "%.3f" % r[k] for k in
+                                          ("directional_proportion", "speed_mm_s",
+                                           "speed_sd_mm_s")), fontsize=8)
+    inset.set_title("b) per trial (the first two subjects; the paper's inset)", fontsize=8)
+    fig.suptitle("Swipe directionality (seed 001, Fig. 3)", fontsize=9)
+    for k, x in enumerate(d["subjects"][:2]):
+        inset.plot(range(1, len(x["per_trial"]) + 1), x["per_trial"], ".-", color="C%d" % (k + 1),
+                   label=x["participant"], lw=0.8, ms=3)
+    inset.axhline(0, color="k", lw=0.5, ls=":")
+    inset.set_ylim(-1.05, 1.05)
+    inset.set_xlabel("trial")
+    inset.set_ylabel("directional proportion (right - left) / samples")
+    inset.legend(fontsize=7)
+    if not pts:
+        ax.text(0.3, 0.5, "no subject has both a finger record\nand a convergent length",
+                transform=ax.transAxes, fontsize=8)
+    return _save(fig, out)
+
+
 def _series(ax: Any, k: int, xs: Sequence[float], rows: Sequence[Sequence[float]],
             label: str) -> None:
     """One series of Fig. 4: every participant's value at each x (nudged by k
@@ -554,6 +637,7 @@ PAPER_FIGURES = (("seed000_fig10_matches.png", fig10_data, plot_fig10),
                  ("seed000_fig15_quantization.png", fig15_data, plot_fig15),
                  ("seed000_fig14c_similarity.png", fig14c_data, plot_fig14c),
                  ("seed001_fig2_staircase.png", fig2_data, plot_fig2),
+                 ("seed001_fig3_direction.png", fig3_data, plot_fig3),
                  ("seed001_fig4_mapping.png", fig4_data, plot_fig4),
                  ("seed001_fig5_ratings.png", fig5_data, plot_fig5))
 

@@ -79,6 +79,9 @@ class SimulatedParticipant:
     threshold_mm: float = 6.0
     slope_mm: float = 1.0
     feel: str = "felt"
+    # the finger (study/finger.py simulated): swipe speed, and rightward only (lifted back)
+    swipe_mm_s: float = 90.0
+    one_way: bool = False
     _rng: random.Random = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -120,6 +123,13 @@ class SimulatedParticipant:
         z = (length_mm - self.threshold_mm) / self.slope_mm
         p = 1.0 / 3.0 + (2.0 / 3.0) / (1.0 + math.exp(-max(-60.0, min(60.0, z))))
         return self._rng.random() < p
+
+    def finger(self, seconds: float, rate_hz: int, display: dict, start_us: int = 0) -> list:
+        """This participant's finger for `seconds` as the board's telemetry
+        records it: (t_us, position or -1, amplitude) at rate_hz."""
+        from .finger import simulated
+        return simulated(seconds, rate_hz, display["dx_um"], display["positions"],
+                         self.swipe_mm_s, self.one_way, start_us)
 
     def jitter(self, scale: float) -> float:
         """Noise of SD noise*scale (the square's units times scale), or 0."""

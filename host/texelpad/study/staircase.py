@@ -42,6 +42,8 @@ from dataclasses import dataclass, field
 from texel.gen.lognormal import to_db
 from texel.gen.params import DX_MM, NYQUIST_CPMM
 
+from .finger import FINGER_HZ
+
 CONDITIONS = {"narrow": 1.2, "wide": 4.3}     # seed 001: the lognormal's SD, c/mm
 
 
@@ -63,6 +65,10 @@ class Config:
     remainder_level: float = 0.0
     whole_texels: bool = True       # False: one texel region over the whole display (before)
     fit_mm: float = 100.0           # seed 001: the texels that fit in the 100-mm display
+    # the finger recorded per trial (seed 001 reports swipe speeds and directions, Fig. 3):
+    # the board's telemetry at this many samples per second, in the session (study/finger.py);
+    # 0: none (sessions of format /3 and older recorded none)
+    finger_hz: int = FINGER_HZ
 
     def texture(self) -> dict:
         """The texel texture's keys of the staircase's distribution (no
@@ -79,6 +85,10 @@ class Config:
         if self.condition not in CONDITIONS:
             raise ValueError("condition: expected 'narrow' (SD 1.2 c/mm) or 'wide' (SD 4.3 "
                              "c/mm), got %r" % (self.condition,))
+        if isinstance(self.finger_hz, bool) or not isinstance(self.finger_hz, int) \
+                or not 0 <= self.finger_hz <= 1000:
+            raise ValueError("finger_hz: expected telemetry samples per second 0 (none) .. "
+                             "1000, got %r" % (self.finger_hz,))
         if self.phase not in ("continuous", "reset"):
             raise ValueError("phase: expected 'reset' (seed 001) or 'continuous', got %r"
                              % (self.phase,))

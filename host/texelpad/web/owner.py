@@ -212,8 +212,28 @@ class BoardOwner:
             return b.finger([(0.0, position_mm)])
         return self._call(go)
 
+    # the telemetry stream the lab's finger recording set: (the Board, rate_hz)
+    _stream_of: tuple[Board, int] | None = None
+
+    def finger_samples(self, rate_hz: int) -> tuple[list[tuple[int, int, int]], int, bool]:
+        """The board's telemetry samples since the last read at rate_hz
+        (t_us, position or -1, amplitude), how many the ring lapped, and
+        whether the stream was (re)started by this call - its samples then
+        come from before the caller's moment, and it may drop them
+        (a new connection, a replugged board: the stream is set again)."""
+        def go(b: Board) -> tuple[list[tuple[int, int, int]], int, bool]:
+            fresh = self._stream_of is None or self._stream_of[0] is not b \
+                or self._stream_of[1] != rate_hz
+            if fresh:
+                b.stream(rate_hz)
+                self._stream_of = (b, rate_hz)
+            samples, lost = b.telemetry()
+            return samples, lost, fresh
+        return self._call(go)
+
     def telemetry(self, seconds: float, rate_hz: int = 125) -> list[tuple[int, int, int]]:
         """The board's own record of what it played for `seconds`: (t_us,
         position or -1, uint16 amplitude) samples taken by its refresh
         (Board.monitor; the stream is turned off again at the end)."""
+        self._stream_of = None          # (monitor turns the stream off at its end)
         return self._call(lambda b: list(b.monitor(seconds, rate_hz)))

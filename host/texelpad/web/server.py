@@ -67,6 +67,7 @@ from starlette.staticfiles import StaticFiles
 
 from ..link.board import host_check
 from ..study import configs as C
+from ..study import finger as F
 from ..study import matches as M
 from ..study import protocols
 from ..study import questions as Q
@@ -129,9 +130,56 @@ class Lab:
         # what the strip and the editor hold between requests, made with their routes
         self.strip_cache: Any = None        # web/strip.py StripCache
         self.editor: Any = None             # web/editor.py Editor
+        # the finger recorder (study/finger.py): a thread reading the board's telemetry
+        # while a recording session's question plays, started with the first one
+        self._recorder: threading.Thread | None = None
+        self._stopping = threading.Event()
 
     def close(self) -> None:
+        self._stopping.set()
+        if self._recorder is not None:
+            self._recorder.join(timeout=5.0)
         self.data_lock.release()
+
+    # --- the finger, recorded per trial (study/finger.py) -----------------------------
+    def _finger_hz(self, lv: Live) -> int:
+        return protocols.get(lv.protocol).finger_hz(lv.state)
+
+    def _finger(self, lv: Live, keep: bool = True) -> None:
+        """Read the board's telemetry ring; keep: write what it held as lv's
+        finger record of the question asked and the option playing (one
+        append, fsynced, as an answer is). Samples of a stream just
+        (re)started are from before this moment: dropped."""
+        hz = self._finger_hz(lv)
+        if not hz:
+            return
+        samples, lost, fresh = self.owner.finger_samples(hz)
+        if self._recorder is None and not self._stopping.is_set():
+            self._recorder = threading.Thread(target=self._record_loop, daemon=True,
+                                              name="texelpad-lab-finger")
+            self._recorder.start()
+        if fresh or not keep or not (samples or lost) or lv.session.finished:
+            return
+        n = self._number(lv)
+        trial = lv.question.public.get("trial", n) if lv.question is not None else n
+        lv.session.append(F.record(n, trial, lv.playing, samples, lost, hz,
+                                   self.owner.display()["dx_um"]))
+
+    def _plays_now(self, lv: Live) -> bool:
+        return (lv.playing is not None and self.board_session == lv.key
+                and lv.connection == self.owner.connections)
+
+    def _record_loop(self) -> None:
+        """Every FINGER_POLL_S: the session whose question plays, if it records the finger."""
+        while not self._stopping.wait(F.FINGER_POLL_S):
+            with self.lock:
+                lv = self._owning()
+                if lv is None or not self._finger_hz(lv):
+                    continue
+                try:
+                    self._finger(lv)
+                except (BoardLost, ValueError, SessionError, OSError):
+                    pass        # (a lost board is said by the next request; nothing to keep)
 
     # --- whose scene plays -------------------------------------------------------------
     def _took_board(self, lv: Live) -> None:
@@ -179,6 +227,8 @@ class Lab:
 
     def _play(self, lv: Live, k: int) -> None:
         assert lv.question is not None              # an option is played from its question
+        if self._finger_hz(lv):     # what the finger did while the option before played
+            self._finger(lv, keep=self._plays_now(lv))
         _, canonical = self.owner.push(lv.question.options[k])
         lv.playing, lv.playing_scene = k, canonical
         self._took_board(lv)
@@ -416,6 +466,10 @@ class Lab:
                            % ("another page played on it since" if lv.playing is not None
                               else "it played something else since"))
         p = protocols.get(lv.protocol)
+        try:
+            self._finger(lv)        # the trial's last finger samples, before its answer
+        except BoardLost:
+            pass                    # (the answer is kept; the next question says the board)
         rec = dict({"question": q.public, "answer": taken, "scene": lv.playing_scene,
                     "playing": lv.playing, "state": q.detail}, **p.record(q, body["answer"]))
         lv.session.append(rec)                          # on disk first, then the state moves

@@ -45,6 +45,9 @@ class Protocol:
     FIXED = False
     # its session figure shows the nine references on the pitch-irregularity plane
     ON_PLANE = False
+    # the lab records the board's telemetry per trial in its sessions (study/finger.py)
+    # at its Config's finger_hz samples per second
+    RECORDS_FINGER = False
 
     # --- the state ----------------------------------------------------------------------
     def state(self, config: dict[str, Any], seed: int, fmt: int) -> Any:
@@ -101,6 +104,10 @@ class Protocol:
     def simulate(self, who: Any, state: Any) -> Any:
         """The simulated participant `who`'s answer to the question asked now."""
         raise NotImplementedError
+
+    def finger_hz(self, state: Any) -> int:
+        """Telemetry samples per second the lab records per trial (0: none)."""
+        return int(getattr(state.config, "finger_hz", 0)) if self.RECORDS_FINGER else 0
 
     # --- export (study/export.py) ---------------------------------------------------------
     def columns(self, state: Any, answer: Any) -> dict[str, Any]:

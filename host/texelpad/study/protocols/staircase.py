@@ -81,6 +81,7 @@ def _plot(fig: Any, ax: Any, state: Any) -> None:
 class StaircaseProtocol(Protocol):
     NAME = "staircase"
     TITLE = "texel-length oddity staircase (seed 001)"
+    RECORDS_FINGER = True
 
     ask = staticmethod(_ask)
     plot = staticmethod(_plot)
