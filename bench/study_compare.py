@@ -5,8 +5,8 @@ within 1 dB of each of the nine reference textures, side by side - per
 answer, and at equal numbers of textures felt (issue 20).
 
     .venv/bin/python -m bench.study_compare [--seeds N] [--noise DB [DB ...]]
-        [--max-answers N] [--picks N] [--feel felt|plane] [--json PATH]
-        [--figure PATH]
+        [--max-answers N] [--picks N] [--feel felt|plane]
+        [--update rank_one|positive|active] [--json PATH] [--figure PATH]
 
 The model (docs/lab-benchmark.md):
 - targets: texelpad.study.references.target_point - each reference's point
@@ -66,12 +66,14 @@ import time
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
-from texelpad.search.preference import PreferenceSearch
+from texelpad.search.preference import UPDATES, PreferenceSearch
 from texelpad.study import references as R
 from texelpad.analysis.perception import JND_DB
 from texelpad.study.participant import FEELS, SimulatedParticipant
 from texelpad.study.pursuit import DIRECTIONS, Pursuit
 from texelpad.study.space import PITCH_DB_PER_U, Point, irregularity_db, pitch_db
+
+DEFAULT_UPDATE = PreferenceSearch.cma_update     # the search's own default (seed 003's)
 
 WITHIN_DB = 1.0
 PROTOCOL_SEED_OFFSET = 1000     # protocol seed = participant seed + this (independent streams)
@@ -146,10 +148,11 @@ def run_pursuit(target: Point, noise_db: float, seed: int, feel: str = "felt") -
 
 
 def run_search(target: Point, noise_db: float, seed: int, max_answers: int,
-               feel: str = "felt") -> list[float]:
-    """The distance (dB) of the search's mean after 0, 1, ..., max_answers picks."""
+               feel: str = "felt", update: str = DEFAULT_UPDATE) -> list[float]:
+    """The distance (dB) of the search's mean after 0, 1, ..., max_answers picks
+    (update: the search's cma_update, texelpad.search.preference)."""
     who = _participant(target, noise_db, seed, feel)
-    s = PreferenceSearch(seed=seed + PROTOCOL_SEED_OFFSET, x0=(0.5, 0.5))
+    s = PreferenceSearch(seed=seed + PROTOCOL_SEED_OFFSET, x0=(0.5, 0.5), cma_update=update)
     u, v = s.mean
     curve = [_distance(who, u, v)]
     for _ in range(max_answers):
@@ -230,12 +233,12 @@ def summarise(runs: list[dict], at: int) -> dict:
 
 
 def _one_run(method: str, t: Point, noise: float, seed: int, max_answers: int,
-             feel: str) -> dict[str, Any]:
+             feel: str, update: str = DEFAULT_UPDATE) -> dict[str, Any]:
     if method == "pursuit":
         curve, partial = run_pursuit_curves(t, noise, seed, feel)
         extra = {"partial_db": partial}
     else:
-        curve, extra = run_search(t, noise, seed, max_answers, feel), {}
+        curve, extra = run_search(t, noise, seed, max_answers, feel, update), {}
     return {"method": method, "answers": len(curve) - 1,
             "textures_per_answer": TEXTURES_PER_ANSWER[method],
             "answers_to_1db": first_within(curve), "final_db": curve[-1], "curve_db": curve,
@@ -244,8 +247,11 @@ def _one_run(method: str, t: Point, noise: float, seed: int, max_answers: int,
 
 def run(references: Sequence[str] = R.REFERENCES, seeds: int = DEFAULT_SEEDS,
         noise_db: Sequence[float] = DEFAULT_NOISE_DB, max_answers: int = DEFAULT_MAX_ANSWERS,
-        progress: Progress | None = None, feel: str = "felt", picks: int = DEFAULT_PICKS) -> dict:
+        progress: Progress | None = None, feel: str = "felt", picks: int = DEFAULT_PICKS,
+        update: str = DEFAULT_UPDATE) -> dict:
     """Every (reference, noise, seed, method) run and the summaries."""
+    if update not in UPDATES:
+        raise ValueError("update: expected one of %s, got %r" % (", ".join(UPDATES), update))
     if feel not in FEELS:
         raise ValueError("feel: expected one of %s, got %r" % (", ".join(FEELS), feel))
     if seeds < 1 or max_answers < 1:
@@ -267,7 +273,8 @@ def run(references: Sequence[str] = R.REFERENCES, seeds: int = DEFAULT_SEEDS,
             for seed in range(seeds):
                 for method in METHODS:
                     results.append({"reference": name, "noise_db": noise, "seed": seed,
-                                    **_one_run(method, t, noise, seed, max_answers, feel)})
+                                    **_one_run(method, t, noise, seed, max_answers, feel,
+                                               update)})
         if progress:
             progress("study_compare: %d/%d %s done (%.1f s)"
                      % (i + 1, len(references), name, time.perf_counter() - t0))
@@ -292,6 +299,7 @@ def run(references: Sequence[str] = R.REFERENCES, seeds: int = DEFAULT_SEEDS,
                        "textures_per_answer": TEXTURES_PER_ANSWER,
                        "protocol_seed_offset": PROTOCOL_SEED_OFFSET,
                        "weighting": R.WEIGHTING, "x0": [0.5, 0.5], "feel": feel,
+                       "cma_update": update,
                        "unsure_db": 0.0 if feel == "plane" else JND_DB},
             "targets": targets, "results": results, "summary": summary,
             "seconds": time.perf_counter() - t0}
@@ -524,6 +532,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--feel", choices=FEELS, default="felt",
                    help="the participant's distance: felt (the felt plane, the default) or "
                         "plane (the unit square's Euclidean oracle)")
+    p.add_argument("--update", choices=UPDATES, default=DEFAULT_UPDATE,
+                   help="the search's covariance update (texelpad.search.preference "
+                        "cma_update; default %(default)s, seed 003's)")
     p.add_argument("--json", metavar="PATH")
     p.add_argument("--figure", metavar="PATH")
     a = p.parse_args(argv)
@@ -546,7 +557,7 @@ def main(argv: list[str] | None = None) -> int:
         print(msg, file=sys.stderr, flush=True)
 
     res = run(seeds=a.seeds, noise_db=a.noise, max_answers=a.max_answers, progress=progress,
-              feel=a.feel, picks=a.picks)
+              feel=a.feel, picks=a.picks, update=a.update)
     print(format_table(res))
     print()
     print(format_effort(res))

@@ -103,17 +103,25 @@ def exported(tmp_path_factory):
     _run(data, "staircase", "p1", {}, 7, _staircase_pattern(), finger=one_way)
     _run(data, "staircase", "p2", {"condition": "wide"}, 8, lambda st: True, n=5, finger=both)
     _, mapping_state = _run(data, "mapping", "p1", {}, 9, _mapping_answer)
+    # two searches of 4sin: 2 picks, the friction slider moved once, one save; 3 picks, never
+    search = dict(C.load("search-4sin")["config"], reference={"kind": "reference",
+                                                                "name": "4sin"})
+    for who, answers in (("p1", [{"choose": 0, "level": 1.0}, {"choose": 1, "level": 0.6},
+                                 {"save": 0, "level": 0.6}, {"stop": True}]),
+                         ("p2", [{"choose": 2}, {"choose": 0}, {"choose": 1}, {"stop": True}])):
+        it = iter(answers)
+        _run(data, "search", who, search, 12, lambda st: next(it))
     res = export(data, out)
     return res, out, mapping_state
 
 
 def test_every_paper_figure_is_written_from_its_sessions(exported):
     res, out, _ = exported
-    assert res["broken"] == [] and len(res["figures"]) == 9
+    assert res["broken"] == [] and len(res["figures"]) == 11
     assert sorted(res["study_figures"]) == sorted([
         "seed000_fig10_matches.png", "seed000_fig15_quantization.png",
         "seed000_fig14c_similarity.png", "seed001_fig2_staircase.png",
-        "seed001_fig3_direction.png",
+        "seed001_fig3_direction.png", "seed003_table1_search.png",
         "seed001_fig4_mapping.png", "seed001_fig5_ratings.png"])
     for name, (path, _) in res["study_figures"].items():
         assert path == out / name and path.stat().st_size > 5000
@@ -264,3 +272,21 @@ def test_fig3_r_is_pearsons_over_the_subjects_with_both(tmp_path):
     for key in ("speed_mm_s", "directional_proportion"):
         ys = [x[key] for x in d["subjects"]]
         assert d["r"][key] == round(float(np.corrcoef(xs, ys)[0, 1]), 4)
+
+
+def test_table1_counts_each_searchs_iterations_tunings_and_time(exported):
+    """p1: two picks, the slider moved once (1.0 -> 0.6; the save at 0.6 moves nothing), one
+    save; p2: three picks, the slider never moved. Mean and SD (n - 1) over the two."""
+    res, out, _ = exported
+    d = res["study_figures"]["seed003_table1_search.png"][1]
+    (row,) = d["rows"]
+    assert row["reference"] == "4sin" and row["sessions"] == 2 and row["slider"]
+    assert row["iterations"] == [2.5, round(0.5 ** 0.5, 4)]
+    assert row["tunings"] == [0.5, round(0.5 ** 0.5, 4)]
+    assert row["saved"] == [0.5, round(0.5 ** 0.5, 4)]
+    assert 0 <= row["minutes"][0] < 1                  # (written in a moment here)
+    assert [r["reference"] for r in d["paper"]] == ["ABS", "Wood", "Fiberglass", "Canvas",
+                                                    "Stone"]
+    with open(out / "seed003_table1_search.csv") as f:
+        (r,) = list(csv.DictReader(f))
+    assert r["reference"] == "4sin" and float(r["iterations_mean"]) == 2.5

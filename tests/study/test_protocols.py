@@ -148,7 +148,9 @@ def test_staircase_converges_near_a_simulated_threshold():
 
 @pytest.mark.parametrize("target", [Point(0.3, 0.7), Point(0.75, 0.2), Point(0.5, 0.5)])
 def test_search_reaches_a_noiseless_participants_target(target):
-    s = PreferenceSearch(seed=11)
+    # (cma's active update; seed 003's rank-one update, the default, is measured beside it in
+    # docs/lab.md: bench/results/search_updates.txt)
+    s = PreferenceSearch(seed=11, cma_update="active")
     sim = SimulatedParticipant(target)
     for _ in range(60):
         xs = s.ask()
@@ -159,6 +161,38 @@ def test_search_reaches_a_noiseless_participants_target(target):
     print("\nsearch to %s: %d iterations, %d choices, mean %s"
           % (target, s.iteration, s.iteration, [round(v, 3) for v in s.mean]))
     assert Point(*s.mean).distance(target) < 0.025
+
+
+def test_the_searchs_update_is_the_one_its_config_names():
+    # seed 003's Algorithm 1 adapts C "by rank-one update": no negative weights, no rank-mu
+    for update, negative, rank_mu in (("rank_one", False, False), ("positive", False, True),
+                                      ("active", True, True)):
+        sp = PreferenceSearch(seed=3, cma_update=update)._es.sp
+        assert (min(sp.weights) < 0) == negative and (sp.cmu > 0) == rank_mu, update
+    assert PreferenceSearch(seed=3).cma_update == "rank_one"
+    with pytest.raises(ValueError, match="cma_update: expected"):
+        PreferenceSearch(seed=3, cma_update="fast")
+
+
+def test_the_friction_slider_sets_every_candidates_level_and_counts_its_tunings():
+    s = PreferenceSearch(seed=4)
+    assert s.level_slider and s.level == 1.0
+    assert all(c["gain"] == 1.0 for c in s.candidates())
+    s.choose(0)                                 # no level: unchanged, no tuning
+    s.choose(1, level=0.6)
+    assert s.level == 0.6 and s.tunings == 1
+    assert all(c["gain"] == 0.6 for c in s.candidates())
+    s.save(2, level=0.6)                        # the same level: no tuning
+    s.choose(2, level=0.45)
+    assert s.tunings == 2 and s.history[-1]["level"] == 0.45 and s.saved[0]["params"]["gain"] == 0.6
+    for bad in (0.1, 1.5, True, "0.5", float("nan")):
+        with pytest.raises(ValueError, match="level: expected"):
+            s.choose(0, level=bad)
+    assert s.iteration == 3 and s.level == 0.45        # a refused answer changed nothing
+    with pytest.raises(ValueError, match="no friction slider"):
+        PreferenceSearch(seed=4, level_slider=False).choose(0, level=0.5)
+    with pytest.raises(ValueError, match="not both"):
+        PreferenceSearch(seed=4, dims=("pitch", "irregularity", "level"))
 
 
 def test_search_is_mirrored_ranked_and_deterministic():

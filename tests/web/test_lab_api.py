@@ -415,3 +415,35 @@ def test_browser_tabs_at_once_are_served_one_at_a_time(tmp_path):
     for sid in sids:
         s = Session.open(tmp_path / (sid + ".jsonl"))
         assert [r["answer"] for r in s.answers()] == sent[sid]
+
+
+def test_the_searchs_friction_slider_plays_and_is_answered_as_it_plays(lab, port):
+    # seed 003's friction slider: a feel with a level plays that candidate at that gain; an
+    # answer must carry the level that plays (409 otherwise, nothing changed); the state keeps it
+    r = lab.post("/api/sessions", json={"config": "search-4sin", "participant": "s1", "seed": 3})
+    sid = r.json()["id"]
+    lv = lab.lab.live[sid]
+    q = lab.get("/api/sessions/%s" % sid).json()["question"]
+    assert q["level"] == {"range": [0.2, 1.0], "start": 1.0, "step": 0.01}
+    assert lv.session.header["config"]["cma_update"] == "rank_one"
+    assert lab.post("/api/sessions/%s/feel" % sid, json={"option": 2, "level": 0.55}
+                    ).json() == {"playing": 2}
+    assert _playing(lab)["regions"][1]["texture"]["gain"] == 0.55
+    for bad in (1.2, "x", True):
+        r = lab.post("/api/sessions/%s/feel" % sid, json={"option": 1, "level": bad})
+        assert r.status_code == 400 and "level" in r.json()["error"], r.text
+    assert _playing(lab)["regions"][1]["texture"]["gain"] == 0.55
+    r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": {"choose": 2}, "question": 0})
+    assert r.status_code == 409 and "level answered (1.0) is not what plays (0.55)" in r.text
+    r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": {"choose": 2, "level": 0.55},
+                                                         "question": 0})
+    assert r.status_code == 200, r.text
+    assert lv.state.level == 0.55 and lv.state.tunings == 1
+    # the next iteration starts at that level, every candidate
+    assert _playing(lab)["regions"][1]["texture"]["gain"] == 0.55
+    r = lab.post("/api/sessions/%s/answer" % sid, json={"answer": {"stop": True}, "question": 1})
+    assert r.status_code == 200, r.text
+    # replayed from the file: the same level and tunings
+    from texelpad.study import protocols
+    st = protocols.replay(Session.open(lv.session.path))
+    assert (st.level, st.tunings, st.cma_update) == (0.55, 1, "rank_one")

@@ -167,8 +167,15 @@ def test_search_clicked_through(browser, lab):
     _blind(p)
     for i in range(3):
         p.click("#feel-%d" % (i % 3))
+        p.wait_for_selector("#feel-%d.playing" % (i % 3))
+        if i == 1:          # seed 003's friction slider: the candidate plays again at 0.6
+            with p.expect_response(lambda r: r.url.endswith("/feel")):
+                p.eval_on_selector("#level", "e => { e.value = '0.6'; "
+                                   "e.dispatchEvent(new Event('change')); }")
+            assert _get(url + "api/scene")["scene"]["regions"][1]["texture"]["gain"] == 0.6
         p.click("#answer-%d" % (i % 3))                     # choose 1, 2, 3
         _wait_answers(p, i + 1)
+    assert p.input_value("#level") == "0.6"                 # (kept across iterations)
     p.click("#answer-4")                                    # save candidate 2
     _wait_answers(p, 4)
     p.click("#feel-2")
@@ -176,9 +183,11 @@ def test_search_clicked_through(browser, lab):
     p.click("#answer-6")                                    # satisfied: stop
     _wait_answers(p, 5, done=True)
     s = _finish(url, data, sid, 5)
-    assert [r["answer"] for r in s.answers()] == [{"choose": 0}, {"choose": 1}, {"choose": 2},
-                                                  {"save": 1}, {"stop": True}]
+    assert [r["answer"] for r in s.answers()] == [
+        {"choose": 0, "level": 1.0}, {"choose": 1, "level": 0.6}, {"choose": 2, "level": 0.6},
+        {"save": 1, "level": 0.6}, {"stop": True}]
     assert len(s.records[-1]["result"]["saved"]) == 1
+    assert s.records[-1]["result"]["saved"][0]["params"]["gain"] == 0.6
 
 
 def test_free_exploration_then_quantization_clicked_through(browser, lab):

@@ -3,7 +3,8 @@ summary figure per session (pursuit: the centre's path on the pitch -
 irregularity plane; staircase: the track with its reversals and threshold;
 search: the mean's path and step size; mapping: the matches against the
 references' central frequencies) and the papers' figures over all sessions
-(PAPER_FIGURES: seed 000 Fig. 10, 15, 14c; seed 001 Fig. 2, 3, 4, 5), each
+(PAPER_FIGURES: seed 000 Fig. 10, 15, 14c; seed 001 Fig. 2, 3, 4, 5; seed 003
+Table I, also as CSV), each
 written only when the data has sessions of its kind. Reads the files only
 (never a board).
 
@@ -633,13 +634,100 @@ def plot_fig5(d: dict[str, Any], out: Path) -> Path:
     return _save(fig, out)
 
 
+def table1_data(loaded: Loaded) -> dict[str, Any] | None:
+    """Seed 003 Table I (Phase 1: texture search) from the finished search
+    sessions, per reference: the number of selection iterations (picks), of
+    friction tunings (iterations whose answer moved the friction slider:
+    PreferenceSearch.tunings) and the time in minutes from the session's start
+    to its end (the stop), each mean and SD over the sessions (the paper's
+    "M +- SD"; SD None for one session), and the saved textures."""
+    from datetime import datetime
+    by: dict[str, list[dict[str, Any]]] = {}
+    for s, st in _of(loaded, "search"):
+        if not st.done or not s.records:
+            continue
+        ref = (s.header["config"].get("reference") or {}).get("name", "4sin")
+        minutes = (datetime.fromisoformat(s.records[-1]["time"])       # (the stop, or its end)
+                   - datetime.fromisoformat(s.header["time"])).total_seconds() / 60.0
+        by.setdefault(ref, []).append({"iterations": st.iteration, "tunings": st.tunings,
+                                       "minutes": minutes, "saved": len(st.saved),
+                                       "slider": st.level_slider,
+                                       "session": "%s/%s" % (s.header["participant"],
+                                                             s.path.stem)})
+    if not by:
+        return None
+    from .references import REFERENCES
+    refs = [r for r in REFERENCES if r in by] + sorted(r for r in by if r not in REFERENCES)
+    rows = []
+    for r in refs:
+        runs = by[r]
+        row: dict[str, Any] = {"reference": r, "sessions": len(runs),
+                               "slider": all(x["slider"] for x in runs)}
+        for key in ("iterations", "tunings", "minutes", "saved"):
+            xs = [float(x[key]) for x in runs]
+            row[key] = [round(_mean(xs), 4), round(_sd(xs), 4) if len(xs) > 1 else None]
+        rows.append(row)
+    return {"rows": rows, "paper": [
+        {"reference": "ABS", "iterations": [5.2, 2.77], "tunings": [2.2, 0.84],
+         "minutes": [4.44, 1.28]},
+        {"reference": "Wood", "iterations": [5.0, 4.53], "tunings": [3.2, 1.64],
+         "minutes": [4.35, 2.25]},
+        {"reference": "Fiberglass", "iterations": [5.4, 2.70], "tunings": [2.4, 1.14],
+         "minutes": [4.38, 0.79]},
+        {"reference": "Canvas", "iterations": [4.4, 1.52], "tunings": [2.4, 1.34],
+         "minutes": [5.01, 2.2]},
+        {"reference": "Stone", "iterations": [3.8, 1.10], "tunings": [1.8, 1.64],
+         "minutes": [3.56, 0.79]}]}
+
+
+def _sd(xs: Sequence[float]) -> float:
+    m = _mean(xs)
+    return (sum((x - m) ** 2 for x in xs) / (len(xs) - 1)) ** 0.5
+
+
+def _pm(v: list[float | None]) -> str:
+    return "%.2f" % v[0] if v[1] is None else "%.2f +- %.2f" % (v[0], v[1])
+
+
+def plot_table1(d: dict[str, Any], out: Path) -> Path:
+    """The table as a figure (and beside it, the same as CSV: out with .csv)."""
+    plt = _pyplot()
+    head = ["texture", "sessions", "# of iterations", "# of friction tuning", "time (mins)",
+            "saved"]
+    cells = [[r["reference"], str(r["sessions"]), _pm(r["iterations"]),
+              _pm(r["tunings"]) if r["slider"] else "(no slider)", _pm(r["minutes"]),
+              _pm(r["saved"])] for r in d["rows"]]
+    paper = [["%s (paper)" % r["reference"], "5", _pm(r["iterations"]), _pm(r["tunings"]),
+              _pm(r["minutes"]), ""] for r in d["paper"]]
+    fig, ax = plt.subplots(figsize=(9, 0.9 + 0.32 * (len(cells) + len(paper) + 1)))
+    ax.axis("off")
+    t = ax.table(cellText=cells + paper, colLabels=head, loc="center", cellLoc="center")
+    t.auto_set_font_size(False)
+    t.set_fontsize(8)
+    for k in range(len(paper)):
+        for j in range(len(head)):
+            t[(len(cells) + k + 1, j)].set_text_props(color="0.45")
+    ax.set_title("Texture search (seed 003, Table I): M +- SD per texture; grey: the paper's "
+                 "five real textures", fontsize=9)
+    with open(out.with_suffix(".csv"), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["reference", "sessions", "iterations_mean", "iterations_sd",
+                    "tunings_mean", "tunings_sd", "minutes_mean", "minutes_sd", "saved_mean",
+                    "saved_sd"])
+        for r in d["rows"]:
+            w.writerow([r["reference"], r["sessions"], *r["iterations"], *r["tunings"],
+                        *r["minutes"], *r["saved"]])
+    return _save(fig, out)
+
+
 PAPER_FIGURES = (("seed000_fig10_matches.png", fig10_data, plot_fig10),
                  ("seed000_fig15_quantization.png", fig15_data, plot_fig15),
                  ("seed000_fig14c_similarity.png", fig14c_data, plot_fig14c),
                  ("seed001_fig2_staircase.png", fig2_data, plot_fig2),
                  ("seed001_fig3_direction.png", fig3_data, plot_fig3),
                  ("seed001_fig4_mapping.png", fig4_data, plot_fig4),
-                 ("seed001_fig5_ratings.png", fig5_data, plot_fig5))
+                 ("seed001_fig5_ratings.png", fig5_data, plot_fig5),
+                 ("seed003_table1_search.png", table1_data, plot_table1))
 
 
 def study_figures(loaded: Loaded, out_dir: str | os.PathLike) -> dict[str, Any]:

@@ -16,7 +16,8 @@
   field of the protocol's resolved Config as it was, so only the fields added
   since are missing; reading fills in what played (ADDED_SINCE_V3: the
   similarity matrix on a split display in a seeded order, the pursuit's
-  points above Nyquist clamped, no finger recorded in a staircase). Every older format gets the same fills.
+  points above Nyquist clamped, no finger recorded in a staircase, the
+  search's update cma's active one and no friction slider). Every older format gets the same fills.
 Headers written since (format /4) hold every field of the protocol's
 resolved Config (protocols.resolved), so nothing needs filling.
 
@@ -40,6 +41,7 @@ ADDED_SINCE_V3: dict[str, dict[str, Any]] = {
     "quant": {"order": "seeded", "presentation": "split"},
     "pursuit": {"above_nyquist": "clamp"},
     "staircase": {"finger_hz": 0},          # (no finger was recorded)
+    "search": {"cma_update": "active", "level_slider": False},     # (cma's default, no slider)
 }
 # /1 and /2 quantization sessions: what their rater_rows played (study/rater.py)
 V2_RATER_ROWS = {"by_texture": "statistics-2026", "app": "index-2026"}

@@ -101,6 +101,8 @@ class Live:
     moves: int = 0                          # sliding protocols: slider changes this trial
     sliders: tuple[float, float] | None = None
     resume_scene: dict[str, Any] | None = None  # resumed mid-trial: the scene the file last had
+    feel: dict[str, Any] | None = None      # the protocol's FEEL_KEYS settings playing (the
+                                            # search's friction slider); None: its feel_state
 
     @property
     def protocol(self) -> str:
@@ -225,11 +227,22 @@ class Lab:
             lv.question = Q.ask(lv.protocol, lv.state, lv.session.header, self.owner.display())
         return lv.question
 
-    def _play(self, lv: Live, k: int) -> None:
+    def _feel(self, lv: Live) -> dict[str, Any]:
+        if lv.feel is None:
+            lv.feel = protocols.get(lv.protocol).feel_state(lv.state)
+        return lv.feel
+
+    def _play(self, lv: Live, k: int, feel: dict[str, Any] | None = None) -> None:
+        """Play option k of the question (with the protocol's FEEL_KEYS
+        settings: feel, else those playing)."""
         assert lv.question is not None              # an option is played from its question
+        p = protocols.get(lv.protocol)
+        scene = p.feel_scene(lv.state, lv.question, k, dict(self._feel(lv), **(feel or {})))
         if self._finger_hz(lv):     # what the finger did while the option before played
             self._finger(lv, keep=self._plays_now(lv))
-        _, canonical = self.owner.push(lv.question.options[k])
+        _, canonical = self.owner.push(scene)
+        if feel:
+            lv.feel = dict(lv.feel or {}, **feel)
         lv.playing, lv.playing_scene = k, canonical
         self._took_board(lv)
 
@@ -436,11 +449,17 @@ class Lab:
             ka, kb = Q.SLIDER_KEYS[lv.protocol]
             keys(body, {ka, kb, "question"})
             return self._slide(lv, body.get(ka), body.get(kb))
-        keys(body, {"option", "question"})
+        p = protocols.get(lv.protocol)
+        keys(body, {"option", "question", *p.FEEL_KEYS})
         k = body.get("option")
         if isinstance(k, bool) or not isinstance(k, int) or not 0 <= k < len(q.options):
             raise Refused("option: expected 0 .. %d, got %r" % (len(q.options) - 1, k))
-        self._play(lv, k)
+        feel = {f: body[f] for f in p.FEEL_KEYS if f in body}
+        try:
+            p.feel_scene(lv.state, q, k, dict(self._feel(lv), **feel))     # (checked first)
+        except ValueError as e:
+            raise Refused(str(e)) from None
+        self._play(lv, k, feel)
         return {"playing": k}
 
     def answer(self, participant: str, name: str, body: dict[str, Any]) -> dict[str, Any]:
@@ -459,6 +478,14 @@ class Lab:
                 raise Conflict("the sliders answered %s are not what plays (%s): feel it, "
                                "then answer - nothing changed"
                                % (list(answered), list(lv.sliders or ())))
+        pr = protocols.get(lv.protocol)
+        if pr.FEEL_KEYS and isinstance(taken, dict) and "stop" not in taken:
+            base = pr.feel_state(lv.state)          # (what an answer without it keeps)
+            for f in pr.FEEL_KEYS:                  # (the search's friction slider)
+                answered, playing = taken.get(f, base.get(f)), self._feel(lv).get(f)
+                if answered != playing:
+                    raise Conflict("the %s answered (%r) is not what plays (%r): feel it, "
+                                   "then answer - nothing changed" % (f, answered, playing))
         if lv.playing is None or self.board_session != key or \
                 lv.connection != self.owner.connections:
             raise Conflict("the board does not play this question now (%s): feel it again, "
@@ -474,7 +501,7 @@ class Lab:
                     "playing": lv.playing, "state": q.detail}, **p.record(q, body["answer"]))
         lv.session.append(rec)                          # on disk first, then the state moves
         result = protocols.apply(lv.protocol, lv.state, taken)
-        lv.question, lv.sliders, lv.moves = None, None, 0
+        lv.question, lv.sliders, lv.moves, lv.feel = None, None, 0, None
         nq = self._question(lv)
         lost = None
         if nq.done:

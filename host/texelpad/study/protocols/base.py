@@ -87,6 +87,18 @@ class Protocol:
             raise ValueError("answer: expected one of %s, got %s" % (js(allowed), js(answer)))
         return answer
 
+    # keys a feel request may carry besides its option (the search's friction slider)
+    FEEL_KEYS: tuple[str, ...] = ()
+
+    def feel_scene(self, state: Any, q: Question, k: int, feel: dict[str, Any]
+                   ) -> dict[str, Any]:
+        """The scene option k plays with the feel's FEEL_KEYS settings."""
+        return q.options[k]
+
+    def feel_state(self, state: Any) -> dict[str, Any]:
+        """The FEEL_KEYS settings a new question starts from."""
+        return {}
+
     def record(self, q: Question, answer: Any) -> dict[str, Any]:
         """What the session file keeps beside an answer, besides the question,
         the answer taken, the scene and the state (the server's record)."""

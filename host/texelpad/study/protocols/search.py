@@ -7,7 +7,7 @@ import json
 import math
 from typing import Any
 
-from ...search.preference import PreferenceSearch, candidate_params
+from ...search.preference import LEVEL, PreferenceSearch, candidate_params, check_level
 from .. import scenes as S
 from ..describing import option
 from ..question import Question, played_db, format_of, mean_of, reference_of
@@ -20,15 +20,18 @@ def _ask(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
         return Question({"done": True}, detail={"mean": mean_of(st), "saved": st.saved,
                                                  "iterations": st.iteration})
     ref = reference_of(header)
-    cands = [candidate_params(x, st.dims, st.texture_seed, format_of(header))
+    cands = [candidate_params(x, st.dims, st.texture_seed, format_of(header), st.level)
              for x in st.ask()]
     options = [S.split(ref, c, display, name="candidate %d" % (k + 1))
                for k, c in enumerate(cands)]
     answers: list[Any] = [{"choose": k} for k in range(3)] + [{"save": k} for k in range(3)]
     answers.append({"stop": True})
-    return Question({"done": False, "kind": "pick", "iteration": st.iteration,
-                     "options": ["1", "2", "3"], "answers": answers,
-                     "saved": len(st.saved)},
+    public: dict[str, Any] = {"done": False, "kind": "pick", "iteration": st.iteration,
+                              "options": ["1", "2", "3"], "answers": answers,
+                              "saved": len(st.saved)}
+    if st.level_slider:         # seed 003's friction slider: the map's gain of all three
+        public["level"] = {"range": list(LEVEL), "start": st.level, "step": 0.01}
+    return Question(public,
                     options,
                     {"reference": ref, "mean": mean_of(st), "sigma": st.sigma,
                      "candidates": cands})
@@ -46,7 +49,11 @@ def _trials(st: Any, header: dict[str, Any], display: dict[str, Any],
         "every candidate; every candidate is rendered with texture seed %d"
         % st.texture_seed,
         "the candidates after the first iteration depend on the picks (CMA-ES, lambda 3, "
-        "mirrored, sigma0 %g); the participant stops when satisfied" % st.sigma0]}
+        "mirrored, sigma0 %g, update %r); the participant stops when satisfied"
+        % (st.sigma0, st.cma_update)] + (
+        ["a friction slider (the map's gain %g .. %g, from %g) sets the level of all three "
+         "candidates; each choice or save carries the level that played"
+         % (LEVEL[0], LEVEL[1], st.level_start)] if st.level_slider else [])}
 
 
 def _plot(fig: Any, ax: Any, state: Any) -> None:
@@ -85,22 +92,67 @@ class SearchProtocol(Protocol):
     def state(self, config: dict[str, Any], seed: int, fmt: int) -> Any:
         return PreferenceSearch(seed, texture_format=fmt, **tuples(config))
 
+    FEEL_KEYS = ("level",)          # the friction slider's setting, sent with a feel
+
     def apply(self, state: Any, answer: Any) -> dict[str, Any]:
         from ..session import SessionError
-        if not isinstance(answer, dict) or len(answer) != 1:
+        if not isinstance(answer, dict):
             raise SessionError("search answer: expected {'choose': k}, {'save': k} or "
                                "{'stop': true}, got %r" % (answer,))
-        (what, k), = answer.items()
-        if what == "choose":
-            return state.choose(k)
-        if what == "save":
-            return state.save(k)
-        if what == "stop" and k is True:
+        level = answer.get("level")
+        what = [k for k in answer if k != "level"]
+        if len(what) != 1 or (level is not None and what[0] == "stop"):
+            raise SessionError("search answer: expected {'choose': k}, {'save': k} (with the "
+                               "friction slider's 'level') or {'stop': true}, got %r"
+                               % (answer,))
+        k = answer[what[0]]
+        if what[0] == "choose":
+            return state.choose(k, level)
+        if what[0] == "save":
+            return state.save(k, level)
+        if what[0] == "stop" and k is True:
             return state.stop()
         raise SessionError("search answer: expected choose, save or stop, got %r" % (answer,))
 
+    def normalise(self, q: Any, state: Any, answer: Any) -> Any:
+        """One of the question's answers; a choose or save may carry the
+        friction slider's level (checked: in range, and a search with a slider)."""
+        if isinstance(answer, dict) and "level" in answer and len(answer) == 2:
+            if not state.level_slider:
+                raise ValueError("answer: this search has no friction slider: no 'level'")
+            check_level(answer["level"])
+            rest = {k: v for k, v in answer.items() if k != "level"}
+            if "stop" in rest:
+                raise ValueError("answer: a stop carries no level")
+            super().normalise(q, state, rest)
+            return answer
+        return super().normalise(q, state, answer)
+
+    def feel_scene(self, state: Any, q: Any, k: int, feel: dict[str, Any]) -> dict[str, Any]:
+        """Option k at the friction slider's level (feel["level"]): the
+        candidate's texel region with that gain."""
+        level = feel.get("level")
+        if level is None:
+            return q.options[k]
+        if not state.level_slider:
+            raise ValueError("level: this search has no friction slider")
+        g = check_level(level)
+        scene = json.loads(json.dumps(q.options[k]))
+        scene["regions"][-1]["texture"]["gain"] = g
+        return scene
+
+    def feel_state(self, state: Any) -> dict[str, Any]:
+        """What a feel starts from for a new question: the slider's level."""
+        return {"level": state.level} if state.level_slider else {}
+
     def resolved(self, state: Any, config: dict[str, Any]) -> dict[str, Any]:
-        return dict(config)             # (no Config: it keeps what it was given)
+        """Every field the search runs with (its defaults included) and the
+        scenes' keys the config gave."""
+        out = {k: getattr(state, k) for k in ("dims", "sigma0", "texture_seed", "cma_update",
+                                               "level_slider", "level_start")}
+        out["x0"] = list(state.x0) if state.x0 is not None else None
+        out.update({k: config[k] for k in SCENE_KEYS if k in config})
+        return json.loads(json.dumps(out))
 
     def estimate(self, state: Any) -> dict[str, float]:
         return played_db(Point(state.mean[0], state.mean[1]))
@@ -114,7 +166,8 @@ class SearchProtocol(Protocol):
     def full_config(self, state: Any, header: dict[str, Any]) -> dict[str, Any]:
         """Its own fields (no Config) and the scenes' keys."""
         fields = {k: getattr(state, k) for k in ("dims", "x0", "sigma0", "texture_seed",
-                                                   "texture_format")}
+                                                   "texture_format", "cma_update",
+                                                   "level_slider", "level_start")}
         fields["x0"] = fields["x0"] if fields["x0"] is not None else [0.5] * len(state.dims)
         out = dict(fields, **{k: v for k, v in header.items() if k in SCENE_KEYS})
         return json.loads(json.dumps(out))

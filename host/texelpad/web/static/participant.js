@@ -64,11 +64,21 @@ async function answer(a) {
               "). Reload this page when it is back.");
 }
 
+// the search's friction slider (seed 003): the level of all three candidates; a feel
+// carries it, and so does a choose or save (the server checks it is what plays)
+let level = null, playingOption = 0;
+function withLevel(a) {
+  return (level === null || "stop" in a) ? a : Object.assign({}, a, {level: level});
+}
+
 async function feel(k) {
   if (busy) return;
   setBusy(true);
   try {
-    const r = await call("POST", "/api/sessions/" + sid + "/feel", {option: k, question: number});
+    const body = {option: k, question: number};
+    if (level !== null) body.level = level;
+    const r = await call("POST", "/api/sessions/" + sid + "/feel", body);
+    playingOption = r.playing;
     markPlaying(r.playing);
   } catch (e) {
     setBusy(false);
@@ -156,6 +166,7 @@ function show(res) {
     $("feel").appendChild(el("button", {id: "feel-" + k, onclick: () => feel(k)},
                              "feel " + name));
   });
+  playingOption = res.playing || 0;
   markPlaying(res.playing);
   if (q.kind === "sliders") {
     sliderRange = q.sliders;
@@ -218,11 +229,26 @@ function show(res) {
       answer(Number($("rating").value));
     }}, "submit this rating"));
   } else {
+    level = q.level ? q.level.start : null;
+    if (q.level) {              // seed 003's friction slider: re-plays what is felt at once
+      const l = el("label", {id: "level-box"});
+      l.appendChild(document.createTextNode("friction: less "));
+      l.appendChild(el("input", {type: "range", id: "level", min: q.level.range[0],
+                                 max: q.level.range[1], step: String(q.level.step),
+                                 value: String(q.level.start)}));
+      l.appendChild(document.createTextNode(" more"));
+      $("answers").appendChild(l);
+      $("level").onchange = async () => {
+        level = Number($("level").value);
+        while (busy) await new Promise((r) => setTimeout(r, 20));   // (a feel under way)
+        feel(playingOption);
+      };
+    }
     q.answers.forEach((a, i) => {
       $("answers").appendChild(el("button", {id: "answer-" + i, onclick: () => {
         if (busy) return;
         setBusy(true);          // at once: a second click of a double-click finds it disabled
-        answer(a);
+        answer(withLevel(a));
       }}, label(q.kind, a, q)));
     });
   }

@@ -3,8 +3,10 @@ lab's apps' ways the defaults (commit 8c349e6, checked out at /tmp/v3head:
 `git worktree add /tmp/v3head 8c349e6`, then
 `.venv/bin/python tests/study/data/legacy/make_v3.py /tmp/v3out`): the shipped
 similarity matrix (split display, a seeded order, 47-sample texels as the config
-said then) and a pursuit of sawtooth whose answers always pick the higher pitch,
-so its points pass Nyquist (19.747 dB) and were clamped. Each answer record holds
+said then), a pursuit of sawtooth whose answers always pick the higher pitch,
+so its points pass Nyquist (19.747 dB) and were clamped, and a search of 4sin
+(cma's active update, no friction slider). `make_v3.py OUT NAME...` writes only
+those. Each answer record holds
 every scene the question offered."""
 import sys
 from pathlib import Path
@@ -22,8 +24,13 @@ def higher(q):
 
 
 RUNS = (("similarity-matrix", "v3-similarity-matrix", 23, lambda q, k: 1 + (k * 3) % 5),
-        ("pursuit-sawtooth", "v3-pursuit-high", 29, lambda q, k: higher(q)))
+        ("pursuit-sawtooth", "v3-pursuit-high", 29, lambda q, k: higher(q)),
+        ("search-4sin", "v3-search", 31,
+         lambda q, k: {"stop": True} if k == 8 else {"save": 1} if k == 4 else {"choose": k % 3}))
+ONLY = set(sys.argv[2:])        # (names to write; all without)
 for config_name, name, seed, answer in RUNS:
+    if ONLY and name not in ONLY:
+        continue
     c = configs.load(config_name)
     config = dict(c["config"], config_file=config_name)
     if "reference" in c:
