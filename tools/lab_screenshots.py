@@ -107,6 +107,9 @@ def _run(data: Path, name: str, participant: str, seed: int, n: int, sim, config
             st.texture(a["pitch_db"], a["irregularity_db"], 0), kind="texel")}]} \
             if proto == "free" else None
         s.append({"answer": a, "scene": scene} if scene else {"answer": a})
+    if proto == "search" and not st.done:      # (satisfied: a search ends when told)
+        protocols.apply(proto, st, {"stop": True})
+        s.append({"answer": {"stop": True}})
     return Session.open(s.path), st
 
 
@@ -145,7 +148,12 @@ def paper_figures(data: Path) -> None:
                                    one_way=k % 3 == 0)
         s, st = _run(data, "free-nine", who, k, 9, sim)
         _run(data, "quant-paper", who, k, 27, sim, {"matches": matches.from_free(s, st)})
+        for e in ("4sin", "pink", "sawtooth"):      # the guided explorations, then the matrix
+            sim.target = target_point(e)
+            _run(data, "pursuit-%s" % e, who, k, 20, sim)
         _run(data, "similarity-matrix", who, k, 9, sim)
+        sim.target = target_point("4sin")
+        _run(data, "search-4sin", who, k, 4 + k % 4, sim)
         _run(data, "staircase" if k % 2 else "staircase-wide", who, k, 400, sim)
         _run(data, "mapping", who, k, 34, sim)
     with tempfile.TemporaryDirectory() as td:

@@ -103,6 +103,13 @@ def exported(tmp_path_factory):
     _run(data, "staircase", "p1", {}, 7, _staircase_pattern(), finger=one_way)
     _run(data, "staircase", "p2", {"condition": "wide"}, 8, lambda st: True, n=5, finger=both)
     _, mapping_state = _run(data, "mapping", "p1", {}, 9, _mapping_answer)
+    # the guided explorations: three of each exemplar (always A; always B; A, unsure in turn)
+    for e in EXEMPLARS:
+        for j, pick in enumerate((lambda k: "A", lambda k: "B",
+                                  lambda k: "A" if k % 2 else "unsure")):
+            ks = iter(range(20))
+            _run(data, "pursuit", "g%d" % j, {"reference": {"kind": "reference", "name": e}},
+                 20 + j, lambda st, pick=pick, ks=ks: pick(next(ks)))
     # two searches of 4sin: 2 picks, the friction slider moved once, one save; 3 picks, never
     search = dict(C.load("search-4sin")["config"], reference={"kind": "reference",
                                                                 "name": "4sin"})
@@ -117,9 +124,11 @@ def exported(tmp_path_factory):
 
 def test_every_paper_figure_is_written_from_its_sessions(exported):
     res, out, _ = exported
-    assert res["broken"] == [] and len(res["figures"]) == 11
+    assert res["broken"] == [] and len(res["figures"]) == 20
     assert sorted(res["study_figures"]) == sorted([
-        "seed000_fig10_matches.png", "seed000_fig15_quantization.png",
+        "seed000_fig10_matches.png", "seed000_fig11_guided.png", "seed000_fig12_plane.png",
+        "seed000_fig13_confidence.png", "seed000_fig14ab_similarity.png",
+        "seed000_fig15_quantization.png",
         "seed000_fig14c_similarity.png", "seed001_fig2_staircase.png",
         "seed001_fig3_direction.png", "seed003_table1_search.png",
         "seed001_fig4_mapping.png", "seed001_fig5_ratings.png"])
@@ -290,3 +299,72 @@ def test_table1_counts_each_searchs_iterations_tunings_and_time(exported):
     with open(out / "seed003_table1_search.csv") as f:
         (r,) = list(csv.DictReader(f))
     assert r["reference"] == "4sin" and float(r["iterations_mean"]) == 2.5
+
+
+def _pursuit_ends():
+    """The guided explorations' end points, replayed here from their files."""
+    from texelpad.study.session import sessions
+    ends = {}
+    for path in sessions(_pursuit_ends.data):
+        s = Session.open(path)
+        if s.header["protocol"] == "pursuit":
+            st = protocols.replay(s)
+            ends.setdefault(s.header["config"]["reference"]["name"], []).append(
+                protocols.get("pursuit").estimate(st))
+    return ends
+
+
+def test_fig11_and_fig12_plot_the_guided_end_points_beside_the_free_matches(exported):
+    res, out, _ = exported
+    _pursuit_ends.data = out.parent / "data"
+    ends = _pursuit_ends()
+    d = res["study_figures"]["seed000_fig11_guided.png"][1]
+    assert d["references"] == list(EXEMPLARS)
+    assert d["guided_pitch_db"] == [[m["pitch_db"] for m in ends[e]] for e in EXEMPLARS]
+    assert d["guided_irregularity_db"] == [[m["irregularity_db"] for m in ends[e]]
+                                           for e in EXEMPLARS]
+    assert all(len(x) == 3 for x in d["guided_pitch_db"])
+    # the free matches of row i: pitch i + 0 (p1) and i + 0.5 (p2), irregularity -i - 1
+    rows = [NINE.index(e) for e in EXEMPLARS]
+    assert d["free_pitch_db"] == [[float(i), i + 0.5] for i in rows]
+    assert d["free_irregularity_db"] == [[-i - 1.0, -i - 1.0] for i in rows]
+    d12 = res["study_figures"]["seed000_fig12_plane.png"][1]
+    assert [x["points"] for x in d12["guided"]] == [
+        [[m["pitch_db"], m["irregularity_db"]] for m in ends[e]] for e in EXEMPLARS]
+    # two free matches per exemplar: too few for an ellipse; three guided: one each
+    assert all(x["ellipse"] is None for x in d12["free"])
+    assert all(x["ellipse"]["n"] == 3 for x in d12["guided"])
+
+
+def test_the_confidence_ellipse_of_the_mean_by_hand():
+    from texelpad.study.export import confidence_ellipse
+    # (+-1, 0), (0, +-1): mean 0, S = diag(2/3, 2/3); k = 2 (n-1) / (n (n-2)) F(.95; 2, 2)
+    # = 6/8 * 19 = 14.25 (F(.95; 2, 2) = 19 exactly: 1/(1-.95)^(2/2) - 1): semi-axes
+    # sqrt(14.25 * 2/3) = sqrt(9.5)
+    e = confidence_ellipse([[1, 0], [-1, 0], [0, 1], [0, -1]])
+    assert e["centre"] == [0.0, 0.0]
+    assert e["semi_axes"] == pytest.approx([9.5 ** 0.5] * 2)
+    # stretched along x by 3: the first axis 3 times the second, at 0 degrees
+    e = confidence_ellipse([[3, 0], [-3, 0], [0, 1], [0, -1]])
+    assert e["semi_axes"][0] == pytest.approx(3 * e["semi_axes"][1])
+    assert e["angle_deg"] % 180 == pytest.approx(0.0)
+    assert confidence_ellipse([[0, 0], [1, 1]]) is None                 # n < 3
+    assert confidence_ellipse([[0, 0], [1, 1], [2, 2]]) is None         # on a line
+
+
+def test_fig13_and_fig14ab_plot_confidence_and_own_similarity(exported):
+    import math
+    res = exported[0]
+    d = res["study_figures"]["seed000_fig13_confidence.png"][1]
+    assert len(d["points"]) == 18 and {p["confidence"] for p in d["points"]} == {3}
+    for p in d["points"]:
+        i, r = NINE.index(p["reference"]), match(p["reference"])
+        assert p["distance_db"] in [round(math.hypot(i + shift - r["pitch_db"],
+                                                     -i - 1.0 - r["irregularity_db"]), 6)
+                                    for shift in (0.0, 0.5)]
+    d = res["study_figures"]["seed000_fig14ab_similarity.png"][1]
+    # own unquantized ratings: p1 5, p2 4 (the paper design's 'base'); the matrix's
+    # diagonal: p1 5, p2 4
+    assert d["free"]["references"] == list(NINE)
+    assert d["free"]["similarity"] == [[5, 4]] * 9
+    assert d["guided"] == {"references": list(EXEMPLARS), "similarity": [[5, 4]] * 3}

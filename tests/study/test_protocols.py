@@ -346,9 +346,11 @@ def test_export_writes_tidy_csv_and_a_figure_per_session(tmp_path, capsys):
                                                              for k in range(9)]
     assert [r["similarity"] for r in by["mapping"][9:]] == [str(k % 11) for k in range(25)]
     pngs = sorted(p.name for p in out.glob("*.png"))
-    # one per session, and the papers' figures these sessions make (no matrix design: no 14c)
-    paper = ["seed000_fig10_matches.png", "seed000_fig15_quantization.png",
-             "seed001_fig2_staircase.png", "seed001_fig4_mapping.png",
-             "seed001_fig5_ratings.png"]
-    assert len(pngs) == 11 and set(paper) < set(pngs) and ", ".join(sorted(paper)) in printed
+    # one per session, and the papers' figures these sessions make (no matrix design: no 14c;
+    # a staircase without a finger record: no Fig. 3; a search not stopped: no Table I)
+    paper = ["seed000_fig10_matches.png", "seed000_fig11_guided.png", "seed000_fig12_plane.png",
+             "seed000_fig13_confidence.png", "seed000_fig14ab_similarity.png",
+             "seed000_fig15_quantization.png", "seed001_fig2_staircase.png",
+             "seed001_fig4_mapping.png", "seed001_fig5_ratings.png"]
+    assert len(pngs) == 15 and set(paper) < set(pngs) and ", ".join(sorted(paper)) in printed
     assert all((out / p).stat().st_size > 5000 for p in pngs)

@@ -3,7 +3,7 @@ summary figure per session (pursuit: the centre's path on the pitch -
 irregularity plane; staircase: the track with its reversals and threshold;
 search: the mean's path and step size; mapping: the matches against the
 references' central frequencies) and the papers' figures over all sessions
-(PAPER_FIGURES: seed 000 Fig. 10, 15, 14c; seed 001 Fig. 2, 3, 4, 5; seed 003
+(PAPER_FIGURES: seed 000 Fig. 10-13, 14a/b, 14c, 15; seed 001 Fig. 2-5; seed 003
 Table I, also as CSV), each
 written only when the data has sessions of its kind. Reads the files only
 (never a board).
@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import os
 from pathlib import Path
 from typing import Any, Sequence
@@ -254,6 +255,131 @@ def fig10_data(loaded: Loaded) -> dict[str, Any] | None:
             "rater": [match(r) for r in refs]}
 
 
+def _guided(loaded: Loaded) -> dict[str, list[dict[str, float]]]:
+    """{reference: [end points]} of the finished guided explorations (the
+    pursuit's centre as the display plays it: protocols/pursuit.py estimate)."""
+    from .question import reference_of
+    p = protocols.get("pursuit")
+    out: dict[str, list[dict[str, float]]] = {}
+    for s, st in _of(loaded, "pursuit"):
+        if st.done:
+            ref = reference_of(s.header).get("name", "")
+            out.setdefault(ref, []).append(p.estimate(st))
+    return out
+
+
+def _free(loaded: Loaded) -> dict[str, list[dict[str, Any]]]:
+    """{reference: [the free explorations' matches (pitch_db, irregularity_db, confidence)]}."""
+    out: dict[str, list[dict[str, Any]]] = {}
+    for _, st in _of(loaded, "free"):
+        for m in st.matches:
+            out.setdefault(m["reference"], []).append(m)
+    return out
+
+
+def _refs(names: Any) -> list[str]:
+    from .references import REFERENCES
+    return [r for r in REFERENCES if r in names] + sorted(r for r in names if r not in REFERENCES)
+
+
+def fig11_data(loaded: Loaded) -> dict[str, Any] | None:
+    """Seed 000 Fig. 11: the guided explorations' choices (end points) per
+    reference, central pitch (a) and irregularity (b), with the free
+    explorations' matches of the same references superimposed."""
+    guided, free = _guided(loaded), _free(loaded)
+    if not guided:
+        return None
+    refs = _refs(guided)
+    return {"references": refs,
+            "guided_pitch_db": [[m["pitch_db"] for m in guided[r]] for r in refs],
+            "guided_irregularity_db": [[m["irregularity_db"] for m in guided[r]] for r in refs],
+            "free_pitch_db": [[m["pitch_db"] for m in free.get(r, [])] for r in refs],
+            "free_irregularity_db": [[m["irregularity_db"] for m in free.get(r, [])]
+                                     for r in refs]}
+
+
+def confidence_ellipse(points: Sequence[Sequence[float]], level: float = 0.95
+                       ) -> dict[str, Any] | None:
+    """The confidence ellipse of the mean of 2-D points (Batschelet's, by
+    Hotelling's T^2): every m with (m - mean)' S^-1 (m - mean) <= 2 (n - 1) /
+    (n (n - 2)) F(level; 2, n - 2), S the sample covariance. Its centre, the
+    semi-axes and the angle (degrees) of the first; None below 3 points or for
+    a singular S."""
+    import numpy as np
+    from scipy.stats import f as fdist
+    x = np.asarray(points, dtype=float)
+    n = len(x)
+    if n < 3:
+        return None
+    cov = np.cov(x.T)
+    if not np.isfinite(cov).all() or np.linalg.det(cov) <= 0:
+        return None
+    k = 2.0 * (n - 1) / (n * (n - 2)) * float(fdist.ppf(level, 2, n - 2))
+    vals, vecs = np.linalg.eigh(cov)
+    order = np.argsort(vals)[::-1]
+    vals, vecs = vals[order], vecs[:, order]
+    return {"centre": [float(v) for v in x.mean(axis=0)], "n": n, "level": level,
+            "semi_axes": [float(np.sqrt(k * v)) for v in vals],
+            "angle_deg": float(np.degrees(np.arctan2(vecs[1, 0], vecs[0, 0])))}
+
+
+def fig12_data(loaded: Loaded) -> dict[str, Any] | None:
+    """Seed 000 Fig. 12: the family exemplars' choices on the pitch -
+    irregularity plane (dB), a) the free explorations' matches, b) the
+    guided explorations' end points, each exemplar with its 95 % confidence
+    ellipse of the mean (confidence_ellipse; None below 3 choices)."""
+    from .quant import EXEMPLARS
+    guided, free = _guided(loaded), _free(loaded)
+    out: dict[str, Any] = {"exemplars": list(EXEMPLARS)}
+    for key, data in (("free", free), ("guided", guided)):
+        pts = [[[m["pitch_db"], m["irregularity_db"]] for m in data.get(e, [])]
+               for e in EXEMPLARS]
+        out[key] = [{"points": p, "ellipse": confidence_ellipse(p)} for p in pts]
+    if not any(x["points"] for key in ("free", "guided") for x in out[key]):
+        return None
+    return out
+
+
+def fig13_data(loaded: Loaded) -> dict[str, Any] | None:
+    """Seed 000 Fig. 13: each free-exploration match's confidence against
+    its distance to the trained rater's choice for the same reference
+    (Euclidean in dB: pitch and irregularity, study/rater.py match)."""
+    from .rater import match
+    pts = []
+    for ref, ms in _free(loaded).items():
+        r = match(ref)
+        for m in ms:
+            pts.append({"reference": ref, "confidence": m["confidence"],
+                        "distance_db": round(math.hypot(m["pitch_db"] - r["pitch_db"],
+                                                        m["irregularity_db"]
+                                                        - r["irregularity_db"]), 6)})
+    if not pts:
+        return None
+    return {"points": pts}
+
+
+def fig14ab_data(loaded: Loaded) -> dict[str, Any] | None:
+    """Seed 000 Fig. 14 a) and b): the similarity of each reference and the
+    participant's own match of it - a) the free exploration's (quant
+    sessions' own, unquantized trials: designs paper and levels), b) the
+    guided exploration's (the similarity matrix's diagonal)."""
+    free: dict[str, list[float]] = {}
+    guided: dict[str, list[float]] = {}
+    for _, st in _of(loaded, "quant"):
+        for r in st.ratings:
+            if r["reference"] != r["match_of"] or r["quant_db"]:
+                continue
+            if st.config.design == "matrix":
+                guided.setdefault(r["reference"], []).append(r["similarity"])
+            elif r["source"] == "own":
+                free.setdefault(r["reference"], []).append(r["similarity"])
+    if not free and not guided:
+        return None
+    return {"free": {"references": _refs(free), "similarity": [free[r] for r in _refs(free)]},
+            "guided": {"references": _refs(guided),
+                       "similarity": [guided[r] for r in _refs(guided)]}}
+
+
 def fig15_data(loaded: Loaded) -> dict[str, Any] | None:
     """Seed 000 Fig. 15: per exemplar and q > 0, the change in similarity -
     the quantized trial's rating minus the unquantized one's, same session
@@ -453,6 +579,86 @@ def plot_fig10(d: dict[str, Any], out: Path) -> Path:
     axes[1].set_title("b) irregularity", fontsize=8)
     fig.suptitle("Free exploration matches per reference (seed 000, Fig. 10); "
                  "n = %d matches" % sum(len(v) for v in d["pitch_db"]), fontsize=9)
+    return _save(fig, out)
+
+
+def plot_fig11(d: dict[str, Any], out: Path) -> Path:
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2))
+    xs = list(range(1, len(d["references"]) + 1))
+    for ax, key, label in ((axes[0], "pitch_db", "central pitch (dB re 1 c/mm)"),
+                           (axes[1], "irregularity_db", "irregularity (dB re 1 decade)")):
+        _boxes(ax, d["guided_" + key], [x - 0.18 for x in xs], 0.32, "C0")
+        _boxes(ax, d["free_" + key], [x + 0.18 for x in xs], 0.32, "C1")
+        ax.plot([], [], "s", color="C0", alpha=0.5, label="guided exploration")
+        ax.plot([], [], "s", color="C1", alpha=0.5, label="free exploration")
+        ax.set_xticks(xs, d["references"], fontsize=8)
+        ax.set_ylabel(label)
+    axes[0].legend(fontsize=7)
+    axes[0].set_title("a) central pitch", fontsize=8)
+    axes[1].set_title("b) irregularity", fontsize=8)
+    fig.suptitle("Guided exploration choices, free exploration superimposed (seed 000, "
+                 "Fig. 11)", fontsize=9)
+    return _save(fig, out)
+
+
+def _ellipse(ax: Any, e: dict[str, Any] | None, color: str) -> None:
+    if e is None:
+        return
+    from matplotlib.patches import Ellipse
+    ax.add_patch(Ellipse(e["centre"], 2 * e["semi_axes"][0], 2 * e["semi_axes"][1],
+                         angle=e["angle_deg"], fill=False, color=color, lw=1.2))
+
+
+def plot_fig12(d: dict[str, Any], out: Path) -> Path:
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.4), sharex=True, sharey=True)
+    for ax, key, title in ((axes[0], "free", "a) free exploration"),
+                           (axes[1], "guided", "b) guided exploration")):
+        for k, (e, x) in enumerate(zip(d["exemplars"], d[key])):
+            pts = x["points"]
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], "o", color="C%d" % k, ms=4,
+                    label="%s (n = %d)" % (e, len(pts)))
+            _ellipse(ax, x["ellipse"], "C%d" % k)
+        ax.set_xlabel("central pitch (dB re 1 c/mm)")
+        ax.set_title(title, fontsize=8)
+        ax.legend(fontsize=7)
+    axes[0].set_ylabel("irregularity (dB re 1 decade)")
+    fig.suptitle("The exemplars' choices with 95 % confidence ellipses of the mean "
+                 "(seed 000, Fig. 12)", fontsize=9)
+    return _save(fig, out)
+
+
+def plot_fig13(d: dict[str, Any], out: Path) -> Path:
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.5, 4.2))
+    pts = d["points"]
+    ax.plot([p["distance_db"] for p in pts], [p["confidence"] for p in pts], "o", ms=4,
+            alpha=0.7)
+    ax.set_xlabel("distance to the trained rater's choice (dB)")
+    ax.set_ylabel("confidence (1..5)")
+    ax.set_title("Free exploration: confidence against distance to the trained rater "
+                 "(seed 000, Fig. 13)", fontsize=9)
+    return _save(fig, out)
+
+
+def plot_fig14ab(d: dict[str, Any], out: Path) -> Path:
+    plt = _pyplot()
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2), sharey=True)
+    for ax, key, title in ((axes[0], "free", "a) free exploration matches"),
+                           (axes[1], "guided", "b) guided exploration matches")):
+        x = d[key]
+        xs = list(range(1, len(x["references"]) + 1))
+        _boxes(ax, x["similarity"], xs, 0.5, "C0" if key == "free" else "C2")
+        if xs:
+            ax.set_xticks(xs, x["references"], rotation=30, fontsize=8)
+        else:
+            ax.text(0.5, 0.5, "no sessions", ha="center", transform=ax.transAxes)
+        ax.set_title(title, fontsize=8)
+        ax.set_ylim(0.5, 5.5)
+    axes[0].set_ylabel("similarity, reference vs its match (1..5)")
+    fig.suptitle("Similarity of the references and the participants' own matches "
+                 "(seed 000, Fig. 14a/b)", fontsize=9)
     return _save(fig, out)
 
 
@@ -721,6 +927,10 @@ def plot_table1(d: dict[str, Any], out: Path) -> Path:
 
 
 PAPER_FIGURES = (("seed000_fig10_matches.png", fig10_data, plot_fig10),
+                 ("seed000_fig11_guided.png", fig11_data, plot_fig11),
+                 ("seed000_fig12_plane.png", fig12_data, plot_fig12),
+                 ("seed000_fig13_confidence.png", fig13_data, plot_fig13),
+                 ("seed000_fig14ab_similarity.png", fig14ab_data, plot_fig14ab),
                  ("seed000_fig15_quantization.png", fig15_data, plot_fig15),
                  ("seed000_fig14c_similarity.png", fig14c_data, plot_fig14c),
                  ("seed001_fig2_staircase.png", fig2_data, plot_fig2),
