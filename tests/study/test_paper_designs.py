@@ -263,7 +263,9 @@ def test_a_staircase_trial_fills_the_display_with_whole_texels():
 # --- every protocol's session replays from its file ----------------------------------------
 
 CONFIGS = {"free": {}, "quant": {"matches": OWN}, "pursuit": {}, "staircase": {},
-           "search": {"dims": ["pitch", "irregularity"]}, "mapping": {}}
+           "search": {"dims": ["pitch", "irregularity"]}, "mapping": {},
+           "evaluate": {"textures": [{"name": "VTp a", "reference": "4sin", "texture": {
+               "pitch_db": 7.0, "irregularity_db": -6.0, "seed": 7, "v": 2}}]}}
 
 
 @pytest.mark.parametrize("protocol", sorted(CONFIGS))

@@ -149,7 +149,7 @@ def test_staircase_converges_near_a_simulated_threshold():
 @pytest.mark.parametrize("target", [Point(0.3, 0.7), Point(0.75, 0.2), Point(0.5, 0.5)])
 def test_search_reaches_a_noiseless_participants_target(target):
     # (cma's active update; seed 003's rank-one update, the default, is measured beside it in
-    # docs/lab.md: bench/results/search_updates.txt)
+    # docs/lab-benchmark.md: bench/results/study_compare_rank_one.txt)
     s = PreferenceSearch(seed=11, cma_update="active")
     sim = SimulatedParticipant(target)
     for _ in range(60):
@@ -189,6 +189,9 @@ def test_the_friction_slider_sets_every_candidates_level_and_counts_its_tunings(
         with pytest.raises(ValueError, match="level: expected"):
             s.choose(0, level=bad)
     assert s.iteration == 3 and s.level == 0.45        # a refused answer changed nothing
+    s.save(0, level=0.7)                        # moved twice in one iteration: one tuning
+    s.choose(0, level=0.8)
+    assert s.tunings == 3
     with pytest.raises(ValueError, match="no friction slider"):
         PreferenceSearch(seed=4, level_slider=False).choose(0, level=0.5)
     with pytest.raises(ValueError, match="not both"):
@@ -240,19 +243,24 @@ def _run_pursuit(sess: Session, state: Pursuit, sim: SimulatedParticipant, stop_
 # a free exploration's felt textures give them (seed, texel length, format)
 GIVEN = {"matches": {r: {"pitch_db": 6.0, "irregularity_db": -12.0, "seed": 11 + k,
                          "texel_samples": 50, "v": 2} for k, r in enumerate(NINE)}}
+EVALUATE = {"textures": [{"name": "VTp a", "reference": "4sin", "texture": {
+    "pitch_db": 7.0, "irregularity_db": -6.0, "seed": 7, "v": 2, "gain": 0.6}},
+    {"name": "VTp b", "reference": "pink", "texture": {"pitch_db": 8.0,
+                                                       "irregularity_db": -1.0, "seed": 7}}]}
 CONFIGS = {"free": {}, "quant": GIVEN, "pursuit": {}, "staircase": {},
-           "search": {"dims": ["pitch", "irregularity"]}, "mapping": {}}
+           "search": {"dims": ["pitch", "irregularity"]}, "mapping": {}, "evaluate": EVALUATE}
 
 
 def _end(protocol, state):
     return {"free": lambda: state.matches, "quant": lambda: state.ratings,
+            "evaluate": lambda: state.ratings,
             "staircase": lambda: state.track,
             "mapping": lambda: (state.matches, state.ratings)}.get(
                 protocol, lambda: state.history)()
 
 
 @pytest.mark.parametrize("protocol", ["free", "quant", "pursuit", "staircase", "search",
-                                      "mapping"])
+                                      "mapping", "evaluate"])
 def test_a_session_resumes_after_a_kill_at_every_step(protocol, tmp_path):
     """The uninterrupted run, then for every answer k a copy of the file as a
     crash would leave it after k answers (and with a torn half record after
@@ -316,8 +324,8 @@ def test_export_writes_tidy_csv_and_a_figure_per_session(tmp_path, capsys):
     mapping = [{"pitch": 10.0 * k, "irregularity": 50.0} for k in range(9)] + \
         [k % 11 for k in range(25)]
     for proto, n in (("pursuit", 20), ("staircase", 12), ("search", 6), ("free", 9),
-                     ("quant", 27), ("mapping", 34)):
-        config = GIVEN if proto == "quant" else {}
+                     ("quant", 27), ("mapping", 34), ("evaluate", 22)):
+        config = {"quant": GIVEN, "evaluate": EVALUATE}.get(proto, {})
         s = Session.create(data, proto, "p01", config, 5)
         st = protocols.start(proto, config, 5)
         for k in range(n):
@@ -329,9 +337,9 @@ def test_export_writes_tidy_csv_and_a_figure_per_session(tmp_path, capsys):
     out = tmp_path / "out"
     assert cli.main(["lab", "export", "--data", str(data), "--out", str(out)]) == 0
     printed = capsys.readouterr().out
-    assert "(108 answers) and 6 figures" in printed
+    assert "(130 answers) and 7 figures" in printed
     rows = list(_csv.DictReader(open(out / "sessions.csv")))
-    assert len(rows) == 108 and {r["protocol"] for r in rows} == set(protocols.PROTOCOLS)
+    assert len(rows) == 130 and {r["protocol"] for r in rows} == set(protocols.PROTOCOLS)
     assert rows[0]["played_pitch_db"] == "1.0"
     by = {}
     for r in rows:
@@ -341,6 +349,10 @@ def test_export_writes_tidy_csv_and_a_figure_per_session(tmp_path, capsys):
     assert [r["quant_db"] for r in by["quant"]][:1] and all(r["similarity"] for r in by["quant"])
     assert {r["correct"] for r in by["staircase"]} <= {"True", "False"}
     assert by["search"][0]["chosen"] in ("0", "1", "2")
+    # seed 003's Phase 2: 2 RT, 2 VTd, 2 VTp x 3 adjectives, then or first 4 similarity pairs
+    ev = by["evaluate"]
+    assert sum(1 for r in ev if r["adjective"]) == 18 and sum(1 for r in ev if r["similarity"]) == 4
+    assert {r["source"] for r in ev if r["similarity"]} == {"data", "preference"}
     assert {r["source"] for r in by["quant"]} == {"own", "rater"}
     assert [r["pitch_slider"] for r in by["mapping"][:9]] == ["%.1f" % (10.0 * k)
                                                              for k in range(9)]
@@ -352,5 +364,5 @@ def test_export_writes_tidy_csv_and_a_figure_per_session(tmp_path, capsys):
              "seed000_fig13_confidence.png", "seed000_fig14ab_similarity.png",
              "seed000_fig15_quantization.png", "seed001_fig2_staircase.png",
              "seed001_fig4_mapping.png", "seed001_fig5_ratings.png"]
-    assert len(pngs) == 15 and set(paper) < set(pngs) and ", ".join(sorted(paper)) in printed
+    assert len(pngs) == 16 and set(paper) < set(pngs) and ", ".join(sorted(paper)) in printed
     assert all((out / p).stat().st_size > 5000 for p in pngs)

@@ -447,3 +447,55 @@ def test_the_searchs_friction_slider_plays_and_is_answered_as_it_plays(lab, port
     from texelpad.study import protocols
     st = protocols.replay(Session.open(lv.session.path))
     assert (st.level, st.tunings, st.cma_update) == (0.55, 1, "rank_one")
+
+
+def test_seed_003s_phase_2_rates_the_textures_stopped_searches_saved(lab, port):
+    # Phase 1: two participants' searches, each saving a texture and stopping
+    sids = []
+    for who, ref in (("s2", "4sin"), ("s3", "pink")):
+        r = lab.post("/api/sessions", json={"protocol": "search", "participant": who,
+                                            "seed": 4, "reference": {"kind": "reference",
+                                                                     "name": ref}})
+        sid = r.json()["id"]
+        sids.append(sid)
+        for n, a in enumerate(({"choose": 1, "level": 1.0}, {"save": 2, "level": 1.0})):
+            assert lab.post("/api/sessions/%s/answer" % sid,
+                            json={"answer": a, "question": n}).status_code == 200
+    # not stopped yet: refused, and nothing made
+    r = lab.post("/api/sessions", json={"config": "evaluate-search", "participant": "e1",
+                                        "matches_from": sids})
+    assert r.status_code == 400 and "is not stopped" in r.json()["error"], r.text
+    r = lab.post("/api/sessions", json={"config": "evaluate-search", "participant": "e1"})
+    assert r.status_code == 400 and "give matches_from" in r.json()["error"], r.text
+    for sid in sids:            # (each feels its question again, then stops)
+        assert lab.post("/api/sessions/%s/feel" % sid, json={"option": 0}).status_code == 200
+        assert lab.post("/api/sessions/%s/answer" % sid,
+                        json={"answer": {"stop": True}, "question": 2}).status_code == 200
+    saved = [lab.lab.live[sid].state.saved[-1]["params"] for sid in sids]
+    # Phase 2: another participant rates them
+    r = lab.post("/api/sessions", json={"config": "evaluate-search", "participant": "e1",
+                                        "matches_from": sids, "seed": 6})
+    assert r.status_code == 200, r.text
+    eid = r.json()["id"]
+    st = lab.lab.live[eid].state
+    h = lab.lab.live[eid].session.header["config"]
+    assert [t["texture"] for t in h["textures"]] == saved
+    assert h["match_source"] == ", ".join(sids)
+    # 2 real, 2 data-driven stand-ins, 2 saved: 6 x 3 adjectives + 4 similarity pairs
+    assert len(st.plan) == 22
+    for n in range(22):
+        step, t, adjective = st.current
+        q = lab.get("/api/sessions/%s" % eid).json()["question"]
+        if step == "similarity":
+            assert q["options"] == ["real", "virtual"]
+            assert _playing(lab)["regions"][0]["texture"] == {"kind": "reference",
+                                                              "name": t["reference"]}
+            assert lab.post("/api/sessions/%s/feel" % eid, json={"option": 1}).status_code == 200
+            if t["source"] == "preference":
+                assert _playing(lab)["regions"][0]["texture"]["pitch_db"] == \
+                    t["texture"]["pitch_db"]
+        else:
+            assert q["adjective"] == adjective and q["options"] == ["texture"]
+        assert lab.post("/api/sessions/%s/answer" % eid, json={"answer": 2.5, "question": n}
+                        ).status_code == 200
+    assert st.done and len(st.ratings) == 22

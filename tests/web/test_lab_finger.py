@@ -76,6 +76,9 @@ def test_a_staircase_records_the_finger_as_it_happens_and_exports_its_swipes(lab
     time.sleep(2 * F.FINGER_POLL_S)
     later = F.of_question(Session.open(lv.session.path).records, 1)
     assert all(t0 not in set(t) for x in later for t0 in x["t_us"])
+    # the next question starts at its option 0; what came before its push is not its own
+    assert later and all(x["option"] == 0 for x in later)
+    assert all(0 < (u - t[-1]) % F.WRAP < F.WRAP // 2 for x in later for u in x["t_us"])
     assert _playing(lab) is not None
 
 

@@ -129,6 +129,7 @@ def cmd_lab(args: argparse.Namespace) -> int:
                 server = _Server(uvicorn.Config(app, log_level="warning", lifespan="off",
                                                 timeout_graceful_shutdown=3))
                 server.run(sockets=[sock])
+                lab.stop_recording()        # (before the owner closes: it would reconnect)
                 owner.close()
             except KeyboardInterrupt:
                 pass

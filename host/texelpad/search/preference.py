@@ -129,6 +129,7 @@ class PreferenceSearch:
         self.level_start = check_level(self.level_start)
         self.level = self.level_start if self.level_slider else None
         self.tunings = 0                # iterations whose answer moved the slider (Table I)
+        self._tuned = -1                # the last iteration counted
         opts = {"popsize": POPSIZE, "seed": self.seed + 1,     # cma: seed 0 means "random"
                 "bounds": [0.0, 1.0], "CMA_mirrors": 1, "CMA_mirrormethod": 0,
                 "verbose": -9, "tolx": 1e-12, "tolfun": 0.0, "tolflatfitness": 10 ** 9}
@@ -163,6 +164,13 @@ class PreferenceSearch:
         return [candidate_params(x, self.dims, self.texture_seed, self.texture_format,
                                  self.level)
                 for x in self.ask()]
+
+    def _tune(self, level: Any) -> None:
+        """The slider's level an answer carries; an iteration that moved it
+        counts once (a save, then a choose, at two levels: one tuning)."""
+        if self.set_level(level) and self._tuned != self.iteration:
+            self.tunings += 1
+            self._tuned = self.iteration
 
     def set_level(self, level: Any) -> bool:
         """The slider's level an answer carries (None: unchanged): whether it
@@ -201,7 +209,7 @@ class PreferenceSearch:
             raise ValueError("choice: expected 0 .. %d, got %r" % (len(xs) - 1, k))
         if level is not None:
             check_level(level)
-        self.tunings += self.set_level(level)
+        self._tune(level)
         others = [i for i in range(len(xs)) if i != k]
         self._rng.shuffle(others)
         ranking = [k] + others
@@ -223,7 +231,7 @@ class PreferenceSearch:
             raise ValueError("save: expected 0 .. %d, got %r" % (len(xs) - 1, k))
         if level is not None:
             check_level(level)
-        self.tunings += self.set_level(level)
+        self._tune(level)
         entry = {"iteration": self.iteration, "x": xs[k],
                  "params": candidate_params(xs[k], self.dims, self.texture_seed,
                                             self.texture_format, self.level)}

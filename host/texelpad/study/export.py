@@ -38,7 +38,9 @@ COLUMNS = ("participant", "protocol", "session", "config_file", "seed", "n", "ti
            # (added with the finger's record, issue 31: seed 001's swipe measures of the
            # question's finger records, study/finger.py; empty where none was recorded)
            "finger_samples", "directional_proportion", "swipe_speed_mm_s",
-           "swipe_speed_sd_mm_s")
+           "swipe_speed_sd_mm_s",
+           # (seed 003's Phase 2, the evaluation: the texture rated, the adjective, its rating)
+           "evaluated", "adjective", "adjective_rating")
 
 
 def _texel(scene: dict[str, Any] | None) -> dict[str, Any]:
@@ -67,6 +69,9 @@ def rows(s: Session) -> list[dict[str, Any]]:
     out = []
     for k, rec in enumerate(s.answers()):
         tex = _texel(rec.get("scene"))
+        shown = (rec.get("state") or {}).get("texture")
+        if not tex and isinstance(shown, dict) and "pitch_db" in shown:
+            tex = shown     # (the rendering, when the scene last felt was the reference alone)
         a: Any = rec.get("answer")          # the protocol's own answer (checked by apply)
         q = rec.get("question") or {}
         row: dict[str, Any] = {c: "" for c in COLUMNS}

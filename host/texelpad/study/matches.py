@@ -76,3 +76,22 @@ def references_of(config: dict[str, Any]) -> tuple[str, ...]:
     names none): the config's own resolution, its matches aside (they are
     what is being looked for). ValueError for a config the protocol refuses."""
     return tuple(protocols.start("quant", dict(config, matches=None), 0).config.references)
+
+
+def from_saved(session: Session, state: Any) -> dict[str, Any]:
+    """Seed 003's Phase 2 input: the texture a stopped search saved last, for
+    the reference it ran on ({name, reference, texture}); ValueError says why not."""
+    sid = "%s/%s" % (session.header.get("participant"), session.path.stem)
+    proto = session.header.get("protocol")
+    if not protocols.get(proto).GIVES_SAVED:
+        raise ValueError("matches_from: %s is a %s session: the evaluation rates stopped "
+                         "searches' saved textures" % (sid, proto))
+    if not state.done:
+        raise ValueError("matches_from: %s is not stopped" % sid)
+    if not state.saved:
+        raise ValueError("matches_from: %s saved no texture" % sid)
+    ref = session.header["config"].get("reference") or {}
+    if ref.get("kind") != "reference":
+        raise ValueError("matches_from: %s did not run on a reference texture" % sid)
+    return {"name": "VTp %s" % sid, "reference": ref["name"],
+            "texture": dict(state.saved[-1]["params"])}

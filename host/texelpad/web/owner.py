@@ -225,6 +225,8 @@ class BoardOwner:
             fresh = self._stream_of is None or self._stream_of[0] is not b \
                 or self._stream_of[1] != rate_hz
             if fresh:
+                if self._display is None:   # (texelpad running there first, as a push would)
+                    self._running(b)
                 b.stream(rate_hz)
                 self._stream_of = (b, rate_hz)
             samples, lost = b.telemetry()
@@ -235,5 +237,9 @@ class BoardOwner:
         """The board's own record of what it played for `seconds`: (t_us,
         position or -1, uint16 amplitude) samples taken by its refresh
         (Board.monitor; the stream is turned off again at the end)."""
-        self._stream_of = None          # (monitor turns the stream off at its end)
-        return self._call(lambda b: list(b.monitor(seconds, rate_hz)))
+        def go(b: Board) -> list[tuple[int, int, int]]:
+            try:
+                return list(b.monitor(seconds, rate_hz))
+            finally:
+                self._stream_of = None  # (monitor turns the stream off at its end)
+        return self._call(go)

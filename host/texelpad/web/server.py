@@ -52,6 +52,7 @@ from __future__ import annotations
 
 import json
 import random
+import sys
 import threading
 from dataclasses import dataclass
 from pathlib import Path
@@ -137,10 +138,15 @@ class Lab:
         self._recorder: threading.Thread | None = None
         self._stopping = threading.Event()
 
-    def close(self) -> None:
+    def stop_recording(self) -> None:
+        """Stop the finger recorder (before the board's owner closes: the
+        recorder would reconnect)."""
         self._stopping.set()
         if self._recorder is not None:
             self._recorder.join(timeout=5.0)
+
+    def close(self) -> None:
+        self.stop_recording()
         self.data_lock.release()
 
     # --- the finger, recorded per trial (study/finger.py) -----------------------------
@@ -182,6 +188,9 @@ class Lab:
                     self._finger(lv)
                 except (BoardLost, ValueError, SessionError, OSError):
                     pass        # (a lost board is said by the next request; nothing to keep)
+                except Exception as e:      # (never let the recorder die unseen)
+                    print("texelpad lab: the finger recorder: %s: %s" % (type(e).__name__, e),
+                          file=sys.stderr, flush=True)
 
     # --- whose scene plays -------------------------------------------------------------
     def _took_board(self, lv: Live) -> None:
@@ -239,7 +248,10 @@ class Lab:
         p = protocols.get(lv.protocol)
         scene = p.feel_scene(lv.state, lv.question, k, dict(self._feel(lv), **(feel or {})))
         if self._finger_hz(lv):     # what the finger did while the option before played
-            self._finger(lv, keep=self._plays_now(lv))
+            try:
+                self._finger(lv, keep=self._plays_now(lv))
+            except ValueError:      # (the board refused the stream: the push says the rest)
+                pass
         _, canonical = self.owner.push(scene)
         if feel:
             lv.feel = dict(lv.feel or {}, **feel)
@@ -318,10 +330,18 @@ class Lab:
             raise Refused("reference: only the pursuit and the search take one (the free "
                           "exploration and the quantization test name theirs in the config)")
         if body.get("matches_from") is not None:
-            if not p.TAKES_MATCHES:
-                raise Refused("matches_from: only the quantization test takes matches")
-            config["matches"], config["match_source"] = self._matches_from(
-                body["matches_from"], config)
+            if p.TAKES_SAVED:
+                config["textures"], config["match_source"] = self._saved_from(
+                    body["matches_from"])
+            elif not p.TAKES_MATCHES:
+                raise Refused("matches_from: only the quantization test and the evaluation "
+                              "take matches")
+            else:
+                config["matches"], config["match_source"] = self._matches_from(
+                    body["matches_from"], config)
+        if p.TAKES_SAVED and config.get("textures") is None:
+            raise Refused("textures: the evaluation rates stopped searches' saved textures: "
+                          "give matches_from (the search sessions)")
         if p.TAKES_MATCHES and config.get("matches") is None:
             raise Refused("matches: the quantization test rates the participant's own matches: "
                           "give matches_from (their free exploration session)")
@@ -342,6 +362,28 @@ class Lab:
         self.live[key] = lv
         self._begin(lv)
         return self._view(key, lv)
+
+    def _sids(self, sids: Any) -> list[str]:
+        if isinstance(sids, str):
+            sids = [sids]
+        if not isinstance(sids, list) or not 1 <= len(sids) <= 100 or \
+                any(not isinstance(x, str) or x.count("/") != 1 for x in sids) or \
+                len(set(sids)) != len(sids):
+            raise Refused("matches_from: expected a session id P/NAME or a list of different "
+                          "ones")
+        return sids
+
+    def _saved_from(self, sids: Any) -> tuple[list[dict[str, Any]], str]:
+        """Seed 003's Phase 2: the texture each stopped search saved last."""
+        sids = self._sids(sids)
+        out = []
+        for sid in sids:
+            lv = self.get(*sid.split("/"))
+            try:
+                out.append(M.from_saved(lv.session, lv.state))
+            except ValueError as e:
+                raise Refused(str(e)) from None
+        return out, ", ".join(sids)
 
     def _matches_from(self, sids: Any, config: dict[str, Any]) -> tuple[dict, str]:
         """The participant's own matches for the quantization test or the
@@ -399,6 +441,7 @@ class Lab:
         return {"id": key, "protocol": lv.protocol, "question": dict(q.public, number=n),
                 "playing": lv.playing,
                 "sliders": lv.sliders if Q.sliding(lv.protocol, lv.state) else None,
+                "feel": self._feel(lv) or None,    # (the search's friction slider as it plays)
                 "answers_so_far": n}
 
     def _asked(self, lv: Live, n: Any, what: str) -> None:
@@ -495,13 +538,16 @@ class Lab:
         p = protocols.get(lv.protocol)
         try:
             self._finger(lv)        # the trial's last finger samples, before its answer
-        except BoardLost:
+        except (BoardLost, ValueError):
             pass                    # (the answer is kept; the next question says the board)
         rec = dict({"question": q.public, "answer": taken, "scene": lv.playing_scene,
                     "playing": lv.playing, "state": q.detail}, **p.record(q, body["answer"]))
         lv.session.append(rec)                          # on disk first, then the state moves
         result = protocols.apply(lv.protocol, lv.state, taken)
         lv.question, lv.sliders, lv.moves, lv.feel = None, None, 0, None
+        # (what the finger does until the next question plays is this answer's trial's,
+        # read above: not the next question's)
+        lv.playing = None
         nq = self._question(lv)
         lost = None
         if nq.done:

@@ -12,8 +12,10 @@ One module per protocol in this folder, each with PROTOCOL, an instance of
 its base.Protocol subclass; NAMES lists them (the lab's order). Answers: free
 {"pitch_db", "irregularity_db", "confidence"}; quant a similarity 1..5;
 pursuit "A" | "B" | "unsure"; staircase true | false (the odd one was found);
-search {"choose": k} | {"save": k} | {"stop": true}; mapping {"pitch",
-"irregularity"} (sliders 0..100), then a similarity 0..10. Every state has
+search {"choose": k} | {"save": k} (with the friction slider's "level") |
+{"stop": true}; mapping {"pitch", "irregularity"} (sliders 0..100), then a
+similarity 0..10; evaluate a rating on its scale (an adjective, or a
+similarity). Every state has
 `done`.
 """
 from __future__ import annotations
@@ -25,7 +27,7 @@ from .. import scenes as _scenes
 from ..session import Session, SessionError
 from .base import SCENE_KEYS, Protocol, tuples as _tuples
 
-NAMES = ("free", "quant", "pursuit", "staircase", "search", "mapping")
+NAMES = ("free", "quant", "pursuit", "staircase", "search", "mapping", "evaluate")
 PROTOCOLS = NAMES
 _BY_NAME: dict[str, Protocol] = {
     n: importlib.import_module("%s.%s" % (__name__, n)).PROTOCOL for n in NAMES}

@@ -37,6 +37,10 @@ class Protocol:
     REFERENCE_CHOSEN = False
     # it rates the participant's own matches: started with matches_from (web/server.py)
     TAKES_MATCHES = False
+    # it rates stopped searches' saved textures: started with matches_from (web/server.py)
+    TAKES_SAVED = False
+    # a stopped session of it gives a TAKES_SAVED protocol its saved texture (matches.py)
+    GIVES_SAVED = False
     # what a finished session of it gives a TAKES_MATCHES protocol (study/matches.py):
     # "matches" (one per reference) or "end point" (the one it ran on); None: nothing
     GIVES_MATCHES: str | None = None

@@ -83,6 +83,7 @@ class SearchProtocol(Protocol):
     TITLE = "preference-driven search: CMA-ES (seed 003)"
     REFERENCE_CHOSEN = True
     GIVES_MATCHES = "end point"
+    GIVES_SAVED = True          # its last saved texture: seed 003's Phase 2 (evaluate)
     ON_PLANE = True
 
     ask = staticmethod(_ask)

@@ -20,7 +20,7 @@ function configChanged() {
   $("start").disabled = !!c.error;
   $("reference-box").hidden = !(c.protocol === "pursuit" || c.protocol === "search");
   if (c.reference) $("reference").value = c.reference.name;
-  $("matches-box").hidden = c.protocol !== "quant";
+  $("matches-box").hidden = c.protocol !== "quant" && c.protocol !== "evaluate";
 }
 
 async function loadSessions() {

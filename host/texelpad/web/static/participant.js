@@ -151,7 +151,16 @@ function show(res) {
     return;
   }
   $("question").hidden = false; $("done").hidden = true;
-  $("prompt").textContent = (q.kind === "pair" && q.presentation === "whole")
+  const lo = q.slider ? q.slider.range[0] : (q.answers || [])[0];
+  const hi = q.slider ? q.slider.range[1] : (q.answers || [])[(q.answers || []).length - 1];
+  $("prompt").textContent = q.adjective     // seed 003's Phase 2: one adjective at a time
+    ? "Feel the texture. Rate its " + q.adjective + " (" + lo + " = " + q.anchors[0] + ", " +
+      hi + " = " + q.anchors[1] + ")."
+    : q.step === "similarity"
+    ? "Feel the real texture and the virtual one (one at a time, on the whole display). How " +
+      "similar do they feel? (" + lo + " = completely different, " + hi +
+      " = completely the same)"
+    : (q.kind === "pair" && q.presentation === "whole")
     ? "Feel the reference, A and B (one at a time, on the whole display). Which of A and B is " +
       "closer to the reference?"
     : q.kind === "rate"
@@ -166,7 +175,7 @@ function show(res) {
     $("feel").appendChild(el("button", {id: "feel-" + k, onclick: () => feel(k)},
                              "feel " + name));
   });
-  playingOption = res.playing || 0;
+  playingOption = res.playing;        // (null: nothing of this session plays)
   markPlaying(res.playing);
   if (q.kind === "sliders") {
     sliderRange = q.sliders;
@@ -229,17 +238,20 @@ function show(res) {
       answer(Number($("rating").value));
     }}, "submit this rating"));
   } else {
-    level = q.level ? q.level.start : null;
+    // the level that plays (after a reload: the board's, not the question's start)
+    level = q.level ? ((res.feel && res.feel.level !== undefined) ? res.feel.level
+                                                                   : q.level.start) : null;
     if (q.level) {              // seed 003's friction slider: re-plays what is felt at once
       const l = el("label", {id: "level-box"});
       l.appendChild(document.createTextNode("friction: less "));
       l.appendChild(el("input", {type: "range", id: "level", min: q.level.range[0],
                                  max: q.level.range[1], step: String(q.level.step),
-                                 value: String(q.level.start)}));
+                                 value: String(level)}));
       l.appendChild(document.createTextNode(" more"));
       $("answers").appendChild(l);
       $("level").onchange = async () => {
         level = Number($("level").value);
+        if (playingOption === null) return;       // (the next feel carries it)
         while (busy) await new Promise((r) => setTimeout(r, 20));   // (a feel under way)
         feel(playingOption);
       };
