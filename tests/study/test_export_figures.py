@@ -368,3 +368,43 @@ def test_fig13_and_fig14ab_plot_confidence_and_own_similarity(exported):
     assert d["free"]["references"] == list(NINE)
     assert d["free"]["similarity"] == [[5, 4]] * 9
     assert d["guided"] == {"references": list(EXEMPLARS), "similarity": [[5, 4]] * 3}
+
+
+def test_simulated_sessions_of_every_protocol_make_every_papers_figure(tmp_path):
+    # issue 31: `texelpad lab export` on simulated sessions of every protocol (the simulated
+    # participant answering; its finger on the staircase; searches saved and stopped, then
+    # evaluated) makes every figure and table PAPER_FIGURES lists
+    from texelpad.study.export import PAPER_FIGURES
+    from texelpad.study.references import target_point
+    data = tmp_path / "data"
+    saved = []
+    for k in range(3):
+        who = "sim%d" % k
+        sim = SimulatedParticipant(target_point("pink"), noise=0.01, seed=k, threshold_mm=3.0 + k,
+                                   swipe_mm_s=60.0 + 20 * k, one_way=k == 0)
+
+        def ans(proto):
+            return lambda st: sim.answer(proto, st)
+        free, fst = _run(data, "free", who, {}, k, ans("free"))
+        from texelpad.study.matches import from_free
+        _run(data, "quant", who, {"matches": from_free(Session.open(free.path), fst)}, k,
+             ans("quant"))
+        for e in EXEMPLARS:
+            sim.target = target_point(e)
+            _run(data, "pursuit", who, {"reference": {"kind": "reference", "name": e}}, k,
+                 ans("pursuit"))
+        _run(data, "quant", who, dict(C.load("similarity-matrix")["config"]), k, ans("quant"))
+        _run(data, "staircase", who, {}, k, ans("staircase"), n=200, finger=sim)
+        search = {"reference": {"kind": "reference", "name": "4sin"}}
+        picks = iter([{"choose": 0}] * 3 + [{"save": 1}, {"stop": True}])
+        srch, sst = _run(data, "search", who, search, k, lambda st: next(picks))
+        _run(data, "mapping", who, {}, k, ans("mapping"))
+        from texelpad.study.matches import from_saved
+        saved.append(from_saved(Session.open(srch.path), sst))
+    # seed 003's Phase 2: another simulated participant rates the three saved textures
+    _, ev = _run(data, "evaluate", "sim9", {"textures": saved}, 9,
+                 lambda st: protocols.get("evaluate").simulate(None, st))
+    assert ev.done and len(ev.ratings) == (1 + 1 + 3) * 3 + 4   # RT, VTd, 3 VTp; 4 pairs
+    res = export(data, tmp_path / "out")
+    assert res["broken"] == []
+    assert sorted(res["study_figures"]) == sorted(name for name, _, _ in PAPER_FIGURES)
