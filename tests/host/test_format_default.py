@@ -177,6 +177,10 @@ def _header(name):
     config = dict(c["config"], reference=c.get("reference") or S.DEFAULT_REFERENCE)
     if c["protocol"] == "quant" and "matches" not in config:   # the paper's: the participant's
         config["matches"] = {r: {"pitch_db": 6.0, "irregularity_db": -12.0} for r in NINE}
+    if c["protocol"] == "evaluate":     # a search's saved texture, its format not said
+        config["textures"] = [{"name": "VTp", "reference": "4sin",
+                               "texture": {"pitch_db": 6.0, "irregularity_db": -12.0}}]
+        del config["reference"]
     return {"protocol": c["protocol"], "seed": 5, "config": config}
 
 
@@ -203,6 +207,9 @@ def test_shipped_study_configs_say_format_2_and_play_it(name):
             state.answer(3)                 # (the rater's trials play samples: no texel)
         if h["protocol"] == "quant":
             scenes = questions.ask("quant", state, h, TPAD).options
+        while h["protocol"] == "evaluate" and not [t for sc in scenes for t in _texels(sc)]:
+            state.answer(3)                 # (a real texture plays the reference: no texel)
+            scenes = questions.ask("evaluate", state, h, TPAD).options
         assert scenes, name
         texs = [t for sc in scenes for t in _texels(sc)]    # (pursuit: one plays the reference)
         assert texs and all(t["v"] == (fmt or 2) for t in texs), (name, fmt, texs)

@@ -116,7 +116,9 @@ class Evaluate:
     def __post_init__(self) -> None:
         c = self.config
         rng = random.Random(self.seed)
-        vt = [dict(t, source="preference") for t in (c.textures or ())]
+        # (a saved texture that does not say its format plays the session's)
+        vt = [dict(t, source="preference", texture=dict({"v": self.fmt}, **t["texture"]))
+              for t in (c.textures or ())]
         refs = sorted({t["reference"] for t in vt})
         if c.data_driven:
             vt += [{"name": "VTd %s" % r, "reference": r, "source": "data",
