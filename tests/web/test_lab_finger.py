@@ -56,6 +56,11 @@ def test_a_staircase_records_the_finger_as_it_happens_and_exports_its_swipes(lab
     assert one and both
     m1, m2 = F.measures(one), F.measures(both)
     # option 0: rightward only at 80 mm/s; option 1: both ways at 100 mm/s
+    print("\nfinger: one way %.2f mm/s (SD %.2f), proportion %.3f, %d samples; both ways "
+          "%.2f mm/s (SD %.2f), proportion %.3f, %d samples"
+          % (m1["speed_mm_s"], m1["speed_sd_mm_s"], m1["directional_proportion"],
+             m1["samples"], m2["speed_mm_s"], m2["speed_sd_mm_s"],
+             m2["directional_proportion"], m2["samples"]))
     assert m1["left"] == 0 and m1["right"] > 100
     assert abs(m1["speed_mm_s"] - 80.0) < 4.0, m1["speed_mm_s"]
     assert m2["left"] > 50 and m2["right"] > 50

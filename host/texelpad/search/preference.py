@@ -51,7 +51,7 @@ from ..space import Point, texel_params
 DIMENSIONS = ("pitch", "irregularity", "texel_length", "level")
 UPDATES = ("rank_one", "positive", "active")    # cma_update (docstring)
 # the `cma` options of each update
-_UPDATE_OPTIONS = {"rank_one": {"CMA_active": False, "CMA_rankmu": 0.0},
+_UPDATE_OPTIONS: dict[str, dict[str, Any]] = {"rank_one": {"CMA_active": False, "CMA_rankmu": 0.0},
                    "positive": {"CMA_active": False},
                    "active": {"CMA_active": True}}
 SIGMA0 = 0.15
@@ -130,9 +130,10 @@ class PreferenceSearch:
         self.level = self.level_start if self.level_slider else None
         self.tunings = 0                # iterations whose answer moved the slider (Table I)
         self._tuned = -1                # the last iteration counted
-        opts = {"popsize": POPSIZE, "seed": self.seed + 1,     # cma: seed 0 means "random"
-                "bounds": [0.0, 1.0], "CMA_mirrors": 1, "CMA_mirrormethod": 0,
-                "verbose": -9, "tolx": 1e-12, "tolfun": 0.0, "tolflatfitness": 10 ** 9}
+        opts: dict[str, Any] = {"popsize": POPSIZE, "seed": self.seed + 1,  # cma: 0 = random
+                                "bounds": [0.0, 1.0], "CMA_mirrors": 1, "CMA_mirrormethod": 0,
+                                "verbose": -9, "tolx": 1e-12, "tolfun": 0.0,
+                                "tolflatfitness": 10 ** 9}
         opts.update(_UPDATE_OPTIONS[self.cma_update])
         self._es = cma.CMAEvolutionStrategy(x0, self.sigma0, opts)
         self._rng = random.Random(self.seed)

@@ -896,7 +896,7 @@ def _sd(xs: Sequence[float]) -> float:
     return (sum((x - m) ** 2 for x in xs) / (len(xs) - 1)) ** 0.5
 
 
-def _pm(v: list[float | None]) -> str:
+def _pm(v: list[Any]) -> str:
     return "%.2f" % v[0] if v[1] is None else "%.2f +- %.2f" % (v[0], v[1])
 
 

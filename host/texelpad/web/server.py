@@ -525,10 +525,10 @@ class Lab:
         if pr.FEEL_KEYS and isinstance(taken, dict) and "stop" not in taken:
             base = pr.feel_state(lv.state)          # (what an answer without it keeps)
             for f in pr.FEEL_KEYS:                  # (the search's friction slider)
-                answered, playing = taken.get(f, base.get(f)), self._feel(lv).get(f)
-                if answered != playing:
+                said, playing = taken.get(f, base.get(f)), self._feel(lv).get(f)
+                if said != playing:
                     raise Conflict("the %s answered (%r) is not what plays (%r): feel it, "
-                                   "then answer - nothing changed" % (f, answered, playing))
+                                   "then answer - nothing changed" % (f, said, playing))
         if lv.playing is None or self.board_session != key or \
                 lv.connection != self.owner.connections:
             raise Conflict("the board does not play this question now (%s): feel it again, "
