@@ -23,7 +23,7 @@ import os
 from pathlib import Path
 from typing import Any, Sequence
 
-from . import finger as F
+from . import finger
 from . import protocols
 from .session import Session, SessionError, sessions
 
@@ -85,9 +85,9 @@ def rows(s: Session) -> list[dict[str, Any]]:
                    played_texel_samples=tex.get("texel_samples", ""),
                    played_quant_db=tex.get("quant_db", "") if tex else "",
                    option_played="" if rec.get("playing") is None else rec["playing"])
-        recs = F.of_question(s.records, k)
+        recs = finger.of_question(s.records, k)
         if recs:
-            m = F.measures(recs)
+            m = finger.measures(recs)
             row.update(finger_samples=m["samples"],
                        **{c: "" if m[f] is None else round(m[f], 6) for c, f in (
                            ("directional_proportion", "directional_proportion"),
@@ -469,11 +469,11 @@ def fig3_data(loaded: Loaded) -> dict[str, Any] | None:
     from scipy.stats import pearsonr
     subjects = []
     for s, st in _of(loaded, "staircase"):
-        trials = [F.measures(F.of_question(s.records, k)) for k in range(len(st.track))]
+        trials = [finger.measures(finger.of_question(s.records, k)) for k in range(len(st.track))]
         trials = [m for m in trials if m["samples"]]
         if not trials:
             continue
-        sub = F.subject(trials)
+        sub = finger.subject(trials)
         subjects.append({"participant": s.header["participant"], "session": s.path.stem,
                          "convergent_mm": st.threshold_mm(), "trials": len(trials),
                          "directional_proportion": sub["directional_proportion"],

@@ -68,7 +68,7 @@ from starlette.staticfiles import StaticFiles
 
 from ..link.board import host_check
 from ..study import configs as C
-from ..study import finger as F
+from ..study import finger
 from ..study import matches as M
 from ..study import protocols
 from ..study import questions as Q
@@ -170,7 +170,7 @@ class Lab:
             return
         n = self._number(lv)
         trial = lv.question.public.get("trial", n) if lv.question is not None else n
-        lv.session.append(F.record(n, trial, lv.playing, samples, lost, hz,
+        lv.session.append(finger.record(n, trial, lv.playing, samples, lost, hz,
                                    self.owner.display()["dx_um"]))
 
     def _plays_now(self, lv: Live) -> bool:
@@ -179,7 +179,7 @@ class Lab:
 
     def _record_loop(self) -> None:
         """Every FINGER_POLL_S: the session whose question plays, if it records the finger."""
-        while not self._stopping.wait(F.FINGER_POLL_S):
+        while not self._stopping.wait(finger.FINGER_POLL_S):
             with self.lock:
                 lv = self._owning()
                 if lv is None or not self._finger_hz(lv):
