@@ -876,7 +876,8 @@ def table1_data(loaded: Loaded) -> dict[str, Any] | None:
                                "slider": all(x["slider"] for x in runs)}
         for key in ("iterations", "tunings", "minutes", "saved"):
             xs = [float(x[key]) for x in runs]
-            row[key] = [round(_mean(xs), 4), round(_sd(xs), 4) if len(xs) > 1 else None]
+            spread = finger.sd(xs)
+            row[key] = [round(_mean(xs), 4), None if spread is None else round(spread, 4)]
         rows.append(row)
     return {"rows": rows, "paper": [
         {"reference": "ABS", "iterations": [5.2, 2.77], "tunings": [2.2, 0.84],
@@ -889,11 +890,6 @@ def table1_data(loaded: Loaded) -> dict[str, Any] | None:
          "minutes": [5.01, 2.2]},
         {"reference": "Stone", "iterations": [3.8, 1.10], "tunings": [1.8, 1.64],
          "minutes": [3.56, 0.79]}]}
-
-
-def _sd(xs: Sequence[float]) -> float:
-    m = _mean(xs)
-    return (sum((x - m) ** 2 for x in xs) / (len(xs) - 1)) ** 0.5
 
 
 def _pm(v: list[Any]) -> str:

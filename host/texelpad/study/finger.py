@@ -109,11 +109,12 @@ def measures(recs: Sequence[dict[str, Any]], contact_only: bool = False) -> dict
     return {"samples": n, "touching": touching, "right": right, "left": left,
             "directional_proportion": (right - left) / denom if denom else None,
             "speed_mm_s": sum(speeds) / len(speeds) if speeds else None,
-            "speed_sd_mm_s": _sd(speeds), "speeds": speeds,
+            "speed_sd_mm_s": sd(speeds), "speeds": speeds,
             "lost": sum(int(r.get("lost", 0)) for r in recs)}
 
 
-def _sd(xs: Sequence[float]) -> float | None:
+def sd(xs: Sequence[float]) -> float | None:
+    """The sample standard deviation (n - 1), None below two values."""
     if len(xs) < 2:
         return None
     m = sum(xs) / len(xs)
@@ -130,7 +131,7 @@ def subject(trials: Sequence[dict[str, Any]]) -> dict[str, Any]:
             "signed_directional_proportion": sum(dps) / len(dps) if dps else None,
             "per_trial": dps,
             "speed_mm_s": sum(speeds) / len(speeds) if speeds else None,
-            "speed_sd_mm_s": _sd(speeds)}
+            "speed_sd_mm_s": sd(speeds)}
 
 
 def simulated(duration_s: float, rate_hz: int, dx_um: float, positions: int,

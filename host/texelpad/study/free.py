@@ -99,6 +99,17 @@ def check_references(refs: tuple[str, ...]) -> None:
                          % (", ".join(NINE), refs))
 
 
+def rating_input(scale: tuple[int, int], how: str) -> dict[str, Any]:
+    """A rating question's answers (rating_of checks them): the lab's app's
+    continuous slider at the middle of the scale to start ("slider"), or one
+    button per whole number ("buttons")."""
+    lo, hi = scale
+    if how == "slider":
+        return {"answers": None, "slider": {"range": [lo, hi], "start": (lo + hi) / 2,
+                                            "step": 0.01}}
+    return {"answers": list(range(lo, hi + 1))}
+
+
 def rating_of(what: str, x: Any, scale: tuple[int, int], how: str) -> float | int:
     """A rating checked on its scale: a whole number ("buttons") or any number
     kept to 0.01 ("slider"); never a bool (JSON true is not 1)."""

@@ -363,19 +363,22 @@ class Lab:
         self._begin(lv)
         return self._view(key, lv)
 
-    def _sids(self, sids: Any) -> list[str]:
+    @staticmethod
+    def _sids(sids: Any, most: int, distinct: bool = False) -> list[str]:
+        """matches_from as a list of session ids P/NAME (one given alone), at
+        most `most` of them, each once if `distinct`; else Refused."""
         if isinstance(sids, str):
             sids = [sids]
-        if not isinstance(sids, list) or not 1 <= len(sids) <= 100 or \
+        if not isinstance(sids, list) or not 1 <= len(sids) <= most or \
                 any(not isinstance(x, str) or x.count("/") != 1 for x in sids) or \
-                len(set(sids)) != len(sids):
-            raise Refused("matches_from: expected a session id P/NAME or a list of different "
-                          "ones")
+                (distinct and len(set(sids)) != len(sids)):
+            raise Refused("matches_from: expected a session id P/NAME or a list of %s"
+                          % ("different ones" if distinct else "them"))
         return sids
 
     def _saved_from(self, sids: Any) -> tuple[list[dict[str, Any]], str]:
         """Seed 003's Phase 2: the texture each stopped search saved last."""
-        sids = self._sids(sids)
+        sids = self._sids(sids, 100, distinct=True)     # (the paper's Phase 2 rated 25)
         out = []
         for sid in sids:
             lv = self.get(*sid.split("/"))
@@ -391,11 +394,7 @@ class Lab:
         matches, a finished guided exploration's end point or a stopped
         search's mean (each for the reference it ran on). Later sessions in
         the list win."""
-        if isinstance(sids, str):
-            sids = [sids]
-        if not isinstance(sids, list) or not 1 <= len(sids) <= 20 or \
-                any(not isinstance(x, str) or x.count("/") != 1 for x in sids):
-            raise Refused("matches_from: expected a session id P/NAME or a list of them")
+        sids = self._sids(sids, 20)
         found: dict[str, dict[str, Any]] = {}
         for sid in sids:
             lv = self.get(*sid.split("/"))
@@ -497,12 +496,8 @@ class Lab:
         k = body.get("option")
         if isinstance(k, bool) or not isinstance(k, int) or not 0 <= k < len(q.options):
             raise Refused("option: expected 0 .. %d, got %r" % (len(q.options) - 1, k))
-        feel = {f: body[f] for f in p.FEEL_KEYS if f in body}
-        try:
-            p.feel_scene(lv.state, q, k, dict(self._feel(lv), **feel))     # (checked first)
-        except ValueError as e:
-            raise Refused(str(e)) from None
-        self._play(lv, k, feel)
+        # (a bad setting: _play's feel_scene refuses it, 400, before anything is read or pushed)
+        self._play(lv, k, {f: body[f] for f in p.FEEL_KEYS if f in body})
         return {"playing": k}
 
     def answer(self, participant: str, name: str, body: dict[str, Any]) -> dict[str, Any]:

@@ -8,6 +8,7 @@ from typing import Any
 from .. import evaluate as EV
 from .. import scenes as S
 from ..describing import whole
+from ..free import rating_input
 from ..question import Question
 from .base import Protocol, tuples
 
@@ -21,14 +22,9 @@ def _ask(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
     if st.done:
         return Question({"done": True}, detail={"ratings": st.ratings})
     step, t, adjective = st.current
-    lo, hi = st.config.scale
     public: dict[str, Any] = {"done": False, "kind": "rate", "trial": st.trial,
-                              "of": len(st.plan), "presentation": "whole", "step": step}
-    if st.config.rating == "slider":
-        public.update(answers=None, slider={"range": [lo, hi], "start": (lo + hi) / 2,
-                                            "step": 0.01})
-    else:
-        public["answers"] = list(range(lo, hi + 1))
+                              "of": len(st.plan), "presentation": "whole", "step": step,
+                              **rating_input(st.config.scale, st.config.rating)}
     if step == "adjective":
         public.update(options=["texture"], adjective=adjective,
                       anchors=list(EV.ADJECTIVES[adjective]))

@@ -9,6 +9,7 @@ from .. import quant as QT
 from .. import rater
 from .. import scenes as S
 from ..describing import split, whole
+from ..free import rating_input
 from ..question import Question, format_of
 from .base import Protocol, tuples
 
@@ -17,15 +18,11 @@ def _ask(st: Any, header: dict[str, Any], display: dict[str, Any]) -> Question:
     if st.done:
         return Question({"done": True}, detail={"ratings": st.ratings})
     ref, level = st.current
-    lo, hi = st.config.scale
     tex = st.texture(format_of(header))
     shown = tex if tex.get("kind") != "samples" else {   # (9,600 values: the record has them)
         "kind": "samples", "rater": st.current_match, "quant_db": level,
         "texel_samples": rater.texel_samples(), "values": len(tex["u16"])}
-    rating: dict[str, Any] = {"answers": list(range(lo, hi + 1))}
-    if st.config.rating == "slider":    # the app's slider: continuous, at the middle (3) to start
-        rating = {"answers": None, "slider": {"range": [lo, hi], "start": (lo + hi) / 2,
-                                              "step": 0.01}}
+    rating = rating_input(st.config.scale, st.config.rating)   # (the app's: a slider from 3)
     reference = {"kind": "reference", "name": ref}
     if st.config.presentation == "whole":   # the guided app's: one at a time, whole display
         names = ["reference", "rendering"]
