@@ -340,11 +340,35 @@ def largest_free_block():
     return lo
 
 
-def memory_words():
+def blocks_free(size, most):
+    """How many blocks of `size` bytes the heap can give now (up to `most`),
+    found by allocating them and letting go: a heap can have the bytes a
+    region's 1 KB chunks need and not their 38 pieces (its holes smaller)."""
+    held = [None] * most
+    k = 0
+    try:
+        while k < most:
+            held[k] = bytearray(size)
+            k += 1
+    except MemoryError:
+        pass
+    held = None
+    import gc
+    gc.collect()
+    return k
+
+
+def memory_words(block=0, need=0):
     """'F bytes free, the largest block L bytes' for an out-of-memory
-    message ('' on CPython)."""
+    message ('' on CPython); with a block size (the largest one block a
+    scene's region needs) and the bytes needed, also how many blocks of that
+    size the heap has room for."""
     big = largest_free_block()
     if big is None:
         return ""
     import gc
-    return "%d bytes free, the largest free block %d bytes" % (gc.mem_free(), big)
+    free = gc.mem_free()
+    words = "%d bytes free, the largest free block %d bytes" % (free, big)
+    if block and need > block:
+        words += ", room for %d blocks of %d" % (blocks_free(block, need // block + 1), block)
+    return words

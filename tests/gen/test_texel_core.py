@@ -339,6 +339,16 @@ import texel.app as app
 from texel import compat
 from texel.runtime import refresh_viper as RV
 c = compat.core()
+# a map in flash (K_BUF: the firmware's ROMFS references, gen/reference.py flash_u16)
+# stood in for by one RAM block: elsewhere a reference plays from RAM chunks (K_CHUNK)
+from texel.runtime.kinds import reference as KR
+import texel
+_maps = {}
+def _flash(name, n):
+    if (name, n) not in _maps:
+        _maps[(name, n)] = texel.reference_u16(name, n)
+    return _maps[(name, n)]
+KR.flash = _flash
 app.start("virtual", %(scene)r)
 r = app._rt.refresh
 app.stream(8333)

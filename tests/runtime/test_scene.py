@@ -421,8 +421,8 @@ def test_split_screen_plays_reference_and_texel():
     assert amps[:9600] == list(ref)
     assert amps[9600:] == [int(v) for v in tx]
     assert len(set(amps[9600:])) > 1000 and len(set(amps[:9600])) > 1000   # not a constant
-    bufs = sc.buffers()
-    assert [len(b) for b in bufs] == [9600]
+    (bufs,) = sc.buffers()          # the reference in 1 KB chunks (kinds/reference.py)
+    assert [len(b) for b in bufs] == [512] * 18 + [9600 - 18 * 512]
     assert all(isinstance(b, array) and b.typecode == "H" for b in bufs)
     (t28, d28, L, g), = sc.plans()
     assert len(t28) == len(d28) == 192 and L == 50 and g == 16384
@@ -431,7 +431,7 @@ def test_split_screen_plays_reference_and_texel():
     assert sc.idle == 0
     # asking for an engine renders the map with it instead
     scn = S.build(S.validate(SPLIT, D), D, engine="numpy")
-    assert [len(b) for b in scn.buffers()] == [9600, 9600] and scn.plans() == ()
+    assert [len(b) for b in scn.buffers()] == [19, 9600] and scn.plans() == ()
     txn = texel.render_u16(dict(TEXEL_RIGHT, length_samples=9600), engine="numpy")
     assert [scn.amp(p) for p in range(9600, 19200)] == [int(v) for v in txn]
     for p in (-1, -1000, 19200, 19201, 10 ** 6, 2 ** 30 - 2, -(2 ** 30)):
@@ -507,7 +507,8 @@ def test_gaps_and_constants():
     assert [sc.amp(p) for p in range(19200)] == want
     assert want[2000] == 16384
     assert sc.amp(-1) == 1234 and sc.amp(19200) == 1234 and sc.idle == 1234
-    assert [len(b) for b in sc.buffers()] == [2000]          # only the reference holds samples
+    (chunks,) = sc.buffers()                                  # only the reference holds samples
+    assert [len(b) for b in chunks] == [512, 512, 512, 464]   # in 1 KB chunks
     assert sc.nbytes == 2 * 2000 + 5 * 16
     # the scene's own idle overrides the board's default
     sc2 = S.build(dict(GAPS, idle_amplitude=77), D, idle_default=1234)
@@ -994,13 +995,14 @@ right = all(sc.amp(9600 + p) == tx[p] for p in range(9600))
 print(json.dumps({"left": left, "right": right, "nbytes": sc.nbytes, "engine": texel.default_engine(),
                   "validate_us": time.ticks_diff(t1, t0), "build_us": time.ticks_diff(t2, t1),
                   "out": [sc.amp(-1), sc.amp(19200), sc.amp(2 ** 30 - 2)],
-                  "lens": [len(b) for b in sc.buffers()], "idle": sc.idle}))
+                  "lens": [[len(c) for c in b] for b in sc.buffers()], "idle": sc.idle}))
 """
     res = mpy.run_json(code)
     print("\nsplit screen on the unix port:", json.dumps(res))
     assert res["left"] and res["right"]
     assert res["engine"] == "int"
-    assert res["nbytes"] == 20784 and res["lens"] == [9600]      # texel half: its plan
+    # the reference half in 1 KB chunks, the texel half its plan
+    assert res["nbytes"] == 20784 and res["lens"] == [[512] * 18 + [384]]
     assert res["out"] == [0, 0, 0] and res["idle"] == 0
 
 
@@ -1245,14 +1247,14 @@ print(json.dumps(res))
 
 def test_real_memory_error_under_micropython(tmp_path):
     """Real MemoryErrors: with the split screen playing, build a full-screen
-    reference (a 38.4 KB map; a full-screen texel plays from its 3 KB plan
-    and always fits - test_full_texel_fits_beside_split_screen) on heaps of
-    112..272 KB, the image compiled as a board loads it. build() never lets a
-    MemoryError out (it becomes a ValueError) and the playing scene stays
-    intact; on the small heaps, and on some larger ones by fragmentation, the
-    second 38.4 KB buffer finds no room - and the message says why: the
-    largest free block (found on the board, compat.largest_free_block) is
-    smaller than the one block the region needs, whatever the free total."""
+    reference (a 38.4 KB map in 38 chunks of 1 KB; a full-screen texel plays
+    from its 3 KB plan and always fits - test_full_texel_fits_beside_split_screen)
+    on heaps of 112..272 KB, the image compiled as a board loads it. build()
+    never lets a MemoryError out (it becomes a ValueError) and the playing
+    scene stays intact; on the small heaps the second map finds no room - and
+    the message says why: fewer bytes free than it needs, or a largest free
+    block (found on the board, compat.largest_free_block) smaller than the
+    one block (1 KB) a region needs."""
     code = MEMORY_SCRIPT % {"full": FULL_REFERENCE}
     rows = {}
     # the compiled image, as a board loads it (compiling from source leaves garbage that
@@ -1279,13 +1281,15 @@ def test_real_memory_error_under_micropython(tmp_path):
             assert v in ("built", 38432) or re.match(
                 r"scene: out of memory while building \(needs 38432 bytes: 38400 of sample buffers "
                 r"and plans \+ 32 of region table; (\d+) bytes free, the largest free block (\d+) "
-                r"bytes, and a region needs one block of 38400\)$", v), (kb, k, v)
-            m = re.search(r"the largest free block (\d+) bytes", str(v))
-            if m:               # the message says why: no block the region's size
-                assert int(m.group(1)) < 38400, (kb, k, v)
+                r"bytes, room for (\d+) blocks of 1024, and a region needs one block of 1024\)$",
+                v), (kb, k, v)
+            m = re.search(r"; (\d+) bytes free, the largest free block (\d+) bytes, room for "
+                          r"(\d+) blocks", str(v))
+            if m:               # the message says why: too few bytes, or too few 1 KB pieces
+                assert int(m.group(1)) < 38432 or int(m.group(3)) < 38, (kb, k, v)
     print("\nfull-screen reference built while the split screen plays (heap KB: outcome, free after):")
     for kb, res in rows.items():
-        print("  %d: %s / after dropping the old: %s" % (kb, res["oom"][:60], str(res["after_drop"])[:40]))
+        print("  %d: %s / after dropping the old: %s" % (kb, res["oom"][-96:], str(res["after_drop"])[-96:]))
     assert sum(1 for r in rows.values() if r["oom"].startswith("scene: out of memory")) >= 3
 
 

@@ -68,6 +68,39 @@ def render_u16(plan, out=None):
     return out
 
 
+def render_chunks(plan, chunks, bits):
+    """render_u16 into chunks of 1 << bits values (the last shorter; runtime/
+    kinds new_chunks): the same values, and no block of the map's length (a
+    region of 1-4-sample texels, or of one texel longer than the region, on a
+    board's heap). A texel that straddles two chunks carries its phase from
+    one to the next (fill returns it). With the C core and texels that tile
+    a chunk (L divides it) one C call a chunk, else one fill a texel piece."""
+    n, L = plan.n, plan.L
+    tab = sine_table.table()
+    g = gain_q14(plan.gain)
+    t28, d28 = plan.t28, plan.d28
+    size = 1 << bits
+    if _C and _fill is _C.fill and size % L == 0:
+        per = size // L
+        mt, md = memoryview(t28), memoryview(d28)
+        for c in range(len(chunks)):
+            i0 = c * per
+            k = plan.count - i0 if plan.count - i0 < per else per
+            _C.render(chunks[c], len(chunks[c]), L, k, mt[i0:i0 + k], md[i0:i0 + k], tab, g)
+        return chunks
+    for i in range(plan.count):
+        a = i * L
+        b = a + L if a + L < n else n
+        t = t28[i]
+        d = d28[i]
+        while a < b:
+            o = (a >> bits) << bits
+            e = o + size if o + size < b else b
+            t = _fill(chunks[a >> bits], a - o, e - o, t, d, tab, g)
+            a = e
+    return chunks
+
+
 def render(plan):
     from ..compat import float_buffer
     q = render_u16(plan)

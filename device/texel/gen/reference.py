@@ -3,6 +3,8 @@
 #
 #   reference(name, length_samples=9600)      -> map in [0, 1] (compat.float_buffer)
 #   reference_u16(name, length_samples=9600)  -> uint16 0..65535 (2 bytes/sample)
+#       (out= a buffer, or a tuple of uint16 chunks: a board's map in 1 KB
+#       pieces, runtime/kinds/reference.py - no block of 38 KB on a stock Pico)
 #   bandpass(fc_cpmm, zeta, seed=0, length_samples=9600)   (and bandpass_u16)
 #   names()                                   -> every name reference() accepts
 #
@@ -137,33 +139,58 @@ def reference(name, length_samples=9600):
         fc, zeta = _BANDPASS[name]
         return bandpass(fc, zeta, 0, n)
     out = float_buffer(n)
-    _fill(name, n, out, False)
+    _fill(name, n, [(out, n)], False)
     return out
 
 
 def reference_u16(name, length_samples=9600, out=None):
     """The same map as uint16, q = round(v*65535) (2 bytes/sample; what a board
-    stores). out: an optional uint16 buffer of at least length_samples."""
+    stores). out: an optional uint16 buffer of at least length_samples, or a
+    tuple of uint16 chunks that together hold length_samples values (every
+    chunk but the last as long as the first: runtime/kinds/__init__.py
+    new_chunks) - the same values, written chunk by chunk."""
     _check_name(name)
     n = _check_length(length_samples)
     if out is None:
         out = u16_buffer(n)
-    elif len(out) < n:
-        raise ValueError("out: buffer holds %d samples, %d needed" % (len(out), n))
+    parts = _parts(out, n)
     if name in _BANDPASS:
         fc, zeta = _BANDPASS[name]
         return bandpass_u16(fc, zeta, 0, n, out)
-    _fill(name, n, out, True)
+    _fill(name, n, parts, True)
     return out
 
 
-def _fill(name, n, out, q16):
+def _parts(out, n):
+    """[(buffer, values it takes)] in order: [(out, n)] for one buffer, one
+    pair a chunk for a tuple of chunks; ValueError when they hold fewer than n."""
+    if type(out) is not tuple:
+        if len(out) < n:
+            raise ValueError("out: buffer holds %d samples, %d needed" % (len(out), n))
+        return [(out, n)]
+    parts = []
+    left = n
+    size = len(out[0]) if out else 0
+    for i, c in enumerate(out):
+        if left <= 0:
+            break
+        if len(c) != size and i != len(out) - 1:
+            raise ValueError("out: chunk %d holds %d values, the first %d" % (i, len(c), size))
+        k = len(c) if len(c) < left else left
+        parts.append((c, k))
+        left -= k
+    if left > 0:
+        raise ValueError("out: the chunks hold %d samples, %d needed" % (n - left, n))
+    return parts
+
+
+def _fill(name, n, parts, q16):
     if name in _SINES:
-        _fill_sines(name, n, out, q16)
+        _fill_sines(name, parts, q16)
     elif name in _WAVES:
-        _fill_wave(name, n, out, q16)
+        _fill_wave(name, parts, q16)
     else:
-        _fill_noise(_NOISE_ROWS.index(name), n, out, q16)
+        _fill_noise(_NOISE_ROWS.index(name), n, parts, q16)
 
 
 # A board with viper and float32 renders the uint16 sums of sines in
@@ -182,7 +209,8 @@ def _int_sines():
     return _INT_SINES
 
 
-def _fill_sines(name, n, out, q16):
+def _fill_sines(name, parts, q16):
+    # parts: _parts(); the phases carry from one part to the next
     steps = _SINES[name]
     fill = _int_sines() if q16 else False
     if fill:
@@ -190,8 +218,11 @@ def _fill_sines(name, n, out, q16):
         from . import sine_table
         from .reference_viper import CONSTANTS, steps_of
         a0, ws, rq = CONSTANTS[name]
-        fill(out, n, array("i", steps_of(steps)), array("i", bytes(8 * len(steps))),
-             len(steps), sine_table.table(), a0, ws, rq)
+        st = array("i", steps_of(steps))
+        ph = array("i", bytes(8 * len(steps)))
+        tab = sine_table.table()
+        for out, c in parts:
+            fill(out, c, st, ph, len(steps), tab, a0, ws, rq)
         return
     sin = math.sin
     k = _RAD_PER_SINE_UNIT
@@ -204,42 +235,44 @@ def _fill_sines(name, n, out, q16):
         inv = 1.0 / (hi - lo)
     phases = [0] * len(steps)
     m = len(steps)
-    for i in range(n):
-        s = 0.0
-        for j in range(m):
-            s += sin(phases[j] * k)
-            p = phases[j] + steps[j]
-            if p >= _SINE_TURN:
-                p -= _SINE_TURN
-            phases[j] = p
-        if two:
-            v = 0.5 + 0.3 * s               # docs/background.md §2: clip(0.5 + 0.3*s, 0, 1)
-        else:
-            v = (s - lo) * inv
-        if v < 0.0:
-            v = 0.0
-        elif v > 1.0:
-            v = 1.0
-        out[i] = int(v * 65535.0 + 0.5) if q16 else v
+    for out, c in parts:
+        for i in range(c):
+            s = 0.0
+            for j in range(m):
+                s += sin(phases[j] * k)
+                p = phases[j] + steps[j]
+                if p >= _SINE_TURN:
+                    p -= _SINE_TURN
+                phases[j] = p
+            if two:
+                v = 0.5 + 0.3 * s           # docs/background.md §2: clip(0.5 + 0.3*s, 0, 1)
+            else:
+                v = (s - lo) * inv
+            if v < 0.0:
+                v = 0.0
+            elif v > 1.0:
+                v = 1.0
+            out[i] = int(v * 65535.0 + 0.5) if q16 else v
 
 
-def _fill_wave(name, n, out, q16):
+def _fill_wave(name, parts, q16):
     kind = _WAVES.index(name)
     inv = 1.0 / _WAVE_TURN
     r = 0
-    for i in range(n):
-        if kind == 0:
-            v = 1.0 if r < _WAVE_HALF else 0.0
-        else:
-            f = r * inv
-            if kind == 1:
-                v = 2.0 * f if r <= _WAVE_HALF else 2.0 - 2.0 * f
+    for out, c in parts:
+        for i in range(c):
+            if kind == 0:
+                v = 1.0 if r < _WAVE_HALF else 0.0
             else:
-                v = f
-        out[i] = int(v * 65535.0 + 0.5) if q16 else v
-        r += _WAVE_STEP
-        if r >= _WAVE_TURN:
-            r -= _WAVE_TURN
+                f = r * inv
+                if kind == 1:
+                    v = 2.0 * f if r <= _WAVE_HALF else 2.0 - 2.0 * f
+                else:
+                    v = f
+            out[i] = int(v * 65535.0 + 0.5) if q16 else v
+            r += _WAVE_STEP
+            if r >= _WAVE_TURN:
+                r -= _WAVE_TURN
 
 
 # --- stored rows -----------------------------------------------------------
@@ -296,19 +329,25 @@ def _swap16(buf, m):
         buf[i] = ((v & 0xFF) << 8) | (v >> 8)
 
 
-def _fill_noise(row, n, out, q16):
+def _fill_noise(row, n, parts, q16):
     m = n if n < HALF_SCREEN else HALF_SCREEN
     big = getattr(sys, "byteorder", "little") == "big"   # file is little-endian
     with open(noise_path(), "rb") as f:
         f.seek(row * HALF_SCREEN * 2)
         if q16:
-            # straight into the caller's uint16 buffer: no temporary
-            got = f.readinto(memoryview(out)[0:m])
-            if got != 2 * m:
-                raise OSError("texel: %s is truncated" % NOISE_FILE)
-            if big:
-                _swap16(out, m)
+            # straight into the caller's uint16 buffers: no temporary
+            left = m
+            for out, c in parts:
+                c = c if c < left else left
+                if c <= 0:
+                    break
+                if f.readinto(memoryview(out)[0:c]) != 2 * c:
+                    raise OSError("texel: %s is truncated" % NOISE_FILE)
+                if big:
+                    _swap16(out, c)
+                left -= c
         else:
+            out = parts[0][0]
             chunk = u16_buffer(_CHUNK)
             mv = memoryview(chunk)
             inv = 1.0 / 65535.0
@@ -323,9 +362,19 @@ def _fill_noise(row, n, out, q16):
                     out[i + j] = chunk[j] * inv
                 i += c
     # longer than the row: mirrored repeats (sources are always < 9600)
+    if n <= HALF_SCREEN:
+        return
+    if len(parts) == 1:
+        out = parts[0][0]
+        for i in range(HALF_SCREEN, n):
+            k = i % _MIRROR_PERIOD
+            out[i] = out[k if k < HALF_SCREEN else _MIRROR_PERIOD - k]
+        return
+    size = len(parts[0][0])             # chunks: value i at [i // size][i % size]
     for i in range(HALF_SCREEN, n):
         k = i % _MIRROR_PERIOD
-        out[i] = out[k if k < HALF_SCREEN else _MIRROR_PERIOD - k]
+        k = k if k < HALF_SCREEN else _MIRROR_PERIOD - k
+        parts[i // size][0][i % size] = parts[k // size][0][k % size]
 
 
 # --- band-pass noise ---------------------------------------------------------
@@ -373,7 +422,8 @@ def burn_in_samples(fc_cpmm, zeta):
 
 
 def _bp_run(fc, zeta, seed, n, out, mode, mean=0.0, inv=0.0):
-    # mode 0: store raw y in out (float); 1: statistics only; 2: store u16 map.
+    # mode 0: store raw y in out (float); 1: statistics only; 2: store u16 map
+    # (out: _parts(), written part by part).
     # Returns (mean, population variance) of y over the n map samples
     # (Welford's update: stable in float32 over 1e5+ samples).
     b0, a1, a2 = bandpass_coefficients(fc, zeta)
@@ -390,24 +440,30 @@ def _bp_run(fc, zeta, seed, n, out, mode, mean=0.0, inv=0.0):
         s2 = -b0 * x - a2 * y
     mu = 0.0
     m2 = 0.0
+    if mode == 2:
+        for buf, c in out:
+            for i in range(c):
+                x = normal()
+                y = b0 * x + s1
+                s1 = s2 - a1 * y
+                s2 = -b0 * x - a2 * y
+                v = 0.5 + (y - mean) * inv
+                if v < 0.0:
+                    v = 0.0
+                elif v > 1.0:
+                    v = 1.0
+                buf[i] = int(v * 65535.0 + 0.5)
+        return mean, 0.0
     for i in range(n):
         x = normal()
         y = b0 * x + s1
         s1 = s2 - a1 * y
         s2 = -b0 * x - a2 * y
-        if mode == 2:
-            v = 0.5 + (y - mean) * inv
-            if v < 0.0:
-                v = 0.0
-            elif v > 1.0:
-                v = 1.0
-            out[i] = int(v * 65535.0 + 0.5)
-        else:
-            d = y - mu
-            mu += d / (i + 1)
-            m2 += d * (y - mu)
-            if mode == 0:
-                out[i] = y
+        d = y - mu
+        mu += d / (i + 1)
+        m2 += d * (y - mu)
+        if mode == 0:
+            out[i] = y
     return mu, m2 / n
 
 
@@ -445,8 +501,7 @@ def bandpass_u16(fc_cpmm, zeta, seed=0, length_samples=9600, out=None):
     n = _check_length(length_samples)
     if out is None:
         out = u16_buffer(n)
-    elif len(out) < n:
-        raise ValueError("out: buffer holds %d samples, %d needed" % (len(out), n))
+    parts = _parts(out, n)              # (a tuple of chunks too: reference_u16)
     mean, var = _bp_run(fc_cpmm, zeta, seed, n, None, 1)
-    _bp_run(fc_cpmm, zeta, seed, n, out, 2, mean, _scale(var))
+    _bp_run(fc_cpmm, zeta, seed, n, parts, 2, mean, _scale(var))
     return out

@@ -333,7 +333,7 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
         block = _biggest_block(c, spans, engine)
         raise ValueError("scene: out of memory while building (needs %d bytes: %d of sample "
                          "buffers and plans + %d of region table; %s%s)"
-                         % (need, nbuf, ntab, memory_words() or "the heap is full",
+                         % (need, nbuf, ntab, memory_words(block, nbuf) or "the heap is full",
                             ", and a region needs one block of %d" % block if block else ""))
     return sc
 

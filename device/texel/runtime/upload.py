@@ -11,7 +11,8 @@
 # still builds the split screen (compat grown by them, it did not).
 from array import array
 from .kinds import CHUNK_BITS, CHUNK_MASK
-from .kinds.samples import MAX_SAMPLES, new_chunks
+from .kinds import new_chunks
+from .kinds.samples import MAX_SAMPLES
 
 
 def u16_put_bytes(buf, offset, data):

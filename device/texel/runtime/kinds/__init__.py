@@ -39,6 +39,15 @@ K_CHUNK = 3             # the value indexes the buffers: a tuple of array('H') c
 CHUNK_BITS = 9          # 512 values (1 KB) per chunk (upload.py and refresh_viper.py use these)
 CHUNK_MASK = 511
 
+
+def new_chunks(n):
+    """n uint16 values as a tuple of array('H') of 2^CHUNK_BITS each (the
+    last shorter): a map with no block above 1 KB (upload.Chunks holds one;
+    samples and RAM references play from them)."""
+    from ...compat import u16_one_block
+    size = 1 << CHUNK_BITS
+    return tuple(u16_one_block(min(size, n - o)) for o in range(0, n, size))
+
 _mods = {}
 
 

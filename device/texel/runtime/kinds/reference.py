@@ -1,10 +1,11 @@
 # Region kind "reference": one of the lab's nine reference textures (seed 001;
 # gen/reference.py, texel.reference_names()), rendered region-long. In the
 # texelpad firmware its map may already be in flash (gen/reference.py
-# flash_u16): then it plays in place, no RAM, no render.
-from ...compat import u16_one_block
+# flash_u16): then it plays in place, no RAM, no render; else it is rendered
+# into 1 KB chunks (kinds.new_chunks): a stock Pico's heap seldom has the 19.2 or
+# 38.4 KB of a half or full screen in one piece beside a playing scene.
 from ...gen.check import fail, got, qstr, check_keys
-from . import K_BUF
+from . import K_BUF, K_CHUNK, CHUNK_BITS, new_chunks
 
 NAME = "reference"
 KEYS = ("kind", "name")
@@ -41,20 +42,20 @@ def need(tex, n, engine):
 
 
 def block(tex, n, engine):
-    return 0 if flash(tex["name"], n) is not None else 2 * n
+    return 0 if flash(tex["name"], n) is not None else 2 * min(n, 1 << CHUNK_BITS)
 
 
 def store(tex, n, engine):
     rom = flash(tex["name"], n)
     if rom is not None:
         return K_BUF, rom, None             # the firmware's map, played in place
-    buf = u16_one_block(n)
-    return K_BUF, buf, buf
+    ch = new_chunks(n)
+    return K_CHUNK, ch, ch
 
 
-def fill(tex, n, buf, engine, dx_um):
+def fill(tex, n, chunks, engine, dx_um):
     from ... import reference_u16
-    reference_u16(tex["name"], n, buf)
+    reference_u16(tex["name"], n, chunks)   # chunk by chunk (gen/reference.py _parts)
 
 
 def describe(tex):

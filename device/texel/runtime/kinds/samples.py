@@ -15,7 +15,7 @@
 # tuple is kept as it is, a list is copied once.
 from ...compat import u16_one_block, array, core
 from ...gen.check import fail, got, num, int_in, check_keys
-from . import K_CHUNK, CHUNK_BITS, CHUNK_MASK
+from . import K_CHUNK, CHUNK_BITS, CHUNK_MASK, new_chunks
 
 NAME = "samples"
 KEYS = ("kind", "values", "u16", "fit")
@@ -159,13 +159,6 @@ def _gather(chunks, a, b, dst):
         _copy(dst, at, c, off, off + take)
         at += take
         a += take
-
-
-def new_chunks(n):
-    """n uint16 values as a tuple of array('H') of 2^CHUNK_BITS each (the
-    last shorter): a map with no block above 1 KB (upload.Chunks holds one)."""
-    size = 1 << CHUNK_BITS
-    return tuple(u16_one_block(min(size, n - o)) for o in range(0, n, size))
 
 
 def fill_chunks(vals, fit, n, chunks):

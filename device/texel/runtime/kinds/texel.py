@@ -9,8 +9,10 @@
 # at the finger's position by Scene.amp) when no engine is asked for and its
 # texels are 5 .. PLAN_MAX_L samples long and shorter than the region (where
 # the plan is smaller than the map; k*d stays a small int in 16 x 14-bit limb
-# products); else rendered into a region-long buffer by the engine asked for
-# (the integer engine by default: a scene is the same texture on every runtime).
+# products); else rendered by the engine asked for into a region-long buffer,
+# or by default by the integer engine (a scene is the same texture on every
+# runtime) into 1 KB chunks (kinds.new_chunks: no block of the region's length
+# on a board's heap for 1-4-sample texels, or one texel longer than the region).
 from array import array
 from ...compat import u16_one_block
 from ...gen.params import validate as texel_validate
@@ -18,7 +20,7 @@ from ...gen.params import SPEC as TEXEL_SPEC
 from ...gen.params import KEYS as _TEXEL_ALL_KEYS
 from ...gen.params import OPTION_KEYS as TEXEL_OPTIONS
 from ...gen.check import BIG, expected, fail, got, plain_str, check_keys
-from . import K_BUF, K_PLAN
+from . import K_BUF, K_PLAN, K_CHUNK, CHUNK_BITS, new_chunks
 
 NAME = "texel"
 TEXEL_KEYS = tuple(k for k in _TEXEL_ALL_KEYS if k != "length_samples")
@@ -165,8 +167,11 @@ def fill(tex, n, buf, engine, dx_um):
     p["length_samples"] = n
     # A scene plays what a board plays: the integer engine unless the caller
     # asks for another (so a scene is the same texture on every runtime).
-    if engine is None:
-        engine = "int"
+    if engine is None:                      # the board's way: into chunks (store)
+        from ... import make_plan
+        from ...gen.engine_int import render_chunks
+        render_chunks(make_plan(p), buf, CHUNK_BITS)
+        return
     if engine == "numpy":
         # engine_numpy.render_u16 cannot write an ndarray into an array('H')
         # slice (CPython only; memory is no concern there): render, then copy.
@@ -191,12 +196,17 @@ def need(tex, n, engine):
 
 
 def block(tex, n, engine):
-    return 0 if on_plan(tex, n, engine) else 2 * n
+    if on_plan(tex, n, engine):
+        return 0
+    return 2 * n if engine is not None else 2 * min(n, 1 << CHUNK_BITS)
 
 
 def store(tex, n, engine):
     if on_plan(tex, n, engine):
         return K_PLAN, plan_of(tex, n), None
+    if engine is None:
+        ch = new_chunks(n)
+        return K_CHUNK, ch, ch
     buf = u16_one_block(n)                  # exactly region-long
     return K_BUF, buf, buf
 

@@ -1,0 +1,151 @@
+"""Issue 32, item 4: no push needs one block of a region's length. A reference
+(where the board has no flash map of it) and a texel region rendered whole
+(1-4-sample texels, or one texel longer than its region) are written into
+1 KB chunks (runtime/kinds/__init__.py new_chunks) and play as K_CHUNK rows:
+the same values as the one-block maps, on CPython and on the real
+interpreters (the unix port with the C core's x64 native module: its render
+a chunk at a time; MicroPython float32: the viper sines and fill)."""
+from __future__ import annotations
+
+import json
+import shutil
+from array import array
+
+import pytest
+
+import texel
+from support import mpy
+from texel.gen import engine_int, reference as R
+from texel.runtime import kinds, scene as S
+from texelpad import toolchain
+from texelpad.firmware import natmod
+
+D = {"positions": 19200, "dx_um": 5.3}
+LENGTHS = (1, 511, 512, 513, 9600, 9601, 19200)
+
+
+def _chunks(n: int, bits: int = kinds.CHUNK_BITS) -> tuple:
+    size = 1 << bits
+    return tuple(array("H", bytes(2 * min(size, n - o))) for o in range(0, n, size))
+
+
+def _flat(chunks) -> list[int]:
+    return [v for c in chunks for v in c]
+
+
+@pytest.mark.parametrize("name", R.STUDY_NAMES + ("bp-4-0.5",))
+def test_a_reference_in_chunks_is_its_one_block_map(name):
+    for n in LENGTHS if name in R.STUDY_NAMES else (1, 513, 9600):
+        ch = _chunks(n)
+        assert R.reference_u16(name, n, ch) is ch
+        assert _flat(ch) == list(R.reference_u16(name, n)), (name, n)
+
+
+def test_chunks_that_cannot_hold_the_map_are_refused():
+    with pytest.raises(ValueError, match=r"^out: the chunks hold 1024 samples, 1025 needed$"):
+        R.reference_u16("4sin", 1025, _chunks(1024))
+    odd = (array("H", bytes(1024)), array("H", bytes(10)), array("H", bytes(1024)))
+    with pytest.raises(ValueError, match=r"^out: chunk 1 holds 5 values, the first 512$"):
+        R.reference_u16("pink", 1200, odd)
+
+
+def _texel(L: int, n: int, seed: int = 3):
+    return texel.make_plan({"pitch_db": 6.3, "irregularity_db": -12.9, "seed": seed,
+                            "texel_samples": L, "length_samples": n})
+
+
+@pytest.mark.parametrize("L", [1, 2, 3, 4, 5, 7, 600, 20000])
+@pytest.mark.parametrize("bits", [9, 4])
+def test_texels_rendered_into_chunks_are_the_one_block_render(L, bits):
+    for n in (1, 15, 512, 1000, 19200):
+        plan = _texel(L, n)
+        ch = _chunks(n, bits)
+        assert engine_int.render_chunks(plan, ch, bits) is ch
+        assert _flat(ch) == list(engine_int.render_u16(plan)), (L, n, bits)
+
+
+def test_a_scene_of_short_texels_and_a_reference_plays_from_chunks():
+    scene = {"regions": [
+        {"start_mm": 0, "end_mm": 40, "texture": {"kind": "reference", "name": "pink"}},
+        {"start_mm": 40, "end_mm": 70, "texture": {"kind": "texel", "pitch_db": 6.3,
+                                                   "irregularity_db": -12.9, "seed": 7,
+                                                   "texel_samples": 3}},
+        {"start_mm": 70, "end_mm": 101.76, "texture": {"kind": "texel", "pitch_db": 6.3,
+                                                       "irregularity_db": -12.9, "seed": 8,
+                                                       "texel_samples": 9000}}]}
+    sc = S.build(S.validate(scene, D), D)
+    rows = [sc._t[S.STRIDE * i + 2] for i in range(sc.count) if sc._t[S.STRIDE * i + 1] >
+            sc._t[S.STRIDE * i]]
+    assert rows == [kinds.K_CHUNK] * 3
+    assert all(max(len(c) for c in b) == 512 for b in sc.buffers())
+    for (s, e, *_), tex in zip(sc.spans(), [r["texture"] for r in scene["regions"]]):
+        if tex["kind"] == "reference":
+            want = list(R.reference_u16(tex["name"], e - s))
+        else:
+            want = list(texel.render_u16(dict({k: v for k, v in tex.items() if k != "kind"},
+                                              length_samples=e - s), engine="int"))
+        assert [sc.amp(p) for p in range(s, e)] == want, tex
+    # asked for an engine, a texel region is one buffer of that engine's render
+    sn = S.build(S.validate(scene, D), D, engine="int")
+    assert [type(b) for b in sn.buffers()] == [tuple, array, array]
+
+
+SCRIPT = r"""
+import json
+from array import array
+import texel
+from texel import compat
+from texel.gen import reference as R, engine_int
+from texel.runtime import kinds, scene as S
+def chunks(n, bits=9):
+    size = 1 << bits
+    return tuple(array("H", bytes(2 * min(size, n - o))) for o in range(0, n, size))
+def flat(ch):
+    out = []
+    for c in ch:
+        out.extend(c)
+    return out
+bad = []
+for name in R.STUDY_NAMES:
+    for n in (1, 513, 9601, 19200):
+        ch = chunks(n)
+        R.reference_u16(name, n, ch)
+        if flat(ch) != list(R.reference_u16(name, n)):
+            bad.append([name, n])
+for L in (1, 2, 3, 4, 7, 20000):
+    for n in (15, 1000, 19200):
+        for bits in (9, 4):
+            p = texel.make_plan({"pitch_db": 6.3, "irregularity_db": -12.9, "seed": 3,
+                                 "texel_samples": L, "length_samples": n})
+            ch = chunks(n, bits)
+            engine_int.render_chunks(p, ch, bits)
+            if flat(ch) != list(engine_int.render_u16(p)):
+                bad.append([L, n, bits])
+print(json.dumps({"bad": bad, "c": bool(compat.core()), "fill": engine_int.ENGINE,
+                  "int_sines": bool(R._int_sines())}))
+"""
+
+
+@pytest.fixture(scope="module")
+def x64_core(tmp_path_factory):
+    """_texelcore.mpy for x64 built from this checkout (None where it cannot be)."""
+    if natmod.missing("x64"):
+        return None
+    d = tmp_path_factory.mktemp("natmod")
+    shutil.copyfile(natmod.build("x64", d), d / "_texelcore.mpy")
+    return d
+
+
+@pytest.mark.parametrize("exe", ["micropython", "micropython-ulab-f32"])
+def test_chunks_on_the_real_interpreters(exe, x64_core):
+    path = toolchain.interpreter(exe)
+    if path is None:
+        pytest.skip("no %s here (../shared/instruments)" % exe)
+    kw = {"extra_path": str(x64_core)} if exe == "micropython" and x64_core else {}
+    got = mpy.run_json(SCRIPT, exe=path, timeout=600, **kw)
+    print("\n%s: %s" % (exe, json.dumps(got)))
+    assert got["bad"] == []
+    if exe == "micropython-ulab-f32":
+        assert got["int_sines"] and got["fill"] == "viper"
+    elif x64_core:
+        assert got["c"] and got["fill"] == "c"
