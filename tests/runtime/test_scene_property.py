@@ -903,7 +903,7 @@ def check_build(c, display):
                 assert np.abs(seg - exact).max() <= 2.5, "stretch off by %r" % np.abs(seg - exact).max()
                 assert seg[0] == u16[0] and (n == 1 or seg[-1] == u16[-1])
         else:
-            assert kind in (S.K_PLAN, S.K_BUF)
+            assert kind in (S.K_PLAN, S.K_CHUNK)      # its plan, or rendered into 1 KB chunks
             p = _texel_params(tex, n)
             q = np.asarray(texel.render_u16(p, engine="int"), dtype=np.int64)
             assert (seg == q).all(), "texel region does not play the int engine's map"
