@@ -149,3 +149,63 @@ def test_chunks_on_the_real_interpreters(exe, x64_core):
         assert got["int_sines"] and got["fill"] == "viper"
     elif x64_core:
         assert got["c"] and got["fill"] == "c"
+
+
+POOL_SCRIPT = r"""
+import json, gc
+import texel, texel.app as app
+from texel.runtime import kinds
+from texel.gen import reference as R, engine_int
+FULL = 101.76
+def ref(name, a=0, b=FULL):
+    return {"start_mm": a, "end_mm": b, "texture": {"kind": "reference", "name": name}}
+def short(seed, L, a=0, b=FULL):
+    return {"start_mm": a, "end_mm": b, "texture": {"kind": "texel", "pitch_db": 6.3,
+            "irregularity_db": -12.9, "seed": seed, "texel_samples": L}}
+def plays(want):
+    sc = app._rt.refresh.scene
+    return all(sc.amp(p) == want[p] for p in range(len(want)))
+def ids():
+    return set(id(c) for b in app._rt.refresh.scene.buffers() if type(b) is tuple for c in b)
+out = {}
+app.start("virtual", {"regions": [ref("pink")]})
+a = ids()
+out["pool0"] = len(kinds._pool)
+app.push({"regions": [ref("4sin")]})
+out["pool1"] = len(kinds._pool)                       # pink's 37 whole chunks
+b = ids()
+app.push({"regions": [short(5, 3)]})                  # takes the pooled pink chunks
+c = ids()
+out["reused"] = len(c & a)
+out["short_plays"] = plays(engine_int.render_u16(texel.make_plan({"pitch_db": 6.3,
+    "irregularity_db": -12.9, "seed": 5, "texel_samples": 3, "length_samples": 19200})))
+app.push({"regions": [ref("4sin", 0, 50.88), short(6, 2, 50.88)]})
+sc = app._rt.refresh.scene
+r = R.reference_u16("4sin", 9600)
+t = engine_int.render_u16(texel.make_plan({"pitch_db": 6.3, "irregularity_db": -12.9,
+    "seed": 6, "texel_samples": 2, "length_samples": 9600}))
+out["split_plays"] = all(sc.amp(p) == r[p] for p in range(9600)) and \
+    all(sc.amp(9600 + p) == t[p] for p in range(9600))
+out["reused2"] = len(ids() & (b | c))
+st = app.status()
+gc.collect()
+out["pooled"] = kinds.pooled_bytes()
+out["status_less_heap"] = st["mem_free"] - gc.mem_free()   # the pool, and st's own few objects
+app.stop()
+out["drained"] = len(kinds._pool)
+print(json.dumps(out))
+"""
+
+
+def test_a_push_reuses_the_chunks_of_the_scene_it_replaced():
+    """The chunk pool (runtime/kinds/__init__.py recycle): the whole chunks of
+    a replaced scene's maps make the next push's maps, so the next request's
+    small objects cannot split their 1 KB holes; every map still plays its
+    own values; status()'s mem_free counts the pool as free; stop() lets it go."""
+    got = mpy.run_json(POOL_SCRIPT, heapsize="4M", timeout=600)
+    print("\n", json.dumps(got))
+    assert got["pool0"] == 0 and got["pool1"] == 37
+    assert got["reused"] == 37 and got["short_plays"]
+    assert got["split_plays"] and got["reused2"] > 0
+    assert got["pooled"] > 0 and 0 <= got["status_less_heap"] - got["pooled"] < 4096
+    assert got["drained"] == 0
