@@ -168,7 +168,8 @@ def start(board_name=None, scene=None, realtime=False, fast=None, report=True, *
     None with report=False (main.py: status's full collection is ~30 ms of
     a stock Pico's power-up, which a friendly Ctrl-D waits for).
 
-    fast: the fused viper refresh (refresh_viper.py) - default on wherever
+    fast: the fused refresh (runtime/refresh_fast.py: the C core's, or
+    refresh_viper.py's in viper) - default on wherever
     the port has viper and the sensor is a linear ADC; on an RP2040 its IRQ
     then reads the ADC and writes the PWM compare register itself."""
     board = _checked_board(default_board() if board_name is None else board_name)
@@ -232,8 +233,10 @@ def _start(board, canonical, realtime, fast, hw_opts):
         callback = None
         if fast:
             try:
-                # viper code: a port without a native emitter cannot compile it
-                from .runtime.refresh_viper import FastRefresh, irq_rp2
+                from .runtime.refresh_fast import FastRefresh, irq_rp2, _engine
+                # the refresh's machine code: the C core's, else the viper core (a
+                # port without a native emitter cannot compile it)
+                _engine()
             except (ImportError, SyntaxError):
                 fast = False
         if fast:

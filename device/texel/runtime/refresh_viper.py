@@ -9,7 +9,9 @@
 # machine.Timer (`texelpad bench-refresh --chip rp2040`, docs/runtime.md).
 # It computes exactly what Refresh.step with AdcLinearSensor, Scene.amp and
 # DutyLaw.duty compute (tests/runtime/test_refresh_viper.py runs both on the
-# same inputs and compares every refresh).
+# same inputs and compares every refresh). Its Python side - FastRefresh,
+# the swap, irq_rp2 - is refresh_fast.py, which runs the C core's twin of core()
+# instead where the board has it and then never loads this module.
 #
 # Layout. Everything the refresh touches is reached from one array('I'), the
 # word array W (indices below): the state array S (int32 words), the scene's
@@ -34,11 +36,8 @@
 #
 # Kept alone in this file: a port without a native emitter cannot compile it.
 import micropython
-from array import array
 from micropython import const
-import uctypes
-from .refresh import Refresh, TELEMETRY_SLOTS
-from ..gen import sine_table
+from . import refresh_fast as _f
 
 # W: word array indices, one 32-bit word each. Addresses are kept as offsets
 # from BASE (words 0 and 1: its low and high halves; high is 0 on 32-bit
@@ -108,13 +107,8 @@ V_BIAS = const(0x10000000)      # 2^28 > any |v| (v <= qmax < 2^28)
 _SLOTS = const(256)             # = refresh.TELEMETRY_SLOTS (checked below)
 _FAST_O = const(32768)          # offsets below this divide by reciprocal (texel branch)
 
-_W = None               # the word array in use (kept referenced here too)
-_WA = 0                 # its address: core()'s argument from refresh() and FastRefresh.step
-# core()'s argument as the RP2040 trampoline passes it: one word holding W's
-# address as a MicroPython small-int object ((address << 1) | 1; SRAM
-# addresses are below 2^30). Updated with one 32-bit store at each swap.
-_ARGS = array("I", [1])
-_RP2 = None             # the FastRefresh that use_rp2_registers() set up (irq_rp2's)
+_W = None               # the word array in use, kept current by refresh_fast (_viper_loaded)
+_WA = 0                 # its address: core()'s argument from refresh()
 
 
 @micropython.viper
@@ -311,286 +305,26 @@ def _word(a: int) -> int:
     return int(ptr32(a)[0])
 
 
-@micropython.viper
-def _publish(args: ptr32, a: int):
-    args[0] = (a << 1) | 1                  # a small-int object; a < 2^30 on a board
+# FastRefresh and irq_rp2 live in refresh_fast.py (a board with the C refresh never
+# loads this module); named here too for the benches and tests that import them so
+FastRefresh = _f.FastRefresh
+irq_rp2 = _f.irq_rp2
+_ARGS = _f._ARGS
+_EMPTY_TABLE = _f._EMPTY_TABLE
+_c_core = _f._c_core
+_start_many_is_reset = _f._start_many_is_reset
+_resolve = _f._resolve
 
-
-class _Rp2Irq:
-    """irq_rp2: the fused refresh as the RP2040's refresh interrupt. Called
-    (machine.Timer's hard callback, tests) it runs one refresh; hw/rp2.py's
-    Hw.start() asks native_entry() instead and makes the PWM-wrap interrupt
-    call core()'s machine code itself - or the C core's (engine: which)."""
-
-    engine = None
-
-    def __call__(self, timer):
-        return refresh(timer)
-
-    def native_entry(self):
-        """(function object address, its machine code address, address of its
-        one-word argument array): what a Thumb trampoline passes to call
-        core(W) as MicroPython's native calling convention has it - r0 the
-        function object, r1 = 1 argument, r2 = 0 keywords, r3 the arguments.
-        The refresh that use_rp2_registers() set up switches its ADC to
-        free-running conversions (START_MANY).
-        The code address is the function object's fourth word
-        (py/objfun.h mp_obj_fun_bc_t.bytecode: a viper function's machine
-        code); hw/rp2.py checks it before use."""
-        if _RP2 is not None and _start_many_is_reset():
-            # the ADC converts continuously from now on (core()'s START_MANY
-            # branch): the refresh takes the last conversion instead of
-            # starting one and waiting 2 us for it
-            S = _RP2._S
-            S[S_ADC_CS] = (S[S_ADC_CS] & ~4) | 8
-        a = id(core)
-        code = _word(a + 12)
-        self.engine = "viper"
-        c = _c_core()
-        if c is not None:
-            # the C core's refresh (device/cmod/texelcore/refresh_core.c: this
-            # file's core() in C, on the same W; in RAM on the firmware), called
-            # the same way: the trampoline's function object goes unused
-            code = c.refresh_entry()
-            self.engine = "c"
-        return a, code, uctypes.addressof(_ARGS)
-
-
-def _c_core():
-    """The C core when it has the refresh (compat.core(): the firmware's
-    _texelcore, or deploy's native module), else None: then the interrupt
-    calls core()'s viper machine code."""
-    from ..compat import core as _core
-    c = _core()
-    return c if c is not None and hasattr(c, "refresh_entry") else None
-
-
-def _start_many_is_reset():
-    """True on the texelpad firmware (its board name says so), whose soft-reset
-    hook in C turns the free-running ADC off (boards/pico/mpconfigboard.h).
-    Stock MicroPython leaves START_MANY on through a soft reset, and then a
-    user's machine.ADC(...).read_u16() waits for a READY that never comes: the
-    hardware/README calibration loop hung a stock Pico after a plain mpremote
-    exec on the emulated chip (tests/host/test_doc_mpremote.py). There the
-    refresh starts one conversion each time and waits its 2 us."""
-    import sys
-    return "(texelpad" in getattr(sys.implementation, "_machine", "")
-
-
-irq_rp2 = _Rp2Irq()     # what app.py gives the rp2 backend on an RP2040
-
-
-def _offset(a, base):
-    # an address as core() finds it: one word above BASE
-    d = a - base
-    if not 0 <= d <= 0xFFFFFFFF:
-        raise MemoryError("fused refresh: address %x is more than 4 GB above %x" % (a, base))
-    return d
-
-
-def _resolve(words, tab, addr, chunked, nbuf):
-    """Fill W (words) and core()'s table (tab) before a swap: every address
-    as its offset from the lowest one (W_BASE holds that base, split in two
-    words), chunk tables' entries likewise, and each table row's value as
-    core() looks it up - a K_PLAN row the index of its plan's first word in
-    W, a K_BUF or K_CHUNK row its buffer's offset."""
-    base = min(a for _, a in addr)
-    for ct, cs in chunked:
-        base = min(base, min(cs))
-    for k, a in addr:
-        words[k] = _offset(a, base)
-    for ct, cs in chunked:
-        for c in range(len(cs)):
-            ct[c] = _offset(cs[c], base)
-    for r in range(0, len(tab) - 4, 4):      # every row but the sentinel
-        kind = tab[r + 2]
-        if kind == 2:                       # scene.K_PLAN
-            tab[r + 3] = W_BUF0 + nbuf + W_PLAN * tab[r + 3]
-        elif kind == 1 or kind == 3:        # scene.K_BUF, K_CHUNK
-            tab[r + 3] = words[W_BUF0 + tab[r + 3]]
-    words[W_BASE] = base & 0xFFFFFFFF
-    words[W_BASE + 1] = (base >> 16) >> 16
-
-
-def _state(i, bias=0):
-    # a Refresh attribute kept in S[i] (stored + bias: positions may be -1)
-    def get(self):
-        return self._S[i] - bias
-
-    def put(self, v):
-        self._S[i] = v + bias
-    return property(get, put)
-
-
-_RP2_TIMERAWL = const(0x40054028)
-_RP2_ADC_CS = const(0x4004C000)
-
-
-class FastRefresh(Refresh):
-    """Refresh with the fused viper core: same attributes and telemetry API,
-    state kept in S (read back through properties for status())."""
-
-    def __init__(self, sensor, law, set_duty, read, ticks_us, ticks_diff, period_us,
-                 idle_amp=0, cost_ticks=None):
-        self._S = array("i", bytes(4 * S_SIZE))
-        self._keep = None
-        self._prev = None
-        # True when the refresh may run in another thread (the unix port's
-        # real-time virtual board): the previous scene is kept one swap longer
-        self.threaded = False
-        Refresh.__init__(self, sensor, law, set_duty, ticks_us, ticks_diff, period_us,
-                         idle_amp, cost_ticks)
-        S = self._S
-        sn = sensor
-        S[S_DEB] = sn._debounce
-        S[S_K] = sn._k
-        S[S_KM] = sn._km
-        S[S_KV] = sn._kv
-        S[S_KVM] = sn._kvm
-        S[S_VMAX] = sn._vmax
-        S[S_QMAX] = sn._qmax
-        S[S_REV] = 1 if sn._rev else 0
-        S[S_R0] = sn._r0
-        S[S_SPAN] = sn._span
-        S[S_SHI] = sn._s_hi
-        S[S_SLO] = sn._s_lo
-        S[S_LQ8] = sn._lq8
-        S[S_LIFT] = sn._lift
-        S[S_V] = V_BIAS
-        S[S_Q] = law.q
-        S[S_HALF] = law._half
-        S[S_MAXC] = law.max_counts
-        S[S_PERIOD] = period_us
-        self._read = read
-        # the generic path's "registers": a clock word, an ADC (CS with READY
-        # always set, RESULT = the raw read_u16 value) and a CC word (MUL 1)
-        self._clk = array("I", [0])
-        self._adc = array("I", [0x100, 0])
-        self._cc = array("I", [0])
-        S[S_ADC_CS] = 0x100
-        S[S_ADC12] = 0
-        self._regs = (uctypes.addressof(self._clk), uctypes.addressof(self._adc),
-                      uctypes.addressof(self._cc), 1)
-        self._install(None)
-
-    def use_rp2_registers(self, cc_addr, mul, adc_channel, timer_addr=_RP2_TIMERAWL,
-                          adc_addr=_RP2_ADC_CS):
-        """Let irq_rp2 drive the hardware directly (RP2040)."""
-        global _RP2
-        _RP2 = self
-        self._S[S_ADC_CS] = 1 | 4 | (adc_channel << 12)
-        self._S[S_ADC12] = 1
-        self._regs = (timer_addr, adc_addr, cc_addr, mul)
-        self._install(self.scene)
-
-    def _install(self, scene):
-        global _W, _WA
-        bufs = scene.buffers() if scene is not None else ()
-        plans = scene.plans() if scene is not None else ()
-        nbuf = len(bufs)
-        words = array("I", [0] * (W_FIXED + nbuf + W_PLAN * len(plans)))
-        # core()'s copy of the region table: the same rows, with each row's
-        # value resolved to what core() needs - a K_BUF or K_CHUNK row the
-        # offset of its buffer (or chunk table), a K_PLAN row the index of its
-        # plan's first word in W - so a lookup is one load less (Scene.amp
-        # keeps using scene._t)
-        if scene is None:
-            tab = array("i", _EMPTY_TABLE)
-            words[W_IDLE] = self.idle_amp
-        else:
-            tab = array("i", scene._t)
-            words[W_IDLE] = scene.idle
-        # (index, address) of everything core() reaches by address; chunked
-        # uploads get a table of their chunks' offsets
-        addr = [(W_S, uctypes.addressof(self._S)), (W_TAB, uctypes.addressof(tab)),
-                (W_FINE, uctypes.addressof(self.law._fine)),
-                (W_TEL_T, uctypes.addressof(self.tel_t)),
-                (W_TEL_P, uctypes.addressof(self.tel_pos)),
-                (W_TEL_A, uctypes.addressof(self.tel_amp)),
-                (W_TIMER, self._regs[0]), (W_ADC, self._regs[1]), (W_CC, self._regs[2]),
-                (W_SINE, uctypes.addressof(sine_table.table()))]
-        words[W_MUL] = self._regs[3]
-        chunked = []
-        for k in range(nbuf):
-            b = bufs[k]
-            if isinstance(b, tuple):    # scene.K_CHUNK: a table of its chunks' offsets
-                ct = array("I", [0] * len(b))
-                chunked.append((ct, [uctypes.addressof(c) for c in b]))
-                b = ct
-            addr.append((W_BUF0 + k, uctypes.addressof(b)))
-        for k in range(len(plans)):
-            b = W_BUF0 + nbuf + W_PLAN * k
-            t28, d28, ln, g = plans[k]
-            addr.append((b, uctypes.addressof(t28)))
-            addr.append((b + 1, uctypes.addressof(d28)))
-            words[b + 2] = ln
-            words[b + 3] = g
-            words[b + 4] = 65536 // ln + 1      # core()'s reciprocal of L
-        _resolve(words, tab, addr, chunked, nbuf)
-        chunked = [ct for ct, _ in chunked]
-        keep = (words, scene, tab, chunked)
-        # The previous generation stays referenced until the next swap: the
-        # viper refresh holds raw addresses the GC cannot see, and on a port
-        # with real threads (the unix port's realtime virtual board) a refresh
-        # may still be reading the old scene just after this store.
-        self._prev = self._keep
-        self._keep = keep               # referenced before the refresh can see them
-        # the swap: one store each (refresh() and FastRefresh.step read _WA;
-        # the RP2040 trampoline reads _ARGS[0], stored by viper code: the
-        # small-int word (address << 1) | 1 is above 2^30, a big int here)
-        _W = words
-        _WA = uctypes.addressof(words)
-        _publish(_ARGS, _WA)
-        if not self.threaded:
-            # a hard IRQ (rp2, stm32) runs to its end before this code goes on:
-            # now that W is published no refresh can still read the old scene,
-            # whose buffers go now (on a Pico, keeping a full-screen upload one
-            # swap longer left no room for the next: measured on the emulated
-            # Pico). On a port with real threads (the unix port's realtime
-            # virtual board) a refresh may still be reading the old scene just
-            # after the store: the previous generation stays until the next swap.
-            self._prev = None
-        return self._prev
-
-    def swap(self, scene):
-        old = self.scene
-        self._install(scene)
-        self.scene = scene
-        return old
-
-    def step(self, _timer=None):
-        c0 = self.cost_ticks()
-        self._clk[0] = self.ticks_us() & 0x3FFFFFFF
-        self._adc[1] = self._read()
-        core(_WA)
-        self.set_duty(self._cc[0])
-        dt = self.ticks_diff(self.cost_ticks(), c0)
-        S = self._S
-        if dt > S[S_WORST]:
-            S[S_WORST] = dt
-        if dt > self.period_us:
-            S[S_OVR] = (S[S_OVR] + 1) & 0x3FFFFFFF
-
-    # Refresh's attributes, backed by S (read by status() and telemetry)
-    count = _state(S_COUNT)
-    amp = _state(S_AMP)
-    duty = _state(S_DUTY)
-    worst_us = _state(S_WORST)
-    overruns = _state(S_OVR)
-    tel_every = _state(S_TEL_EVERY)
-    tel_div = _state(S_TEL_DIV)
-    tel_head = _state(S_TEL_HEAD)
-    pos = _state(S_POS1, 1)
-
-
-from . import kinds as _k
-if _k.CHUNK_BITS != 9 or _k.CHUNK_MASK != 511:
-    raise ImportError("refresh_viper: scene chunk size differs from the literals in refresh()")
-if (_k.K_CONST, _k.K_BUF, _k.K_PLAN, _k.K_CHUNK) != (0, 1, 2, 3):
-    raise ImportError("refresh_viper: the region table's codes (runtime/kinds/__init__.py) "
-                      "differ from the literals in refresh()")
-if TELEMETRY_SLOTS != _SLOTS:
+# the layout, compiled into core() as literals, is refresh_fast's
+for _n in ("W_BASE", "W_S", "W_TAB", "W_FINE", "W_TEL_T", "W_TEL_P", "W_TEL_A", "W_IDLE",
+           "W_TIMER", "W_ADC", "W_CC", "W_MUL", "W_SINE", "W_BUF0", "W_FIXED", "W_PLAN",
+           "S_TOUCH", "S_LOW", "S_ADC12", "S_F", "S_V", "S_FR", "S_VR", "S_K", "S_KM", "S_KV",
+           "S_KVM", "S_VMAX", "S_QMAX", "S_REV", "S_R0", "S_SPAN", "S_SHI", "S_SLO", "S_LQ8",
+           "S_LIFT", "S_POS1", "S_AMP", "S_DUTY", "S_COUNT", "S_TEL_EVERY", "S_Q", "S_HALF",
+           "S_MAXC", "S_WORST", "S_OVR", "S_PERIOD", "S_ADC_CS", "S_DEB", "S_TEL_DIV",
+           "S_TEL_HEAD", "S_SIZE", "V_BIAS"):
+    if globals()[_n] != getattr(_f, _n):
+        raise ImportError("refresh_viper: %s differs from refresh_fast.py's" % _n)
+if _SLOTS != _f.TELEMETRY_SLOTS:
     raise ImportError("refresh_viper: telemetry ring size differs from refresh.py")
-
-# a scene-less table: the sentinel row alone (every position is a gap)
-_EMPTY_TABLE = array("i", [0x3FFFFFFF, 0x3FFFFFFF, 0, 0])
+_f._viper_loaded(globals())

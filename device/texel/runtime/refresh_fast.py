@@ -1,0 +1,414 @@
+# The fused refresh's Python side: FastRefresh (the scene swap, the word array W
+# and the state S every refresh reads, telemetry, status) and irq_rp2 (the RP2040's
+# refresh interrupt). The refresh itself is machine code that reads only W: the C
+# core's (device/cmod/texelcore/refresh_core.c: the texelpad firmware's module,
+# or the native module texelpad deploy installs) where the board has it, else
+# refresh_viper.core(), the same computation in viper (tests/gen/test_texel_core.py
+# compares them word for word). Apart from refresh_viper.py so that a board with
+# the C refresh never loads the viper code: on the texelpad firmware that code is
+# copied into RAM at import (host/texelpad/firmware/romfs.py RAM_MODULES), 8.2 KB
+# of the heap measured on the emulated Pico; on a stock Pico its bytecode and
+# machine code are RAM too. The layout below (W, S) is refresh_viper.py's, which
+# keeps its own compile-time copy and checks it against this one at import.
+from array import array
+from micropython import const
+import uctypes
+from .refresh import Refresh, TELEMETRY_SLOTS
+from ..gen import sine_table
+
+# W: word array indices, one 32-bit word each. Addresses are kept as offsets
+# from BASE (words 0 and 1: its low and high halves; high is 0 on 32-bit
+# boards), the lowest address the refresh uses, so every offset is one
+# non-negative word (RP2040: the registers at 0x4xxxxxxx lie above the SRAM
+# heap; the unix port: everything in its one heap) and an address costs core()
+# one load and one add instead of rebuilding 64 bits from two halves.
+W_BASE = const(0)       # 2 words
+W_S = const(2)          # state S (array 'i')
+W_TAB = const(3)        # scene region table (array 'i', rows start,end,kind,value + sentinel)
+W_FINE = const(4)       # DutyLaw fine table (array 'H')
+W_TEL_T = const(5)      # telemetry ring: time (array 'i')
+W_TEL_P = const(6)      # telemetry ring: position (array 'i')
+W_TEL_A = const(7)      # telemetry ring: amplitude (array 'H')
+W_IDLE = const(8)       # scene idle amplitude (uint16; a value, not an address)
+W_TIMER = const(9)      # rp2: TIMERAWL register (us counter)
+W_ADC = const(10)       # rp2: ADC CS register (RESULT follows)
+W_CC = const(11)        # rp2: PWM slice CC register
+W_MUL = const(12)       # rp2: CC word = counts * MUL (leg A, and B for a bridge; a value)
+W_SINE = const(13)      # sine_table (array 'H') for plan-backed texel regions
+W_BUF0 = const(14)      # scene buffer k at W_BUF0 + k (scene.K_CHUNK: its chunk-offset
+                        # table); then plan p at W_BUF0 + nbuf + W_PLAN*p: t28, d28,
+                        # L, gain Q14, R = 65536 // L + 1 (see the texel branch)
+W_FIXED = const(14)
+W_PLAN = const(5)
+
+# S: state indices (int32 words; every value non-negative and < 2^30 - the
+# velocity is stored biased by V_BIAS - so 32- and 64-bit viper agree). The
+# words every refresh reads come first: indices below 32 are one Thumb load.
+S_TOUCH = const(0)
+S_LOW = const(1)
+S_ADC12 = const(2)      # 1: RESULT is a 12-bit RP2040 reading, scaled as read_u16 does
+S_F = const(3)
+S_V = const(4)
+S_FR = const(5)
+S_VR = const(6)
+S_K = const(7)
+S_KM = const(8)
+S_KV = const(9)
+S_KVM = const(10)
+S_VMAX = const(11)
+S_QMAX = const(12)
+S_REV = const(13)
+S_R0 = const(14)
+S_SPAN = const(15)
+S_SHI = const(16)
+S_SLO = const(17)
+S_LQ8 = const(18)
+S_LIFT = const(19)
+S_POS1 = const(20)      # last position + 1 (0 = lifted)
+S_AMP = const(21)
+S_DUTY = const(22)
+S_COUNT = const(23)
+S_TEL_EVERY = const(24)
+S_Q = const(25)         # DutyLaw q
+S_HALF = const(26)      # DutyLaw rounding offset
+S_MAXC = const(27)      # DutyLaw max_counts
+S_WORST = const(28)
+S_OVR = const(29)
+S_PERIOD = const(30)    # refresh period, us
+S_ADC_CS = const(31)    # the word written to the ADC's CS (rp2: starts one conversion)
+S_DEB = const(32)       # lift debounce (read only when the finger lifts)
+S_TEL_DIV = const(33)
+S_TEL_HEAD = const(34)
+S_SIZE = const(35)
+V_BIAS = const(0x10000000)      # 2^28 > any |v| (v <= qmax < 2^28)
+_SLOTS = const(256)             # = refresh.TELEMETRY_SLOTS (checked below)
+
+_W = None               # the word array in use (kept referenced here too)
+_WA = 0                 # its address: core()'s argument
+_S = None               # the state array of the FastRefresh that published _W
+# core()'s argument as the RP2040 trampoline passes it: one word holding W's
+# address as a MicroPython small-int object ((address << 1) | 1; SRAM
+# addresses are below 2^30). Updated with one 32-bit store at each swap.
+_ARGS = array("I", [1])
+_RP2 = None             # the FastRefresh that use_rp2_registers() set up (irq_rp2's)
+_VG = None              # refresh_viper's globals once it is loaded (its refresh() reads _WA)
+_CORE = None            # (the C core, None) or (None, refresh_viper.core): _engine()
+
+
+def _viper():
+    """refresh_viper, imported at its first use (a port with a native emitter)."""
+    from . import refresh_viper
+    return refresh_viper
+
+
+def _engine():
+    """(C core, viper core) with exactly one set: what runs a refresh on W."""
+    global _CORE
+    if _CORE is None:
+        c = _c_core()
+        _CORE = (c, None) if c is not None else (None, _viper().core)
+    return _CORE
+
+
+def _viper_loaded(g):
+    """refresh_viper's import hands its globals here: its refresh() reads
+    _W and _WA from them (kept current by every swap)."""
+    global _VG
+    _VG = g
+    g["_W"] = _W
+    g["_WA"] = _WA
+
+
+class _Rp2Irq:
+    """irq_rp2: the fused refresh as the RP2040's refresh interrupt. Called
+    (machine.Timer's hard callback, tests) it runs one refresh; hw/rp2.py's
+    Hw.start() asks native_entry() instead and makes the PWM-wrap interrupt
+    call core()'s machine code itself - or the C core's (engine: which)."""
+
+    engine = None
+
+    def __call__(self, timer):
+        c, v = _engine()
+        if c is not None:
+            c.refresh(_W)
+        else:
+            v(_WA)
+        return _S[S_DUTY]
+
+    def native_entry(self):
+        """(function object address, its machine code address, address of its
+        one-word argument array): what a Thumb trampoline passes to call
+        core(W) as MicroPython's native calling convention has it - r0 the
+        function object, r1 = 1 argument, r2 = 0 keywords, r3 the arguments.
+        The refresh that use_rp2_registers() set up switches its ADC to
+        free-running conversions (START_MANY).
+        The code address is the function object's fourth word
+        (py/objfun.h mp_obj_fun_bc_t.bytecode: a viper function's machine
+        code); hw/rp2.py checks it before use."""
+        if _RP2 is not None and _start_many_is_reset():
+            # the ADC converts continuously from now on (core()'s START_MANY
+            # branch): the refresh takes the last conversion instead of
+            # starting one and waiting 2 us for it
+            S = _RP2._S
+            S[S_ADC_CS] = (S[S_ADC_CS] & ~4) | 8
+        c = _c_core()
+        if c is not None:
+            # the C core's refresh (device/cmod/texelcore/refresh_core.c:
+            # refresh_viper.core() in C, on the same W; in RAM on the firmware),
+            # called the same way: the trampoline's function object (this one,
+            # in SRAM) goes unused
+            self.engine = "c"
+            return id(self), c.refresh_entry(), uctypes.addressof(_ARGS)
+        rv = _viper()
+        a = id(rv.core)
+        self.engine = "viper"
+        return a, rv._word(a + 12), uctypes.addressof(_ARGS)
+
+
+def _c_core():
+    """The C core when it has the refresh (compat.core(): the firmware's
+    _texelcore, or deploy's native module), else None: then the interrupt
+    calls core()'s viper machine code."""
+    from ..compat import core as _core
+    c = _core()
+    return c if c is not None and hasattr(c, "refresh_entry") else None
+
+
+def _start_many_is_reset():
+    """True on the texelpad firmware (its board name says so), whose soft-reset
+    hook in C turns the free-running ADC off (boards/pico/mpconfigboard.h).
+    Stock MicroPython leaves START_MANY on through a soft reset, and then a
+    user's machine.ADC(...).read_u16() waits for a READY that never comes: the
+    hardware/README calibration loop hung a stock Pico after a plain mpremote
+    exec on the emulated chip (tests/host/test_doc_mpremote.py). There the
+    refresh starts one conversion each time and waits its 2 us."""
+    import sys
+    return "(texelpad" in getattr(sys.implementation, "_machine", "")
+
+
+irq_rp2 = _Rp2Irq()     # what app.py gives the rp2 backend on an RP2040
+
+
+def _offset(a, base):
+    # an address as core() finds it: one word above BASE
+    d = a - base
+    if not 0 <= d <= 0xFFFFFFFF:
+        raise MemoryError("fused refresh: address %x is more than 4 GB above %x" % (a, base))
+    return d
+
+
+def _resolve(words, tab, addr, chunked, nbuf):
+    """Fill W (words) and core()'s table (tab) before a swap: every address
+    as its offset from the lowest one (W_BASE holds that base, split in two
+    words), chunk tables' entries likewise, and each table row's value as
+    core() looks it up - a K_PLAN row the index of its plan's first word in
+    W, a K_BUF or K_CHUNK row its buffer's offset."""
+    base = min(a for _, a in addr)
+    for ct, cs in chunked:
+        base = min(base, min(cs))
+    for k, a in addr:
+        words[k] = _offset(a, base)
+    for ct, cs in chunked:
+        for c in range(len(cs)):
+            ct[c] = _offset(cs[c], base)
+    for r in range(0, len(tab) - 4, 4):      # every row but the sentinel
+        kind = tab[r + 2]
+        if kind == 2:                       # scene.K_PLAN
+            tab[r + 3] = W_BUF0 + nbuf + W_PLAN * tab[r + 3]
+        elif kind == 1 or kind == 3:        # scene.K_BUF, K_CHUNK
+            tab[r + 3] = words[W_BUF0 + tab[r + 3]]
+    words[W_BASE] = base & 0xFFFFFFFF
+    words[W_BASE + 1] = (base >> 16) >> 16
+
+
+def _state(i, bias=0):
+    # a Refresh attribute kept in S[i] (stored + bias: positions may be -1)
+    def get(self):
+        return self._S[i] - bias
+
+    def put(self, v):
+        self._S[i] = v + bias
+    return property(get, put)
+
+
+_RP2_TIMERAWL = const(0x40054028)
+_RP2_ADC_CS = const(0x4004C000)
+
+
+class FastRefresh(Refresh):
+    """Refresh with the fused viper core: same attributes and telemetry API,
+    state kept in S (read back through properties for status())."""
+
+    def __init__(self, sensor, law, set_duty, read, ticks_us, ticks_diff, period_us,
+                 idle_amp=0, cost_ticks=None):
+        self._S = array("i", bytes(4 * S_SIZE))
+        self._c, self._vcore = _engine()
+        self._keep = None
+        self._prev = None
+        # True when the refresh may run in another thread (the unix port's
+        # real-time virtual board): the previous scene is kept one swap longer
+        self.threaded = False
+        Refresh.__init__(self, sensor, law, set_duty, ticks_us, ticks_diff, period_us,
+                         idle_amp, cost_ticks)
+        S = self._S
+        sn = sensor
+        S[S_DEB] = sn._debounce
+        S[S_K] = sn._k
+        S[S_KM] = sn._km
+        S[S_KV] = sn._kv
+        S[S_KVM] = sn._kvm
+        S[S_VMAX] = sn._vmax
+        S[S_QMAX] = sn._qmax
+        S[S_REV] = 1 if sn._rev else 0
+        S[S_R0] = sn._r0
+        S[S_SPAN] = sn._span
+        S[S_SHI] = sn._s_hi
+        S[S_SLO] = sn._s_lo
+        S[S_LQ8] = sn._lq8
+        S[S_LIFT] = sn._lift
+        S[S_V] = V_BIAS
+        S[S_Q] = law.q
+        S[S_HALF] = law._half
+        S[S_MAXC] = law.max_counts
+        S[S_PERIOD] = period_us
+        self._read = read
+        # the generic path's "registers": a clock word, an ADC (CS with READY
+        # always set, RESULT = the raw read_u16 value) and a CC word (MUL 1)
+        self._clk = array("I", [0])
+        self._adc = array("I", [0x100, 0])
+        self._cc = array("I", [0])
+        S[S_ADC_CS] = 0x100
+        S[S_ADC12] = 0
+        self._regs = (uctypes.addressof(self._clk), uctypes.addressof(self._adc),
+                      uctypes.addressof(self._cc), 1)
+        self._install(None)
+
+    def use_rp2_registers(self, cc_addr, mul, adc_channel, timer_addr=_RP2_TIMERAWL,
+                          adc_addr=_RP2_ADC_CS):
+        """Let irq_rp2 drive the hardware directly (RP2040)."""
+        global _RP2
+        _RP2 = self
+        self._S[S_ADC_CS] = 1 | 4 | (adc_channel << 12)
+        self._S[S_ADC12] = 1
+        self._regs = (timer_addr, adc_addr, cc_addr, mul)
+        self._install(self.scene)
+
+    def _install(self, scene):
+        global _W, _WA, _S
+        bufs = scene.buffers() if scene is not None else ()
+        plans = scene.plans() if scene is not None else ()
+        nbuf = len(bufs)
+        words = array("I", [0] * (W_FIXED + nbuf + W_PLAN * len(plans)))
+        # core()'s copy of the region table: the same rows, with each row's
+        # value resolved to what core() needs - a K_BUF or K_CHUNK row the
+        # offset of its buffer (or chunk table), a K_PLAN row the index of its
+        # plan's first word in W - so a lookup is one load less (Scene.amp
+        # keeps using scene._t)
+        if scene is None:
+            tab = array("i", _EMPTY_TABLE)
+            words[W_IDLE] = self.idle_amp
+        else:
+            tab = array("i", scene._t)
+            words[W_IDLE] = scene.idle
+        # (index, address) of everything core() reaches by address; chunked
+        # uploads get a table of their chunks' offsets
+        addr = [(W_S, uctypes.addressof(self._S)), (W_TAB, uctypes.addressof(tab)),
+                (W_FINE, uctypes.addressof(self.law._fine)),
+                (W_TEL_T, uctypes.addressof(self.tel_t)),
+                (W_TEL_P, uctypes.addressof(self.tel_pos)),
+                (W_TEL_A, uctypes.addressof(self.tel_amp)),
+                (W_TIMER, self._regs[0]), (W_ADC, self._regs[1]), (W_CC, self._regs[2]),
+                (W_SINE, uctypes.addressof(sine_table.table()))]
+        words[W_MUL] = self._regs[3]
+        chunked = []
+        for k in range(nbuf):
+            b = bufs[k]
+            if isinstance(b, tuple):    # scene.K_CHUNK: a table of its chunks' offsets
+                ct = array("I", [0] * len(b))
+                chunked.append((ct, [uctypes.addressof(c) for c in b]))
+                b = ct
+            addr.append((W_BUF0 + k, uctypes.addressof(b)))
+        for k in range(len(plans)):
+            b = W_BUF0 + nbuf + W_PLAN * k
+            t28, d28, ln, g = plans[k]
+            addr.append((b, uctypes.addressof(t28)))
+            addr.append((b + 1, uctypes.addressof(d28)))
+            words[b + 2] = ln
+            words[b + 3] = g
+            words[b + 4] = 65536 // ln + 1      # core()'s reciprocal of L
+        _resolve(words, tab, addr, chunked, nbuf)
+        chunked = [ct for ct, _ in chunked]
+        keep = (words, scene, tab, chunked)
+        # The previous generation stays referenced until the next swap: the
+        # viper refresh holds raw addresses the GC cannot see, and on a port
+        # with real threads (the unix port's realtime virtual board) a refresh
+        # may still be reading the old scene just after this store.
+        self._prev = self._keep
+        self._keep = keep               # referenced before the refresh can see them
+        # the swap: one store each (step() reads _W or _WA; the RP2040
+        # trampoline reads _ARGS[0]: the small-int word (address << 1) | 1, one
+        # 32-bit store - SRAM addresses are below 2^30; a 64-bit unix port's
+        # word is cut, as nothing there reads it)
+        _W = words
+        _WA = uctypes.addressof(words)
+        _S = self._S
+        _ARGS[0] = ((_WA << 1) | 1) & 0xFFFFFFFF
+        if _VG is not None:             # refresh_viper.refresh() reads its own globals
+            _VG["_W"] = _W
+            _VG["_WA"] = _WA
+        if not self.threaded:
+            # a hard IRQ (rp2, stm32) runs to its end before this code goes on:
+            # now that W is published no refresh can still read the old scene,
+            # whose buffers go now (on a Pico, keeping a full-screen upload one
+            # swap longer left no room for the next: measured on the emulated
+            # Pico). On a port with real threads (the unix port's realtime
+            # virtual board) a refresh may still be reading the old scene just
+            # after the store: the previous generation stays until the next swap.
+            self._prev = None
+        return self._prev
+
+    def swap(self, scene):
+        old = self.scene
+        self._install(scene)
+        self.scene = scene
+        return old
+
+    def step(self, _timer=None):
+        c0 = self.cost_ticks()
+        self._clk[0] = self.ticks_us() & 0x3FFFFFFF
+        self._adc[1] = self._read()
+        if self._c is not None:
+            self._c.refresh(_W)
+        else:
+            self._vcore(_WA)
+        self.set_duty(self._cc[0])
+        dt = self.ticks_diff(self.cost_ticks(), c0)
+        S = self._S
+        if dt > S[S_WORST]:
+            S[S_WORST] = dt
+        if dt > self.period_us:
+            S[S_OVR] = (S[S_OVR] + 1) & 0x3FFFFFFF
+
+    # Refresh's attributes, backed by S (read by status() and telemetry)
+    count = _state(S_COUNT)
+    amp = _state(S_AMP)
+    duty = _state(S_DUTY)
+    worst_us = _state(S_WORST)
+    overruns = _state(S_OVR)
+    tel_every = _state(S_TEL_EVERY)
+    tel_div = _state(S_TEL_DIV)
+    tel_head = _state(S_TEL_HEAD)
+    pos = _state(S_POS1, 1)
+
+
+from . import kinds as _k
+if _k.CHUNK_BITS != 9 or _k.CHUNK_MASK != 511:
+    raise ImportError("refresh_fast: scene chunk size differs from the literals in refresh_viper.core()")
+if (_k.K_CONST, _k.K_BUF, _k.K_PLAN, _k.K_CHUNK) != (0, 1, 2, 3):
+    raise ImportError("refresh_fast: the region table's codes (runtime/kinds/__init__.py) "
+                      "differ from the literals in refresh_viper.core()")
+if TELEMETRY_SLOTS != _SLOTS:
+    raise ImportError("refresh_fast: telemetry ring size differs from refresh.py")
+
+# a scene-less table: the sentinel row alone (every position is a gap)
+_EMPTY_TABLE = array("i", [0x3FFFFFFF, 0x3FFFFFFF, 0, 0])
