@@ -25,7 +25,6 @@ from . import __version__, compat
 from .protocol import PROTOCOL
 from .runtime import boards as _boards
 from .runtime import scene as _scene
-from .runtime import kinds as _kinds
 from .runtime.duty import DutyLaw
 from .runtime.refresh import Refresh
 from .runtime.sensor import make_sensor
@@ -296,8 +295,6 @@ def _install(canonical, validate_us=0, checked=None):
     t1 = clock()
     old = rt.refresh.swap(sc)
     t2 = clock()
-    if old is not None:
-        _kinds.recycle(old, sc)     # its whole map chunks: for the next push's maps
     # The old scene's buffers are garbage now. No collection here: it took 5-15 ms of
     # every answer on an RP2040 (more with a large scene live; bench/firmware.py). It
     # comes after the answer - tidy(), which texel.wire.reply runs once the host has
@@ -322,7 +319,6 @@ def push(scene):
     try:
         _install(checked[0], rt.diff(clock(), t0), checked)
     except MemoryError:
-        _kinds.drain()
         gc.collect()
         raise ValueError("scene does not fit in memory (%s); the current scene keeps playing"
                          % (compat.memory_words() or "the heap is full"))
@@ -358,8 +354,6 @@ def status(collect=True):
         if rt is not None:
             rt.collect_due = False
         free = compat.heap_free()
-        if free is not None:
-            free += _kinds.pooled_bytes()   # kept for maps (kinds.recycle), free for them
     else:
         free = None
     st = {"protocol": PROTOCOL, "texel": __version__,
@@ -439,7 +433,6 @@ def stop():
     finally:
         rt.hw.off()
         _rt = None
-        _kinds.drain()
         gc.collect()
 
 

@@ -326,16 +326,7 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
     try:
         sc = _make(c, spans, positions, dx_um, idle, engine, reuse)
     except MemoryError:
-        if kinds.pooled_bytes():
-            # once more with the pooled chunks given back (kinds.recycle): what
-            # failed may have wanted a block they held
-            kinds.drain()
-            import gc
-            gc.collect()
-            try:
-                sc = _make(c, spans, positions, dx_um, idle, engine, reuse)
-            except MemoryError:
-                pass
+        pass
     if sc is None:
         # whatever was allocated is unreachable now: give it back (memory_words collects)
         from ..compat import memory_words

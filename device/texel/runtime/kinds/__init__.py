@@ -43,62 +43,10 @@ CHUNK_MASK = 511
 def new_chunks(n):
     """n uint16 values as a tuple of array('H') of 2^CHUNK_BITS each (the
     last shorter): a map with no block above 1 KB (upload.Chunks holds one;
-    samples and RAM references play from them). Whole chunks come from the
-    pool first (recycle()); their old values stay until the caller writes
-    every value, as every fill does."""
+    samples and RAM references play from them)."""
     from ...compat import u16_one_block
     size = 1 << CHUNK_BITS
-    out = []
-    for o in range(0, n, size):
-        if n - o >= size and _pool:
-            out.append(_pool.pop())
-        else:
-            out.append(u16_one_block(size if n - o >= size else n - o))
-    return tuple(out)
-
-
-# The chunk pool: the whole chunks of the maps a push replaced, kept for the
-# next push's maps instead of given back to the heap. On a stock Pico the
-# freed 1 KB holes were at once split by the next request's small objects (its
-# text, the parsed scene): with 16-55 KB free the heap had room for 3-37 chunks
-# and refused 73 of the bench's 100 pushes (docs/firmware.md). Kept: at most
-# POOL_MAX (a full screen's map); status()'s mem_free counts them as free
-# (pooled_bytes); stop() and a push that runs out of memory let them go (drain).
-POOL_MAX = 38
-_pool = []
-
-
-def recycle(old, new):
-    """Pool the whole chunks of scene `old`'s maps that scene `new` does not
-    play (a region it shares, kinds' SHARED) and no upload owns (a samples
-    region plays an upload's own chunks): called once `new` plays."""
-    keep = set()
-    for b in new.buffers():
-        if isinstance(b, tuple):
-            keep.add(id(b))
-    regions = old.source["regions"]
-    t = old._t
-    size = 1 << CHUNK_BITS
-    for k in range(old.count):
-        if t[4 * k + 2] != K_CHUNK or getattr(regions[k]["texture"].get("u16"), "CHUNKS", False):
-            continue
-        b = old.buffers()[t[4 * k + 3]]
-        if id(b) in keep:
-            continue
-        for c in b:
-            if len(_pool) >= POOL_MAX:
-                return
-            if len(c) == size:
-                _pool.append(c)
-
-
-def pooled_bytes():
-    return len(_pool) << (CHUNK_BITS + 1)
-
-
-def drain():
-    """Give the pooled chunks back to the heap (the caller collects)."""
-    del _pool[:]
+    return tuple(u16_one_block(min(size, n - o)) for o in range(0, n, size))
 
 _mods = {}
 
