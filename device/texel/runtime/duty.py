@@ -34,7 +34,7 @@ class DutyLaw:
     """DutyLaw(top, duty_cap=0.5): amplitude -> PWM counts for a PWM with
     top+1 counts per carrier period (compare 0..top+1).
 
-    .lut  array('H') of 1,025 counts: lut[i] = duty(64*i) for i < 1024,
+    .lut  array('H') of 1,025 counts (made when read): lut[i] = duty(64*i) for i < 1024,
           i.e. round(D(64*i/65535) * (top+1)); lut[1024] = the cap (a = 1).
     .duty(amp16) -> counts for amplitude 0..65535 (allocation-free).
     .max_counts  = floor(duty_cap * (top+1)); duty() never exceeds it.
@@ -72,7 +72,6 @@ class DutyLaw:
         top_fine = cap_counts << q
 
         fine = array("H", bytes(2 * (_SEGMENTS + 1)))
-        lut = array("H", bytes(2 * (_SEGMENTS + 1)))
         scale = n * (1 << q) / math.pi
         for i in range(_SEGMENTS):
             x = (i << _SHIFT) / 65535.0 * s  # a * sin(pi*cap), < 1
@@ -82,7 +81,6 @@ class DutyLaw:
             if v > top_fine:
                 v = top_fine
             fine[i] = v
-            lut[i] = (v + half) >> q
         # End point of the last segment: amp16 = 65535 (a = 1) is row 1023 plus
         # 63/64 of the step (the row itself, amp16 = 65536, does not exist), so
         # choose the end point that makes that land exactly on the cap: at the
@@ -93,10 +91,18 @@ class DutyLaw:
         g = want - lo
         step = (64 * g + 62) // 63 if g > 0 else 0
         fine[_SEGMENTS] = lo + step
-        lut[_SEGMENTS] = cap_counts
         self._fine = fine
         self._half = half
-        self.lut = lut
+
+    @property
+    def lut(self):
+        # made when asked (tests, docs): the refresh reads _fine, and a board
+        # keeps no second 2 KB table for it
+        lut = array("H", bytes(2 * (_SEGMENTS + 1)))
+        for i in range(_SEGMENTS):
+            lut[i] = (self._fine[i] + self._half) >> self.q
+        lut[_SEGMENTS] = self.max_counts
+        return lut
 
     def duty(self, amp16):
         # amp16: uint16 amplitude 0..65535 (out-of-range values are clamped).
