@@ -64,7 +64,20 @@ def port_of(impl, platform):
 
 
 PORT = port_of(IMPL, sys.platform)      # this interpreter's port, or None
-ROM = PORT is not None and PORT_TABLE[PORT]["rom"]     # the firmware's data may be in ROMFS
+
+
+def _romfs():
+    # a ROMFS partition is there (MicroPython >= 1.25 built with MICROPY_VFS_ROM,
+    # as the texelpad firmware is; stock RPI_PICO is not): only then can data be in
+    # flash, and only then does texel.rom (4.8 KB of a stock Pico's heap) load
+    try:
+        import vfs
+        return hasattr(vfs, "rom_ioctl")
+    except ImportError:
+        return False
+
+
+ROM = PORT is not None and PORT_TABLE[PORT]["rom"] and _romfs()    # data may be in ROMFS
 
 
 def default_board():

@@ -312,7 +312,8 @@ FLASH_SAMPLES = 19200
 def flash_u16(name, length_samples):
     """The map of reference name, length_samples long, as a uint16 view of
     flash (rom.rom_u16), or None where the image has no flash maps."""
-    if name not in STUDY_NAMES or not 1 <= length_samples <= FLASH_SAMPLES:
+    from ..compat import ROM
+    if not ROM or name not in STUDY_NAMES or not 1 <= length_samples <= FLASH_SAMPLES:
         return None
     from ..rom import rom_u16, path_beside
     try:

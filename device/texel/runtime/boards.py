@@ -49,7 +49,7 @@ CPU_HZ_MIN = 1000000
 CPU_HZ_MAX = 1000000000                 # < 2^30: a small int on every port
 U16_MAX = 65535                         # amplitudes and read_u16 raw units
 
-from ..compat import PORT_TABLE, PORTS, port_of
+from ..compat import PORT_TABLE, PORTS, ROM, port_of
 DRIVES = ("single", "bridge")
 SENSOR_KINDS = ("adc_linear", "adc_ratio")
 MODES = ("timer_irq", "core1_viper", "loop", "stepped")
@@ -176,10 +176,12 @@ def _installed_boards():
     """<texel package>/boards.d, or None without __file__ (frozen). This
     module is <texel>/runtime/boards.py, so the package is two levels up."""
     try:
-        from ..rom import data_beside
-        here = data_beside(__file__)    # frozen (texelpad firmware): the ROMFS's copy
+        here = __file__
     except NameError:
         return None
+    if ROM:
+        from ..rom import data_beside
+        here = data_beside(here)        # frozen (texelpad firmware): the ROMFS's copy
     pkg = _norm_up(here.replace("\\", "/"), 2)
     if pkg == ".":
         return PACKAGE_BOARDS_DIR
