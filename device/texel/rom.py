@@ -7,7 +7,7 @@ from .compat import ROM             # the texelpad firmware's port: data in ROMF
 
 
 def rom_view(path, typecode, n):
-    """A read-only view ("H": uint16, "i": int32; index it, uctypes.addressof()
+    """A read-only view ("H": uint16, "h": int16, "i": int32; index it, uctypes.addressof()
     it, hand it to viper's ptr16/ptr32; it has no len()) of the first n
     little-endian values of a file that the filesystem keeps in memory-mapped
     flash - a ROMFS file: MicroPython gives its bytes in place
@@ -26,7 +26,8 @@ def rom_view(path, typecode, n):
     except TypeError:
         f.close()
         return None
-    kind, size = (uctypes.UINT16, 2) if typecode == "H" else (uctypes.INT32, 4)
+    kind, size = ((uctypes.UINT16, 2) if typecode == "H" else (uctypes.INT16, 2)
+                  if typecode == "h" else (uctypes.INT32, 4))
     a = uctypes.addressof(mv)
     if len(mv) < size * n or a & 3:
         return None
@@ -71,14 +72,15 @@ def path_beside(module_file, name):
 
 
 def const_table(module_file, name, raw, typecode):
-    """A read-only table of little-endian values ("H": uint16, "i": int32):
-    the texelpad firmware's copy of raw in its ROMFS partition (name beside
-    module_file, the module that holds raw: texelpad.firmware.romfs puts
-    it there, aligned) as a rom_view - no RAM - where there is one; else
-    array(typecode, raw), as on every other image."""
+    """A read-only table of little-endian values ("H": uint16, "h": int16,
+    "i": int32): the texelpad firmware's copy of raw (its bytes, or a tuple of
+    its values) in its ROMFS partition (name beside module_file, the module
+    that holds raw: texelpad.firmware.romfs puts it there, aligned) as a
+    rom_view - no RAM - where there is one; else array(typecode, raw), as on
+    every other image."""
     if ROM:
-        v = rom_view(path_beside(module_file, name), typecode,
-                     len(raw) // (2 if typecode == "H" else 4))
+        n = len(raw) if isinstance(raw, tuple) else len(raw) // (4 if typecode == "i" else 2)
+        v = rom_view(path_beside(module_file, name), typecode, n)
         if v is not None:
             return v
     from array import array

@@ -82,11 +82,21 @@ def test_the_generators_tables_read_in_place_make_the_hosts_maps(pico):
     with _connect(pico.port) as b:
         got = b.link.eval(
             "import texel, hashlib, binascii\nfrom texel.gen import sine_table, plan_int_tables\n"
+            "from texel.gen import brush\n"
             "m = texel.render_u16(%r, engine='int')\n"
             "print(repr((binascii.hexlify(hashlib.sha256(m).digest()),"
-            " str(type(sine_table.table())), str(type(plan_int_tables.table())))))" % (p,))
+            " str(type(sine_table.table())), str(type(plan_int_tables.table())),"
+            " [str(type(t)) for t in brush._tables()[1:]],"
+            " [list(t[k] for k in (0, 1, 100, 150, 191)) for t in brush._tables()[1:]])))"
+            % (p,))
     assert got[0].decode() == want.hexdigest()
-    assert got[1:] == ("<class 'struct'>", "<class 'struct'>")      # views of flash, not arrays
+    assert got[1:3] == ("<class 'struct'>", "<class 'struct'>")     # views of flash, not arrays
+    # and the brush painter's five (gen/brush.py TABLE_FILES), signed where they are
+    from texel.gen import brush
+    assert got[3] == ["<class 'struct'>"] * 5
+    want_t = [[t[k] for k in (0, 1, 100, 150, 191)] for t in (brush.PHASE, brush.TW, brush.HANN,
+                                                              brush.LOG2, brush.POS)]
+    assert min(min(t) for t in want_t) < 0 and got[4] == want_t     # negatives read as such
 
 
 def test_push_status_and_scene_pull_through_the_command_line(pico, capsys, tmp_path):

@@ -59,6 +59,12 @@ def test_the_romfs_holds_texelpad_and_the_references_flash_maps():
     files = romfs.romfs_files()
     assert romfs.BOOT_MODULE in files and "lib/texel/app.mpy" in files
     assert "lib/texel/hw/rp2.mpy" in files and "lib/texel/hw/stm32.mpy" not in files
+    # the brush painter's tables, read in place (gen/brush.py TABLE_FILES)
+    from texel.gen import brush
+    for (f, code), values in zip(brush.TABLE_FILES, (brush.PHASE, brush.TW, brush.HANN,
+                                                     brush.LOG2, brush.POS)):
+        dt = "<i2" if code == "h" else "<i4"
+        assert np.frombuffer(files["lib/texel/gen/" + f], dtype=dt).tolist() == list(values), f
     for name in reference.STUDY_NAMES:
         m = np.frombuffer(files["lib/texel/gen/ref/%s.u16" % name], dtype="<u2")
         assert len(m) == reference.FLASH_SAMPLES

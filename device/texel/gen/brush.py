@@ -731,14 +731,27 @@ RBIAS = 1 << 23             # brush_viper.py: the ring of partial sums held + RB
 _T = None
 
 
+# the tables as the C and viper loops read them, in this order: the texelpad
+# firmware reads them in place from its ROMFS (rom.const_table; 3.5 KB of heap
+# otherwise, kept for the next painting), other images make arrays once
+TABLE_FILES = (("brush_phase.i16", "h"), ("brush_tw.i16", "h"), ("brush_hann.i32", "i"),
+               ("brush_log2.i32", "i"), ("brush_pos.i32", "i"))
+
+
 def _tables():
-    """(None, PHASE and TW as array('h'), HANN, LOG2, POS as array('i')): the
-    tables as the C and viper loops read them (made once)."""
+    """(None, PHASE and TW as int16, HANN, LOG2, POS as int32 tables): what
+    the C and viper loops read (made once)."""
     global _T
     if _T is None:
-        from array import array
-        _T = (None, array("h", PHASE), array("h", TW), array("i", HANN), array("i", LOG2),
-              array("i", POS))
+        from ..compat import ROM
+        if ROM:
+            from ..rom import const_table
+            _T = (None,) + tuple(const_table(__file__, f, t, c) for (f, c), t in
+                                 zip(TABLE_FILES, (PHASE, TW, HANN, LOG2, POS)))
+        else:
+            from array import array
+            _T = (None, array("h", PHASE), array("h", TW), array("i", HANN), array("i", LOG2),
+                  array("i", POS))
     return _T
 
 

@@ -17,6 +17,7 @@ neither the code nor its data take heap.
 from __future__ import annotations
 
 import struct
+import sys
 from typing import Iterable, Mapping
 
 from .. import image
@@ -162,9 +163,18 @@ def const_tables() -> dict[str, bytes]:
     """The generator's constant tables beside their modules, aligned: the
     board reads them in place (texel.rom.const_table) instead of copying the
     frozen bytes literal into RAM (a frozen bytes object is not aligned)."""
-    from texel.gen import plan_int_tables, sine_table
-    return {"lib/texel/gen/sine_table.u16": bytes(sine_table._RAW),
-            "lib/texel/gen/plan_int_tables.i32": bytes(plan_int_tables._RAW)}
+    from array import array
+    from texel.gen import brush, plan_int_tables, sine_table
+    out = {"lib/texel/gen/sine_table.u16": bytes(sine_table._RAW),
+           "lib/texel/gen/plan_int_tables.i32": bytes(plan_int_tables._RAW)}
+    # the brush painter's (gen/brush.py TABLE_FILES), little-endian as the chip reads them
+    for (name, code), values in zip(brush.TABLE_FILES, (brush.PHASE, brush.TW, brush.HANN,
+                                                        brush.LOG2, brush.POS)):
+        a = array(code, values)
+        if sys.byteorder != "little":
+            a.byteswap()
+        out["lib/texel/gen/" + name] = a.tobytes()
+    return out
 
 
 def reference_maps() -> dict[str, bytes]:
@@ -192,7 +202,7 @@ def _record(kind: int, payload: bytes) -> bytes:
 
 
 ALIGN = 4                      # file data that code reads as words (the reference maps)
-ALIGNED_SUFFIXES = (".u16", ".i32")   # ... start on a 4-byte boundary (a Cortex-M0+ faults on an
+ALIGNED_SUFFIXES = (".u16", ".i16", ".i32")   # ... start on a 4-byte boundary (a Cortex-M0+ faults on an
                                # unaligned halfword load: viper's ptr16 does plain ldrh)
 _LEN_BYTES = 5                 # the image's length field, fixed width (0x80 prefixes pad it)
 
@@ -214,7 +224,7 @@ def _padding(n: int) -> bytes:
 def romfs_image(files: Mapping[str, bytes]) -> bytes:
     """A VfsRom filesystem holding files ({"lib/texel/app.mpy": bytes}),
     directories and names sorted (the same bytes for the same files). Files
-    named *.u16 keep their data at the top level, ALIGN-aligned from the
+    named *.u16, *.i16 and *.i32 keep their data at the top level, ALIGN-aligned from the
     image's start (which is where a partition starts: 4 KB aligned), and
     point to it; the rest is stored inline, as mpremote does."""
     head = len(ROMFS_HEADER) + _LEN_BYTES
