@@ -66,8 +66,12 @@ def test_device_tree_and_native_files():
     assert "f = native(viper_module, name)" in src      # compat.fastest: C, viper, then Python
     assert "except (ImportError, SyntaxError, MemoryError, AttributeError)" in src
     app = (DEVICE / "texel" / "app.py").read_text()
-    assert "from .runtime.refresh_viper import FastRefresh, irq_rp2" in app
+    # the fused refresh's Python side imports its viper core only where no C core
+    # has the refresh (refresh_fast._engine), inside app's guard
+    assert "from .runtime.refresh_fast import FastRefresh, irq_rp2, _engine" in app
     assert "except (ImportError, SyntaxError)" in app
+    fast = (DEVICE / "texel" / "runtime" / "refresh_fast.py").read_text()
+    assert "@micropython.viper" not in fast and "from . import refresh_viper" in fast
 
 
 def _compile(tmp_path: Path, src: Path, march: str | None) -> tuple[bytes, str]:
