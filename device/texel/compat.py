@@ -66,6 +66,25 @@ def port_of(impl, platform):
 PORT = port_of(IMPL, sys.platform)      # this interpreter's port, or None
 
 
+def const_view(raw, typecode):
+    """raw, a bytes literal of little-endian values ("H": uint16, "i": int32),
+    as a read-only table without a copy where the runtime can: a uctypes view
+    of the literal's own bytes, 4-byte aligned (a module loaded into RAM -
+    a stock board's .mpy, source on the unix port - has its literals on the
+    heap: 8 KB of a stock Pico's heap for the sine and plan tables); else
+    array(typecode, raw). Like texel.rom's views it has no len()."""
+    try:
+        import uctypes
+        a = uctypes.addressof(raw)
+    except (ImportError, TypeError, AttributeError):
+        a = 1
+    if a & 3:
+        return array(typecode, raw)
+    kind, size = (uctypes.UINT16, 2) if typecode == "H" else (uctypes.INT32, 4)
+    return uctypes.struct(a, {"v": (uctypes.ARRAY | 0, kind | (len(raw) // size))},
+                          uctypes.LITTLE_ENDIAN).v
+
+
 def _romfs():
     # a ROMFS partition is there (MicroPython >= 1.25 built with MICROPY_VFS_ROM,
     # as the texelpad firmware is; stock RPI_PICO is not): only then can data be in

@@ -222,7 +222,7 @@ def table():
         if ROM:                         # the texelpad firmware's copy in flash: no RAM
             from ..rom import const_table
             _table = const_table(__file__, "plan_int_tables.i32", _RAW, "i")
-        else:
-            from array import array
-            _table = array("i", _RAW)
+        else:                           # a view of the literal where it can be (compat)
+            from ..compat import const_view
+            _table = const_view(_RAW, "i")
     return _table

@@ -89,7 +89,7 @@ def table():
         if ROM:                         # the texelpad firmware's copy in flash: no RAM
             from ..rom import const_table
             _table = const_table(__file__, "sine_table.u16", _RAW, "H")
-        else:
-            from array import array
-            _table = array("H", _RAW)
+        else:                           # a view of the literal where it can be (compat)
+            from ..compat import const_view
+            _table = const_view(_RAW, "H")
     return _table
