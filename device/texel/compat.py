@@ -73,16 +73,19 @@ def const_view(raw, typecode):
     a stock board's .mpy, source on the unix port - has its literals on the
     heap: 8 KB of a stock Pico's heap for the sine and plan tables); else
     array(typecode, raw). Like texel.rom's views it has no len()."""
+    if typecode not in ("H", "i"):
+        raise ValueError("const_view: typecode %r (expected 'H' or 'i')" % (typecode,))
     try:
         import uctypes
         a = uctypes.addressof(raw)
     except (ImportError, TypeError, AttributeError):
         a = 1
-    if a & 3:
+    if a & 3 or getattr(sys, "byteorder", "little") != "little":
         return array(typecode, raw)
     kind, size = (uctypes.UINT16, 2) if typecode == "H" else (uctypes.INT32, 4)
+    # NATIVE (= little-endian here): aligned loads, not uctypes' byte-by-byte path
     return uctypes.struct(a, {"v": (uctypes.ARRAY | 0, kind | (len(raw) // size))},
-                          uctypes.LITTLE_ENDIAN).v
+                          uctypes.NATIVE).v
 
 
 def _romfs():
@@ -376,9 +379,10 @@ def blocks_free(size, most):
     """How many blocks of `size` bytes the heap can give now (up to `most`),
     found by allocating them and letting go: a heap can have the bytes a
     region's 1 KB chunks need and not their 38 pieces (its holes smaller)."""
-    held = [None] * most
+    held = None
     k = 0
     try:
+        held = [None] * most
         while k < most:
             held[k] = bytearray(size)
             k += 1

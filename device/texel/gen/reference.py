@@ -174,7 +174,7 @@ def _parts(out, n):
     for i, c in enumerate(out):
         if left <= 0:
             break
-        if len(c) != size and i != len(out) - 1:
+        if len(c) > size or (len(c) != size and i != len(out) - 1):
             raise ValueError("out: chunk %d holds %d values, the first %d" % (i, len(c), size))
         k = len(c) if len(c) < left else left
         parts.append((c, k))

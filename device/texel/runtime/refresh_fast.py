@@ -90,6 +90,10 @@ _S = None               # the state array of the FastRefresh that published _W
 # address as a MicroPython small-int object ((address << 1) | 1; SRAM
 # addresses are below 2^30). Updated with one 32-bit store at each swap.
 _ARGS = array("I", [1])
+# ... written through a native uint32 field: one 32-bit store whatever the value
+# (an array('I') store of a big int - any SRAM address << 1 is above 2^30 - goes
+# through mpz_as_bytes, a byte at a time: the interrupt could read a torn address)
+_ARGV = uctypes.struct(uctypes.addressof(_ARGS), {"w": uctypes.UINT32 | 0}, uctypes.NATIVE)
 _RP2 = None             # the FastRefresh that use_rp2_registers() set up (irq_rp2's)
 _VG = None              # refresh_viper's globals once it is loaded (its refresh() reads _WA)
 _CORE = None            # (the C core, None) or (None, refresh_viper.core): _engine()
@@ -347,12 +351,12 @@ class FastRefresh(Refresh):
         self._keep = keep               # referenced before the refresh can see them
         # the swap: one store each (step() reads _W or _WA; the RP2040
         # trampoline reads _ARGS[0]: the small-int word (address << 1) | 1, one
-        # 32-bit store - SRAM addresses are below 2^30; a 64-bit unix port's
-        # word is cut, as nothing there reads it)
+        # 32-bit store through _ARGV - SRAM addresses are below 2^30; a 64-bit
+        # unix port's word is cut, as nothing there reads it)
         _W = words
         _WA = uctypes.addressof(words)
         _S = self._S
-        _ARGS[0] = ((_WA << 1) | 1) & 0xFFFFFFFF
+        _ARGV.w = ((_WA << 1) | 1) & 0xFFFFFFFF
         if _VG is not None:             # refresh_viper.refresh() reads its own globals
             _VG["_W"] = _W
             _VG["_WA"] = _WA
