@@ -368,6 +368,10 @@ ALLOWED_CYCLES = {
     ("texel.gen.options", "texel.gen.plan", "texel.gen.plan_int"):
         "the texture options (min_cpmm, phase: docs/generator.md) build on the plans' arithmetic, "
         "and a plan applies them, importing options only when a texture sets one",
+    ("texel.runtime.refresh_fast", "texel.runtime.refresh_viper"):
+        "the fused refresh's Python side imports its viper core only where no C core has the "
+        "refresh (refresh_fast._viper), and the viper module checks its compile-time copy of "
+        "the W/S layout against refresh_fast's and hands its globals back at import",
 }
 
 
@@ -381,6 +385,6 @@ def _module_cycles(root: Path) -> list[tuple[str, ...]]:
     return sorted(tuple(c) for c in cycles(graph))      # the layer graph's Tarjan, above
 
 
-def test_no_import_cycles_between_modules_but_the_one_explained():
+def test_no_import_cycles_between_modules_but_the_explained_ones():
     cycles = _module_cycles(DEVICE) + _module_cycles(HOST)
     assert cycles == sorted(ALLOWED_CYCLES), cycles
