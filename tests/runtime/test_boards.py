@@ -73,11 +73,11 @@ def test_shipped_board_facts():
     # the arithmetic the wiring notes state
     assert boards.board_top(pico) == 3675                         # 3,676 counts
     assert boards.board_top(bridge) == boards.board_top(virt) == 3675
-    # CircuitPython's pwmio floors: TOP = 125 MHz // 34 kHz = 3676 (3,677 clocks)
-    assert boards.board_top(cpy) == 3676
+    # CircuitPython 10's pwmio floors: TOP = 125 MHz // 34 kHz - 1 = 3675 (3,676 clocks)
+    assert boards.board_top(cpy) == 3675
     assert boards.board_top(pyb) == 4940                          # 4,941 counts
     assert "4,941 counts" in pyb["wiring"] and "3,676 counts" in pico["wiring"]
-    assert "= 3676 itself (3,677 clocks per period, actual carrier 33,995.10 Hz" in cpy["wiring"]
+    assert "= 3675 itself (3,676 clocks per period, actual carrier 34,004.35 Hz" in cpy["wiring"]
     # the stm32 backend's optional keys, written out
     assert pyb["carrier"]["deadtime_ns"] == 200 and pyb["refresh"]["timer"] == 7
     assert "deadtime_ns" not in pico["carrier"] and "timer" not in pico["refresh"]
@@ -91,7 +91,7 @@ def test_carrier_within_0_1_percent(name):
     err = f / b["carrier"]["freq_hz"] - 1
     assert abs(err) <= 0.001, (name, top, f, err)
     if b["port"] == "circuitpython":
-        assert top == b["cpu_hz"] // b["carrier"]["freq_hz"]      # pwmio's own rule
+        assert top == b["cpu_hz"] // b["carrier"]["freq_hz"] - 1  # pwmio's own rule
     else:
         # nearest count: no other TOP is closer
         for t in (top - 1, top + 1):
@@ -141,7 +141,7 @@ def test_validator_accepts_only_carriers_within_0_1_percent(name, cpu_hz, freq):
         b = boards.validate(d, f"{name}.json")
     except ValueError as e:
         assert f"{name}.json: carrier.freq_hz: " in str(e) and "gives PWM TOP" in str(e)
-        top = cpu_hz // freq if name == "pico_cpy" else (cpu_hz + freq // 2) // freq - 1
+        top = cpu_hz // freq - 1 if name == "pico_cpy" else (cpu_hz + freq // 2) // freq - 1
         least = 1000 if name == "pico_cpy" else 500
         assert top + 1 < least or top > boards.TOP_MAX
         return
@@ -373,7 +373,7 @@ BAD = [
      "carrier.drive: 'bridge' needs an inverted (complementary) PWM output, which "
      "CircuitPython's pwmio cannot make; use 'single'"),
     ("pico_cpy", _set("carrier.freq_hz", 130000),
-     "carrier.freq_hz: 130000 Hz on the 125000000 Hz clock (cpu_hz) gives PWM TOP 961; need "
+     "carrier.freq_hz: 130000 Hz on the 125000000 Hz clock (cpu_hz) gives PWM TOP 960; need "
      "999 .. 16382 (>= 1000 counts for resolution and frequency accuracy; compare words within "
      "small ints)"),
     ("pico_cpy", _set("refresh.mode", "timer_irq"),

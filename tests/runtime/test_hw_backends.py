@@ -208,7 +208,7 @@ def check_suite(r, board, top):
     (PICO_BRIDGE_BA, 3675, "direct=False"),
     (PYBOARD, 4940, ""),
     (PYBOARD_BRIDGE, 4940, ""),
-    (PICO_CPY, 3676, ""),
+    (PICO_CPY, 3675, ""),
 ], ids=["pico-direct", "pico-duty_u16", "pico_bridge-direct", "pico_bridge-duty_u16",
         "pico_bridge_ba-direct", "pico_bridge_ba-duty_u16", "pyboard", "pyboard_bridge",
         "pico_cpy"])
@@ -509,12 +509,13 @@ hw.stop()
 out["stopped"] = [o.duty_cycle, summary(waves(hw, "circuitpython"))]
 print(json.dumps(out))
 """, PICO_CPY)
-    assert r["pin"] == "GP16" and r["freq"] == 34000 and r["var"] is False
-    assert r["top"] == 3676 and r["bad"] == []
+    # pwmio's own TOP and frequency (10.2.1: cpu // freq - 1 = 3675, 125 MHz / 3676)
+    assert r["pin"] == "GP16" and r["freq"] == 34004 and r["var"] is False
+    assert r["top"] == 3675 and r["bad"] == []
     assert r["writes"] == 1839
     assert r["adc_pins"] == ["GP26"] and r["adc"] == [7, 65535]
     assert "paced loop" in r["start"]
-    assert r["stopped"] == [0, [[0, 3677, 0]]]
+    assert r["stopped"] == [0, [[0, 3676, 0]]]
 
 
 def test_cpy_rejects_bridge():
@@ -658,7 +659,7 @@ def test_real_board_files(board):
         assert cpu == 168000000                  # the fake's TIM1/8 clock (F405)
         top = (cpu + f // 2) // f - 1
     else:
-        top = cpu // f
+        top = cpu // f - 1                       # CircuitPython 10 pwmio (hw/cpy.py)
     check_suite(r, dict(board, carrier=dict(board["carrier"],
                                             duty_cap=board["carrier"].get("duty_cap", 0.5))), top)
 

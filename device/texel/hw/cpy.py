@@ -10,12 +10,15 @@
 # interpreter keeps up -- a reduced-rate profile).
 #
 # Carrier: pwmio.PWMOut(pin, frequency=freq, duty_cycle=0). duty_cycle is a
-# 16-bit fraction; the raspberrypi port (ports/raspberrypi/common-hal/pwmio/
-# PWMOut.c) programs TOP = cpu_hz // freq (125 MHz / 34 kHz -> 3676: TOP+1 =
-# 3,677 clocks per period, 33,995 Hz) and compare = (duty*TOP + 32767) //
-# 65534, so this backend reports top = cpu_hz // freq and sends
-# duty = (counts*65534 + TOP//2) // TOP, which that rounding maps back to
-# exactly `counts`. (On other CircuitPython ports the count is approximate.)
+# 16-bit fraction; the raspberrypi port of CircuitPython 10.2.1 (ports/
+# raspberrypi/common-hal/pwmio/PWMOut.c, set_frequency) programs
+# TOP = cpu_hz // freq - 1 (125 MHz / 34 kHz -> 3675: TOP+1 = 3,676 clocks per
+# period, 34,004.35 Hz - the emulated Pico's pin probe reads 34,004 Hz, tests/
+# host/test_emulated_cpy.py) and compare = (duty*TOP + 32767) // 65534, so this
+# backend reports top = cpu_hz // freq - 1 and freq_hz = cpu_hz // (TOP+1) as
+# pwmio does, and sends duty = (counts*65534 + TOP//2) // TOP, which that
+# rounding maps back to exactly `counts` for every count 0..TOP (TOP+1, full
+# on, is duty 65535). (On other CircuitPython ports the count is approximate.)
 # Only single drive: pwmio has no inverted or phase-locked outputs, so the
 # complementary legs of a bridge cannot be made (ValueError); a bridge can be
 # built with an external inverter on a single-drive pin.
@@ -60,14 +63,14 @@ class Hw:
         if real != cpu:
             raise ValueError("cpu_hz: board says %d Hz but microcontroller.cpu.frequency is %d Hz "
                              "(PWM TOP depends on it)" % (cpu, real))
-        top = cpu // freq
+        top = cpu // freq - 1
         if not 1 <= top < 16383:
             raise ValueError("carrier.freq_hz: %d Hz gives TOP %d at %d Hz; supported 1..16382"
                              % (freq, top, cpu))
         cap = float(c.get("duty_cap", 0.5))
         self.top = top
         self.max_counts = int(cap * (top + 1))
-        self.freq_hz = freq
+        self.freq_hz = cpu // (top + 1)        # what pwmio makes (its actual_frequency)
         self.drive = drive
         self.pins = tuple(pins)
         self._half = top // 2
@@ -85,7 +88,8 @@ class Hw:
             counts = self.max_counts
         elif counts < 0:
             counts = 0
-        self._pwm.duty_cycle = (counts * 65534 + self._half) // self.top
+        self._pwm.duty_cycle = (65535 if counts > self.top
+                                else (counts * 65534 + self._half) // self.top)
 
     def off(self):
         """Safe state: duty 0 (the output low)."""

@@ -134,15 +134,15 @@ def actual_hz(cpu_hz, top):
 def board_top(board):
     """The TOP a (validated) board's PWM really runs with. MicroPython
     backends program the nearest count (pwm_top); CircuitPython's pwmio
-    programs TOP = cpu_hz // freq_hz itself (raspberrypi port,
-    common-hal/pwmio/PWMOut.c): 125 MHz / 34 kHz -> TOP 3676, 3,677 clocks
-    per period, 33,995.10 Hz."""
+    programs TOP = cpu_hz // freq_hz - 1 itself (10.2.1's raspberrypi port,
+    common-hal/pwmio/PWMOut.c): 125 MHz / 34 kHz -> TOP 3675, 3,676 clocks
+    per period, 34,004.35 Hz (hw/cpy.py)."""
     return _port_top(board["port"], board["cpu_hz"], board["carrier"]["freq_hz"])
 
 
 def _port_top(port, cpu_hz, freq_hz):
     if port == "circuitpython":
-        return cpu_hz // freq_hz
+        return cpu_hz // freq_hz - 1
     return (cpu_hz + freq_hz // 2) // freq_hz - 1
 
 

@@ -1,8 +1,9 @@
-# A recording stand-in for CircuitPython's `pwmio`, modelling the
+# A recording stand-in for CircuitPython's `pwmio`, modelling 10.2.1's
 # raspberrypi port (ports/raspberrypi/common-hal/pwmio/PWMOut.c):
-#   TOP = cpu_hz // frequency (divider 1, period TOP+1 clocks),
+#   TOP = cpu_hz // frequency - 1 (divider 1, period TOP+1 clocks),
+#   .frequency = cpu_hz // (TOP+1) (its actual_frequency),
 #   compare = TOP + 1 if duty_cycle == 65535 else
-#             (duty_cycle * TOP + 32767) // 65534.
+#             (duty_cycle * TOP + 32767) // 65534, at least 1 when duty_cycle > 0.
 # Every duty_cycle store is counted and its compare value kept; the setter
 # allocates nothing. Plain Python: no type hints, no f-strings.
 CPU_HZ = 125000000
@@ -17,9 +18,9 @@ class PWMOut:
         if frequency <= 0 or frequency > CPU_HZ // 2:
             raise ValueError("Invalid frequency")
         self.pin = pin
-        self.frequency = frequency
         self.variable_frequency = variable_frequency
-        self.top = min(65534, CPU_HZ // frequency)
+        self.top = min(65534, CPU_HZ // frequency - 1)
+        self.frequency = CPU_HZ // (self.top + 1)
         self.writes = 0
         self.compare = 0
         self._duty = 0
@@ -40,6 +41,8 @@ class PWMOut:
             self.compare = self.top + 1
         else:
             self.compare = (d * self.top + 32767) // 65534
+            if self.compare == 0 and d:
+                self.compare = 1
         self.writes += 1
 
     duty_cycle = property(_get, _set)
