@@ -10,6 +10,8 @@
 #   texel.app.telemetry()                    -> ([(t_us, position, amplitude), ...], lost)
 #   texel.app.stop()
 #   texel.app.run_loop(seconds=None)         CircuitPython: the paced loop (below)
+#   texel.app.serve(idle=True)               CircuitPython: the paced loop that also
+#                                               answers the host's link (texel/serve.py)
 # What the host's link calls besides (uploads, JSON scenes, base64 maps, the
 # virtual board's time and finger) is texel.wire; the contract's version is
 # texel.protocol.PROTOCOL.
@@ -470,3 +472,19 @@ def run_loop(seconds=None):
     rt.loop = {"refreshes": k, "seconds": el / 1e6, "rate_hz": (k * 1000000 // el) if el > 0 else 0,
                "late": late}
     return rt.loop
+
+
+def _current():
+    return _rt
+
+
+def serve(idle=True):
+    """Play (the paced loop, as run_loop) and answer the host's link at the
+    same time, until Ctrl-C (which stops the display): how a CircuitPython
+    board keeps playing between texelpad commands (texel/serve.py;
+    docs/runtime.md). idle=False: return False at once when nothing plays in
+    a loop (the link's hand-over: nothing to keep alive)."""
+    if not idle and (_rt is None or not _rt.loop_mode):
+        return False
+    from .serve import serve as _serve
+    _serve(_current, stop)

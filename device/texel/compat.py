@@ -408,3 +408,46 @@ def memory_words(block=0, need=0):
     if block and need > block:
         words += ", room for %d blocks of %d" % (blocks_free(block, need // block + 1), block)
     return words
+
+
+# --- the console the host's link talks through (texel/serve.py) -----------------
+def console_reader():
+    """read() -> the bytes the board's console has received and nobody read
+    yet (None when there are none), without waiting: CircuitPython's
+    usb_cdc.console (timeout 0; its Ctrl-C still raises KeyboardInterrupt),
+    else a select.poll on sys.stdin (MicroPython, CPython), a byte at a time."""
+    try:
+        import usb_cdc
+        con = usb_cdc.console
+    except (ImportError, AttributeError):
+        con = None
+    if con is not None:
+        con.timeout = 0
+
+        def read():
+            n = con.in_waiting
+            return con.read(n) if n else None
+        return read
+    import select
+    p = select.poll()
+    p.register(sys.stdin, select.POLLIN)
+    inp = getattr(sys.stdin, "buffer", sys.stdin)
+
+    def read():
+        return inp.read(1) if p.poll(0) else None
+    return read
+
+
+def print_exception(e):
+    """A traceback on stdout, as the raw REPL prints one: MicroPython's
+    sys.print_exception, else traceback (CircuitPython, CPython)."""
+    pe = getattr(sys, "print_exception", None)
+    if pe is not None:
+        pe(e)
+        return
+    try:
+        import traceback
+    except ImportError:             # CircuitPython's unix build: its last line only
+        print("%s: %s" % (type(e).__name__, e))
+        return
+    traceback.print_exception(e, file=sys.stdout)

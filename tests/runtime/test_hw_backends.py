@@ -507,15 +507,20 @@ except NotImplementedError as e:
 hw.set_duty(500)
 hw.stop()
 out["stopped"] = [o.duty_cycle, summary(waves(hw, "circuitpython"))]
+# a start after a stop in the same VM (texel.app.serve's Ctrl-C): the pins are taken over
+hw2 = make(B)
+hw2.set_duty(7)
+out["again"] = [hw2._pwm is o, hw2._adc[0] is hw._adc[0], o.compare]
 print(json.dumps(out))
 """, PICO_CPY)
     # pwmio's own TOP and frequency (10.2.1: cpu // freq - 1 = 3675, 125 MHz / 3676)
     assert r["pin"] == "GP16" and r["freq"] == 34004 and r["var"] is False
     assert r["top"] == 3675 and r["bad"] == []
-    assert r["writes"] == 1839
+    assert r["writes"] == 1839 + 1          # one per count, and the constructor's duty 0
     assert r["adc_pins"] == ["GP26"] and r["adc"] == [7, 65535]
     assert "paced loop" in r["start"]
-    assert r["stopped"] == [0, [[0, 3676, 0]]]
+    assert r["stopped"] == [0, [[0, 3676, 0]]]     # driven low, never released to float
+    assert r["again"] == [True, True, 7]
 
 
 def test_cpy_rejects_bridge():

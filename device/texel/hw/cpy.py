@@ -40,6 +40,27 @@ def _pin(p):
         raise ValueError("pin %r: no board.%s on this board" % (p, name))
 
 
+# The pins this VM has claimed, (kind, pin[, freq]) -> the pwmio/analogio
+# object. A display stopped inside texel.app.serve() (Ctrl-C) stays in the same
+# VM, so the next start must take over its pins: CircuitPython refuses a second
+# PWMOut/AnalogIn on a pin in use ("GP26_A0 in use") until the old one is
+# deinit()ed or the VM restarts.
+_claimed = {}
+
+
+def _claim(key, make):
+    """The object claimed for `key`, else a new one from make(): a pin
+    claimed under another key (another carrier frequency) is let go first."""
+    got = _claimed.get(key)
+    if got is not None:
+        return got
+    for k in list(_claimed):
+        if k[1] == key[1]:
+            _claimed.pop(k).deinit()
+    got = _claimed[key] = make()
+    return got
+
+
 class Hw:
     def __init__(self, board):
         if board.get("port") != "circuitpython":
@@ -74,9 +95,12 @@ class Hw:
         self.drive = drive
         self.pins = tuple(pins)
         self._half = top // 2
-        self._pwm = pwmio.PWMOut(_pin(pins[0]), frequency=freq, duty_cycle=0)
+        self._pwm = _claim(("pwm", pins[0], freq),
+                           lambda: pwmio.PWMOut(_pin(pins[0]), frequency=freq, duty_cycle=0))
+        self._pwm.duty_cycle = 0
         s = board.get("sensor", {})
-        self._adc = tuple(analogio.AnalogIn(_pin(p)) for p in s.get("pins", ()))
+        self._adc = tuple(_claim(("adc", p), lambda p=p: analogio.AnalogIn(_pin(p)))
+                          for p in s.get("pins", ()))
         # CircuitPython has no time.ticks_us: compat's wraps monotonic_ns
         # (allocates bigints; fine in the paced loop, which runs no IRQ code)
         self.ticks_us = ticks_us
@@ -104,4 +128,7 @@ class Hw:
                                   "as a paced loop (refresh.mode 'loop', texel.app does)")
 
     def stop(self):
+        """Duty 0. The pins stay claimed, the carrier driven low (a released
+        pin would float at the gate driver's input); the next Hw in this VM
+        takes them over (_claim), a VM restart frees them."""
         self.off()

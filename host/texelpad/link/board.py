@@ -126,7 +126,10 @@ class Board:
         self.close()
 
     def close(self) -> None:
-        self.link.close()
+        # CircuitPython: leaving the raw REPL restarts its VM, so a display that
+        # plays is handed to texel.app.serve() instead (transport.Link.close)
+        self.link.close(serve=self.firmware["implementation"] == "circuitpython"
+                        and self.image is not None)
 
     def _app(self, func: str, *args: Any, timeout: float | None = None, **kwargs: Any) -> Any:
         """texel.app.func(...): the board's user API."""

@@ -293,14 +293,18 @@ def render_u16(params: dict[str, Any], engine: str | None) -> str:
 # --- deploy: the board's files ---------------------------------------------------------
 
 # What the board reports for the image's paths: sha256 hex ('' when it has
-# no hashlib, None when missing or unreadable, e.g. a folder in its place), the files under the package directory, and
+# no hashlib; hashlib.sha256, or CircuitPython's hashlib.new('sha256')), None when missing or unreadable, e.g. a folder in its place), the files under the package directory, and
 # free bytes - all files in one round trip (mpremote's fs_hashfile takes three
 # round trips per file; an unchanged 30-file image is checked in ~0.1 s).
 _SURVEY_CODE = """import os
 try:
  import hashlib, binascii
- _H = hashlib.sha256
-except (ImportError, AttributeError):
+ try:
+  _H = hashlib.sha256
+ except AttributeError:
+  # CircuitPython: hashlib.new('sha256') only (no hexdigest: binascii below)
+  _H = lambda: hashlib.new('sha256')
+except ImportError:
  _H = None
 def _h(p):
  try:
@@ -325,9 +329,10 @@ def _h(p):
 def _ls(d):
  out = []
  try:
-  for e in os.ilistdir(d):
-   p = d + '/' + e[0]
-   if e[1] & 0x4000:
+  # CircuitPython has no os.ilistdir: os.listdir and os.stat's mode
+  for n in os.listdir(d):
+   p = d + '/' + n
+   if os.stat(p)[0] & 0x4000:
     out += _ls(p)
    else:
     out.append(p)

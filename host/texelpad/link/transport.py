@@ -274,6 +274,32 @@ class _Transport(SerialTransport):
                     data = (data + new)[-len(self.RAW_PROMPT):]
         self.in_raw_repl = True
 
+    def knock(self, seconds: float) -> str | None:
+        """Ctrl-A alone, no Ctrl-C: a board at its REPL (either) answers with
+        the raw REPL's banner, a CircuitPython board running texel.app.serve()
+        with SERVE_MARK before it (texel/serve.py: it plays on and answers as
+        the raw REPL does; a Ctrl-C would stop its display). Returns "serve",
+        "raw", or None when no banner came within `seconds` (a program runs:
+        enter_raw_repl's Ctrl-C is for that). Never a soft reset."""
+        tail = len(SERVE_MARK) + len(self.RAW_PROMPT)
+        data = b""
+        try:
+            with self.deadline(seconds):
+                self.serial.write(b"\r\x01")
+                while not data.endswith(self.RAW_PROMPT):
+                    n = self.serial.in_waiting            # raises at the deadline
+                    keep = len(self.RAW_PROMPT) + 1       # the ">" stays for exec_raw
+                    new = self.serial.read(n - keep if n > keep else 1)
+                    if new:
+                        data = (data + new)[-tail:]
+        except TransportError:
+            return None
+        self.in_raw_repl = True
+        if data.endswith(SERVE_MARK + self.RAW_PROMPT):
+            self.use_raw_paste = False      # serve answers the standard raw mode only
+            return "serve"
+        return "raw"
+
     def read_until(self, min_num_bytes: int, ending: bytes, timeout: float | None = 10,
                    data_consumer: Any = None, timeout_overall: float | None = None) -> bytes:
         if timeout_overall is None:
@@ -355,6 +381,15 @@ class _Transport(SerialTransport):
 
 # --- the link -----------------------------------------------------------------
 
+# What texel.app.serve() (device/texel/serve.py MARK) prints when it starts and
+# before each raw-REPL banner it answers.
+SERVE_MARK = b"\x1etexel-serve\r\n"
+# s a board at its REPL takes to answer a bare Ctrl-A (Link: after it, Ctrl-C)
+KNOCK_S = 1.0
+# The link's last command on a CircuitPython board that plays (Link.close(serve=True))
+HAND_OVER = b"import texel.app as _a\n_a.serve(False)\n_a = None"
+
+
 class Link:
     """A raw-REPL session with one board. Enters the raw REPL without a soft
     reset and stays in it until close(); counts bytes both ways."""
@@ -371,9 +406,17 @@ class Link:
             self.t = _Transport(port, baudrate=baudrate, timeout=timeout)
         except TransportError as e:
             raise NoBoard("cannot open %s: %s" % (port, e)) from None
+        # serving: the board runs texel.app.serve() (CircuitPython, playing): it
+        # answers as the raw REPL does, and this link never interrupts it
+        self.serving = False
         try:
-            # soft_reset=False: never restart a playing display (docs/background.md §4)
-            self.t.enter_raw_repl(soft_reset=False, timeout_overall=timeout)
+            # a bare Ctrl-A first: a board at its REPL, or serving, answers it
+            # without an interrupt; Ctrl-C only when a program holds the REPL
+            mode = self.t.knock(min(KNOCK_S, timeout))
+            self.serving = mode == "serve"
+            if mode is None:
+                # soft_reset=False: never restart a playing display (docs/background.md §4)
+                self.t.enter_raw_repl(soft_reset=False, timeout_overall=timeout)
         except (TransportError, serial.SerialException, OSError) as e:
             self._close_port()
             raise NotTexelpad("%s does not answer as a MicroPython board (no raw REPL within "
@@ -393,17 +436,38 @@ class Link:
         except Exception:
             pass
 
-    def close(self) -> None:
-        """Leave the raw REPL (Ctrl-B, no reset) and release the port."""
+    def close(self, serve: bool = False) -> None:
+        """Leave the raw REPL (Ctrl-B, no reset) and release the port. On a
+        serving board (CircuitPython) nothing is sent: it plays on, serving.
+        serve=True (a CircuitPython board: Ctrl-B would restart its VM and
+        end what plays): the last command is texel.app.serve(False), which
+        plays on and serves when something plays, else ends at once (then
+        Ctrl-B)."""
         if getattr(self, "t", None) is None:
             return
         try:
             self.t.settle()             # the last answer's tail (a collection) first
-            self.t.exit_raw_repl()
+            if not self.serving and not (serve and self._hand_over()):
+                self.t.exit_raw_repl()
         except Exception:
             pass
         self._close_port()
         self.t = None                           # type: ignore[assignment]  # closed: no transport
+
+    def _hand_over(self) -> bool:
+        """Run HAND_OVER without waiting for its end: True once the board says
+        it serves (SERVE_MARK), False when the command ended (nothing plays)."""
+        with self.t.deadline(self.timeout), redirect_stdout(io.StringIO()):
+            self.t.exec_raw_no_follow(HAND_OVER)
+            buf = b""
+            while not buf.endswith(SERVE_MARK):
+                buf = (buf + self.t.serial.read(1))[-len(SERVE_MARK):]
+                if buf.endswith(b"\x04"):          # ended: read its error text too
+                    self.t.tail = b"\x04"
+                    self.t.settle()
+                    return False
+        self.serving = True
+        return True
 
     def resync(self, timeout: float | None = None) -> None:
         """Interrupt what the board runs (Ctrl-C) and enter the raw REPL again,
@@ -412,6 +476,7 @@ class Link:
         answer within the timeout."""
         if self.t is None:
             raise LinkError("the link to %s is closed" % self.port)
+        self.serving = False        # Ctrl-C ends texel.app.serve(): its display stops
         try:
             self.t.enter_raw_repl(soft_reset=False,
                                   timeout_overall=self.timeout if timeout is None else timeout)
@@ -428,6 +493,8 @@ class Link:
         if self.t is None:
             raise LinkError("the link to %s is closed" % self.port)
         t = self.timeout if timeout is None else timeout
+        if self.serving:                # out of texel.app.serve() into the raw REPL first
+            self.resync(t)
         try:
             self.t.settle()
             with self.t.deadline(t):

@@ -1,0 +1,184 @@
+# texel.serve -- play and answer the host at once, where no timer interrupt
+# plays (CircuitPython): texel.app.serve() runs this loop.
+#
+# Why: CircuitPython restarts its VM when a link leaves the raw REPL (Ctrl-B,
+# which mpremote and texelpad's link send after each command; its main.c
+# run_repl -> cleanup_after_vm), and its display plays only while Python runs
+# the refresh (refresh.mode "loop"). So texelpad's link never leaves the raw
+# REPL on CircuitPython while something plays: its last command is
+# texel.app.serve(), which keeps the refresh paced (as app.run_loop does) and,
+# between refreshes, reads the console and answers as the raw REPL does
+# (standard mode), so the next `texelpad status` / `push` / `monitor` talks to
+# it as to a board's raw REPL (docs/runtime.md, "CircuitPython: serve"):
+#   Ctrl-A          -> MARK + the raw REPL's banner + ">"; the link knows it by
+#                      MARK (host/texelpad/link/transport.py) and sends no Ctrl-C
+#   code + Ctrl-D   -> "OK", what the code prints, "\x04", its traceback (if it
+#                      raised), "\x04", ">" - the raw REPL's own answer; the code
+#                      runs in one namespace kept between requests
+#   Ctrl-E A Ctrl-A -> "R\x00": raw-paste is understood but not offered (mpremote
+#                      then sends in the standard mode)
+#   Ctrl-D alone    -> a soft reset, as the raw REPL does one (SystemExit: the
+#                      port restarts its VM and prints "soft reboot")
+#   Ctrl-B          -> serve() returns: the raw REPL itself again
+#   Ctrl-C          -> the port's own KeyboardInterrupt: the display stops
+#                      (app.stop: carrier off, pins released) and serve goes on
+#                      answering as the raw REPL would. CircuitPython throws
+#                      away its console input at a Ctrl-C (supervisor's
+#                      tud_cdc_rx_wanted_cb flushes the FIFO), so a tool's Ctrl-A
+#                      sent right behind it (mpremote, texelpad's resync) may be
+#                      gone: when none comes within GRACE_MS, serve answers the
+#                      banner as if it had.
+# The refresh pauses while a request runs (one thread); afterwards the pacing
+# starts afresh, with no burst of late refreshes.
+import sys
+from . import compat
+
+MARK = "\x1etexel-serve\r\n"        # never in host code: its text is ASCII repr() literals
+BANNER = "raw REPL; CTRL-B to exit\r\n>"
+POLL_EVERY = 16                     # refreshes between console reads when the loop has no slack
+GRACE_MS = 30                       # after a Ctrl-C: the wait for a tool's Ctrl-A
+
+
+def _out(text):
+    sys.stdout.write(text)
+    f = getattr(sys.stdout, "flush", None)
+    if f is not None:
+        f()
+
+
+def _run(code, ns):
+    """One request, answered as the raw REPL answers it."""
+    _out("OK")
+    try:
+        exec(code, ns)
+    except KeyboardInterrupt as e:  # answered as the raw REPL does, then the display stops
+        _out("\x04")
+        compat.print_exception(e)
+        _out("\x04>")
+        raise
+    except BaseException as e:      # SystemExit too: the raw REPL reports it
+        _out("\x04")
+        compat.print_exception(e)
+        _out("\x04>")
+        return
+    _out("\x04\x04>")
+
+
+def _feed(buf, data, ns):
+    """Take `data` (bytes the console received) into the request's parts (a
+    list: CircuitPython's bytearray cannot delete a slice);
+    answer each control byte as the raw REPL does (above). Returns RAN when
+    a request ran (the pacing starts afresh), LEAVE at a Ctrl-B, else None."""
+    ran = None
+    while data:
+        i = len(data)                       # the text of a request runs to the first
+        for ch in (b"\x01", b"\x02", b"\x04"):  # control byte serve answers (C finds)
+            j = data.find(ch, 0, i)
+            if j >= 0:
+                i = j
+        if i:
+            buf.append(data[:i])
+            data = data[i:]
+            continue
+        c = data[0]
+        data = data[1:]
+        if c == 1:                          # Ctrl-A
+            if b"".join(buf) == b"\x05A":    # raw-paste asked: not offered
+                _out("R\x00")
+            else:
+                _out(MARK + BANNER)
+            buf.clear()
+        elif c == 4:                        # Ctrl-D
+            if not buf:
+                _out("OK\r\n")
+                raise SystemExit            # the raw REPL's soft reset
+            code = b"".join(buf).decode()
+            buf.clear()
+            _run(code, ns)
+            ran = RAN
+        else:                               # Ctrl-B
+            return LEAVE
+    return ran
+
+
+RAN = 1
+LEAVE = 2
+
+
+def serve(current, stop, read=None):
+    """Refresh what current() (app's runtime, or None) plays when it is a
+    paced loop, and answer the host, until a Ctrl-B (returns) or an empty
+    Ctrl-D (SystemExit: a soft reset). stop(): app.stop, at a Ctrl-C."""
+    global _active
+    _out(MARK)                      # the hand-over's sign (transport.Link.close)
+    if _active:                     # a request to this very loop: it serves on after it
+        return
+    if read is None:
+        read = compat.console_reader()
+    ns = {"__name__": "__main__"}
+    buf = []                        # the request's text so far, in pieces
+    _active = True
+    try:
+        while True:
+            try:
+                if _loop(current, read, buf, ns) == LEAVE:
+                    return
+            except KeyboardInterrupt:
+                stop()
+                buf.clear()
+                if _grace(read, buf, ns) == LEAVE:
+                    return
+            except SystemExit:
+                stop()
+                raise
+    finally:
+        _active = False
+
+
+_active = False                     # a serve() loop runs (requests run inside it)
+
+
+def _grace(read, buf, ns):
+    """After a Ctrl-C: a Ctrl-A within GRACE_MS is answered as usual; none
+    (CircuitPython threw it away with its input): the banner anyway, before
+    whatever else comes."""
+    t0 = compat.ticks_us()
+    while compat.ticks_diff(compat.ticks_us(), t0) < GRACE_MS * 1000:
+        data = read()
+        if data:
+            if b"\x01" not in data:
+                _out(MARK + BANNER)
+            return _feed(buf, data, ns)
+    _out(MARK + BANNER)
+    return None
+
+
+def _loop(current, read, buf, ns):
+    cur = step = None
+    k = t0 = hz = 0
+    since = 0
+    while True:
+        rt = current()
+        if rt is not cur:           # a request started or stopped the display
+            cur = rt
+            step = rt.refresh.step if rt is not None and rt.loop_mode else None
+            if step is not None:
+                ticks, diff, hz = rt.ticks, rt.diff, rt.hz
+                t0 = ticks()
+                k = 0
+        if step is not None:
+            if diff(ticks(), t0) >= (k * 1000000) // hz:
+                step()
+                k += 1
+                since += 1
+                if since < POLL_EVERY:
+                    continue
+        since = 0
+        data = read()
+        if data:
+            r = _feed(buf, data, ns)
+            if r == LEAVE:
+                return r
+            if r == RAN and step is not None and current() is cur:
+                t0 = ticks()        # the request took the time: no catching up
+                k = 0
