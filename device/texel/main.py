@@ -43,8 +43,8 @@ def main():
         texel.app.start(board, cfg.get("scene"), report=False)
         st = texel.app.status(False)    # no full collection: the REPL answers sooner
         print("texelpad: playing on %s (%s refreshes/s)" % (st.get("board"), st.get("refresh_hz")))
-        if st.get("refresh_mode") == "loop":      # no timer IRQ: this loop is the display
-            texel.app.run_loop()
+        if st.get("refresh_mode") == "loop":      # no timer IRQ: this loop is the display,
+            texel.app.serve()                     # and it answers the host (texel/serve.py)
     except Exception as e:          # never brick the REPL: report and stay off
         print("texelpad: not started:", repr(e))
 

@@ -10,6 +10,7 @@ No timing asserted; wall times printed."""
 from __future__ import annotations
 
 import random
+import re
 import shutil
 import subprocess
 import sys
@@ -120,3 +121,123 @@ def test_circuitpython_survives_ctrl_c_and_soft_reloads(tmp_path, capsys):
         stop_group(proc)
     with capsys.disabled():
         print("\n".join(["\ncircuitpython rounds (seed %d):" % SEED] + log))
+
+
+# --- issue 35: texelpad's CLI on the CircuitPython Pico, the display playing between commands
+
+# The finger: a slow sweep from t = 0 (12-bit ADC counts; AnalogIn.value = raw << 4 | raw >> 8)
+FINGER_JS = "(ch, t) => ch === 0 ? 600 + Math.floor((t * 700) % 3000) : 0"
+TEXEL = ("--pitch-db", "6.3", "--irregularity-db", "-12.9", "--seed", "7")
+
+
+def _ticks_and_refreshes(b) -> tuple[int, int]:
+    """(the board's microsecond ticks, refreshes so far), read together on the board."""
+    return b.link.eval("import texel.app as _a, texel.compat as _c\n"
+                       "print(repr((_c.ticks_us(), _a.status(False)['refreshes'])))")
+
+
+def test_texelpad_cli_plays_on_circuitpython_between_commands(tmp_path, capsys):
+    """The issue's 'done': texelpad deploy (the survey hashes with CircuitPython's
+    hashlib.new, lists with os.listdir; the drive remounted for code), push --board
+    pico_cpy, and status says it plays - the refresh count grows between two commands on
+    the board's own clock, the finger the emulator sweeps is read and the amplitude is
+    the scene's at that position; a refused push changes nothing; the carrier is pwmio's
+    TOP 3675 (34,004 Hz, on the pin probe too); a plain mpremote exec stops the display
+    cleanly and the next push starts it again; a soft reload (Ctrl-D at the friendly
+    REPL) runs /main.py, which plays and serves."""
+    import texelpad
+    from support.cli import run_cli
+    from texel.runtime import scene as S
+    k = _cpyemu()
+    img = tmp_path / "circuitpy.img"
+    p = subprocess.run([str(k / "make-texel-fs.sh"), str(img), str(ROOT)], capture_output=True,
+                       text=True, timeout=300)
+    assert p.returncode == 0, p.stdout + p.stderr
+    proc = subprocess.Popen([str(k / "run.sh"), "--pty", "--flash", str(img), "--probe", "16",
+                             "--adc-js", FINGER_JS],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+    log = []
+
+    def say(what: str, t0: float) -> None:
+        log.append("%-58s %5.1f s wall" % (what, time.monotonic() - t0))
+    try:
+        assert proc.stdout is not None
+        port = proc.stdout.readline().decode().strip()
+        assert port.startswith("/dev/"), port
+        t0 = time.monotonic()
+        code, out, err = run_cli(capsys, "deploy", "--port", port, "--timeout", "60")
+        assert code == 0, err
+        # the drive's image was laid out as deploy lays it: only /main.py is new
+        m = re.search(r"deployed to \S+: 1 of (\d+) files written \([\d,]+ bytes\), (\d+) "
+                      r"unchanged, 0 removed", out)
+        assert m and int(m.group(2)) == int(m.group(1)) - 1, out + err
+        assert "remounted writable for code" in err, err
+        say("deploy (survey of %s files, /main.py written)" % m.group(1), t0)
+        t0 = time.monotonic()
+        code, out, err = run_cli(capsys, "push", "--port", port, "--timeout", "120",
+                                 "--board", "pico_cpy", *TEXEL)
+        assert code == 0, err
+        assert out.startswith("now playing on %s (pico_cpy):" % port), out
+        say("push --board pico_cpy (start + push)", t0)
+        t0 = time.monotonic()
+        code, out, err = run_cli(capsys, "status", "--port", port, "--timeout", "60")
+        assert code == 0, err
+        assert out.startswith("board pico_cpy (circuitpython), refresh python at 2000 Hz"), out
+        assert "carrier 34004 Hz (PWM top 3675)" in out, out
+        say("status (a new link: the board was serving)", t0)
+        with texelpad.connect(port, timeout=60) as b:
+            assert b.link.serving                       # knocked, no Ctrl-C
+            t1, n1 = _ticks_and_refreshes(b)
+            time.sleep(2.0)
+            t2, n2 = _ticks_and_refreshes(b)
+            st = b.status()
+            source = b.scene_source()
+        rate = (n2 - n1) * 1e6 / ((t2 - t1) or 1)
+        assert st["running"] and n2 > n1 and st["faults"] == 0, st
+        assert st["pwm_top"] == 3675 and st["carrier_hz"] == 34004
+        # the swept finger is on the plate, and what plays there is the scene's own sample
+        # (status reads position and amplitude between two refreshes: one thread)
+        assert st["position"] >= 0, st
+        sc = S.build(S.validate(source, st["display"]), st["display"])
+        assert st["amplitude"] == sc.amp(st["position"]), st
+        log.append("refresh between two requests, board clock: %.0f Hz (%d in %.3f s); "
+                   "heap free playing %s B" % (rate, n2 - n1, (t2 - t1) / 1e6, st["mem_free"]))
+        # a refused push (the host's check: the board is not touched) and the display plays on
+        code, out, err = run_cli(capsys, "push", "--port", port, *TEXEL, "--texel-samples", "1")
+        assert code == 2 and "refused before sending" in err, err
+        with texelpad.connect(port, timeout=60) as b:
+            st2 = b.status()
+        assert st2["running"] and st2["refreshes"] > st["refreshes"]
+        assert st2["scene"] == st["scene"] and st2["pushes"] == st["pushes"]
+        # a teacher's plain mpremote exec: its Ctrl-C stops the display, cleanly
+        t0 = time.monotonic()
+        mp = str(Path(sys.executable).with_name("mpremote"))
+        q = subprocess.run([mp, "connect", port, "exec", "print('hello from mpremote')"],
+                           capture_output=True, text=True, timeout=120)
+        assert q.returncode == 0 and "hello from mpremote" in q.stdout, q.stdout + q.stderr
+        say("plain mpremote exec", t0)
+        code, out, err = run_cli(capsys, "status", "--port", port, "--timeout", "60")
+        assert code == 0 and out.startswith("texelpad is not running"), out + err
+        # Ctrl-D at the friendly REPL: a soft reload runs /main.py, which plays and serves
+        t0 = time.monotonic()
+        r = Raw(port, _Emu(proc))
+        try:
+            r.s.write(b"\r\x03")
+            r.read_until(b">>> ", 60)
+            r.s.write(b"\x04")
+            r.read_until(b"texelpad: playing on pico_cpy", 300)
+        finally:
+            r.close()
+        code, out, err = run_cli(capsys, "status", "--port", port, "--timeout", "60")
+        assert code == 0 and out.startswith("board pico_cpy (circuitpython)"), out + err
+        say("soft reload -> /main.py plays and serves; status", t0)
+    finally:
+        stop_group(proc)
+    tail = proc.stdout.read().decode("utf-8", "replace") if proc.stdout else ""
+    # (the probe's mean over the whole run counts the time the carrier was off: the
+    # period it saw most is the carrier's)
+    m = re.search(r"probe GPIO16: .*most common period (\d+) cycles = ([\d.]+) Hz", tail)
+    assert m and m.group(1) == "3676", tail[-500:]
+    log.append("carrier on the pin probe: %s cycles a period = %s Hz" % m.groups())
+    with capsys.disabled():
+        print("\n".join(["\ntexelpad on the emulated CircuitPython Pico:"] + log))

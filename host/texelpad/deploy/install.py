@@ -191,6 +191,8 @@ def deploy(board: Any, source: bool = False, include_main: bool = True, dry_run:
     say_plan(plan, say)
     check_fits(plan)
     if plan.changes:
+        if fw["implementation"] == "circuitpython" and not dry_run:
+            _writable_for_code(board, say)
         preflight(board, plan.todo, plan.leftovers + plan.stale, probe=not dry_run)
         if not dry_run:
             write_plan(board, plan, say, bar)
@@ -301,6 +303,19 @@ def check_fits(plan: Plan) -> None:
             "the image does not fit: writing %d files needs about %d bytes (in %d-byte blocks) "
             "and the board has %d free; delete files from the board (mpremote fs ls :) or "
             "deploy --no-main" % (len(plan.todo), plan.need, BLOCK, plan.free))
+
+
+def _writable_for_code(board: Any, say: Callable[[str], None]) -> None:
+    """CircuitPython: its CIRCUITPY drive is read-only to code by default;
+    storage.remount('/', readonly=False) lends it to code where no computer
+    has it mounted (a board whose drive is hidden, the emulated one). Where
+    one has, the remount is refused and preflight's EROFS says what to do."""
+    why = board.link.eval(protocol.REMOUNT_WRITABLE, timeout=30)
+    if why:
+        say("CircuitPython: the drive stays read-only to code (%s)" % why)
+    else:
+        say("CircuitPython: the drive remounted writable for code (storage.remount) until "
+            "the board resets")
 
 
 def write_plan(board: Any, plan: Plan, say: Callable[[str], None],

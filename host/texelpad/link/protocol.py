@@ -353,6 +353,17 @@ def survey(paths: Sequence[str], package_dir: str) -> str:
     return _SURVEY_CODE % (literal(list(paths)), literal(package_dir))
 
 
+# CircuitPython: lend the CIRCUITPY drive to code (deploy); prints '' or why not
+REMOUNT_WRITABLE = """try:
+ import storage
+ storage.remount('/', readonly=False)
+ print(repr(''))
+except Exception as _e:
+ print(repr(str(_e) or type(_e).__name__))
+ _e = None
+"""
+
+
 # Drop the texel modules from sys.modules, so the next import loads the new image.
 PURGE = """import sys, gc
 for _k in [k for k in sys.modules if k == 'texel' or k.startswith('texel.')]:
