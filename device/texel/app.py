@@ -41,6 +41,21 @@ DEFAULT_SCENE = {"regions": [
      "texture": {"kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7,
                  "v": 2}}]}
 
+
+
+def _default_scene(d):
+    """DEFAULT_SCENE; on CircuitPython its texel half over the whole display
+    `d`. CircuitPython's heap also holds every module's bytecode (compiled
+    from source at import): with the split screen's 19 KB 4sin map playing,
+    ~15 KB were left, and a status, a push or a deploy's survey failed for
+    memory there (tests/host/test_emulated_cpy.py; bench/results/
+    circuitpython.txt). The format-2 texel half costs a 3 KB plan."""
+    if compat.IMPL != "circuitpython":
+        return DEFAULT_SCENE
+    return {"regions": [{"start_mm": 0, "end_mm": d["positions"] * d["dx_um"] / 1000.0,
+                         "texture": DEFAULT_SCENE["regions"][1]["texture"]}]}
+
+
 _rt = None            # the running runtime (one per board)
 
 
@@ -175,7 +190,9 @@ def start(board_name=None, scene=None, realtime=False, fast=None, report=True, *
     then reads the ADC and writes the PWM compare register itself."""
     board = _checked_board(default_board() if board_name is None else board_name)
     # build the scene before touching the hardware: a bad scene changes nothing
-    canonical = _scene.validate(DEFAULT_SCENE if scene is None else scene, board["display"])
+    if scene is None:
+        scene = _default_scene(board["display"])
+    canonical = _scene.validate(scene, board["display"])
     prev = None
     if _rt is not None:
         sc = _rt.refresh.scene
@@ -478,13 +495,15 @@ def _current():
     return _rt
 
 
-def serve(idle=True):
+def serve(idle=True, repl=False):
     """Play (the paced loop, as run_loop) and answer the host's link at the
-    same time, until Ctrl-C (which stops the display): how a CircuitPython
-    board keeps playing between texelpad commands (texel/serve.py;
-    docs/runtime.md). idle=False: return False at once when nothing plays in
-    a loop (the link's hand-over: nothing to keep alive)."""
+    same time: how a CircuitPython board keeps playing between texelpad
+    commands (texel/serve.py; docs/runtime.md). A Ctrl-C stops the display
+    and ends serve (KeyboardInterrupt: code.py ends as CircuitPython's programs
+    do); repl=True (the link's hand-over, in the raw REPL): serve goes on
+    answering as the raw REPL would. idle=False: return False at once when
+    nothing plays in a loop (the hand-over: nothing to keep alive)."""
     if not idle and (_rt is None or not _rt.loop_mode):
         return False
     from .serve import serve as _serve
-    _serve(_current, stop)
+    _serve(_current, stop, repl=repl)

@@ -30,6 +30,7 @@
 #                      banner as if it had.
 # The refresh pauses while a request runs (one thread); afterwards the pacing
 # starts afresh, with no burst of late refreshes.
+import gc
 import sys
 from . import compat
 
@@ -46,30 +47,13 @@ def _out(text):
         f()
 
 
-def _run(code, ns):
-    """One request, answered as the raw REPL answers it."""
-    _out("OK")
-    try:
-        exec(code, ns)
-    except KeyboardInterrupt as e:  # answered as the raw REPL does, then the display stops
-        _out("\x04")
-        compat.print_exception(e)
-        _out("\x04>")
-        raise
-    except BaseException as e:      # SystemExit too: the raw REPL reports it
-        _out("\x04")
-        compat.print_exception(e)
-        _out("\x04>")
-        return
-    _out("\x04\x04>")
-
-
-def _feed(buf, data, ns):
+def _take(buf, data):
     """Take `data` (bytes the console received) into the request's parts (a
-    list: CircuitPython's bytearray cannot delete a slice);
-    answer each control byte as the raw REPL does (above). Returns RAN when
-    a request ran (the pacing starts afresh), LEAVE at a Ctrl-B, else None."""
-    ran = None
+    list: CircuitPython's bytearray cannot delete a slice), answering Ctrl-A
+    and raw-paste as the raw REPL does, up to the first request or Ctrl-B:
+    (RAN, its code, the bytes after it), (LEAVE, None, the rest) or (None,
+    None, b""). The request runs in _loop itself: CircuitPython's Python stack
+    (pystack) is small, and a start() inside a request is deep."""
     while data:
         i = len(data)                       # the text of a request runs to the first
         for ch in (b"\x01", b"\x02", b"\x04"):  # control byte serve answers (C finds)
@@ -92,23 +76,31 @@ def _feed(buf, data, ns):
             if not buf:
                 _out("OK\r\n")
                 raise SystemExit            # the raw REPL's soft reset
-            code = b"".join(buf).decode()
+            try:
+                code = b"".join(buf).decode()
+            except MemoryError:     # no block for the request's text: a heap with a scene
+                code = None
             buf.clear()
-            _run(code, ns)
-            ran = RAN
+            if code is None:
+                _out("OK\x04MemoryError: no room for the request's text (%s bytes free)\r\n"
+                     "\x04>" % compat.heap_free())
+                continue
+            return RAN, code, data
         else:                               # Ctrl-B
-            return LEAVE
-    return ran
+            return LEAVE, None, data
+    return None, None, b""
 
 
 RAN = 1
 LEAVE = 2
 
 
-def serve(current, stop, read=None):
+def serve(current, stop, read=None, repl=True):
     """Refresh what current() (app's runtime, or None) plays when it is a
     paced loop, and answer the host, until a Ctrl-B (returns) or an empty
-    Ctrl-D (SystemExit: a soft reset). stop(): app.stop, at a Ctrl-C."""
+    Ctrl-D (SystemExit: a soft reset). stop(): app.stop, at a Ctrl-C, which
+    then ends serve (KeyboardInterrupt) unless repl: serve runs in the raw
+    REPL (the link's hand-over) and answers as that raw REPL would."""
     global _active
     _out(MARK)                      # the hand-over's sign (transport.Link.close)
     if _active:                     # a request to this very loop: it serves on after it
@@ -117,17 +109,23 @@ def serve(current, stop, read=None):
         read = compat.console_reader()
     ns = {"__name__": "__main__"}
     buf = []                        # the request's text so far, in pieces
+    pending = None                  # bytes read but not yet answered (after a Ctrl-C)
     _active = True
     try:
         while True:
             try:
-                if _loop(current, read, buf, ns) == LEAVE:
+                if _loop(current, read, buf, ns, pending) == LEAVE:
                     return
             except KeyboardInterrupt:
                 stop()
+                if not repl:
+                    raise
                 buf.clear()
-                if _grace(read, buf, ns) == LEAVE:
-                    return
+                pending = _grace(read)
+            except MemoryError:     # outside a request (reading the console): serve on;
+                buf.clear()         # the host's request, if one was cut, times out and resyncs
+                pending = None
+                gc.collect()
             except SystemExit:
                 stop()
                 raise
@@ -138,22 +136,22 @@ def serve(current, stop, read=None):
 _active = False                     # a serve() loop runs (requests run inside it)
 
 
-def _grace(read, buf, ns):
-    """After a Ctrl-C: a Ctrl-A within GRACE_MS is answered as usual; none
-    (CircuitPython threw it away with its input): the banner anyway, before
-    whatever else comes."""
+def _grace(read):
+    """After a Ctrl-C: what arrives within GRACE_MS (a tool's Ctrl-A is
+    answered as usual); without a Ctrl-A (CircuitPython threw it away with
+    its input) the banner first. Returns the bytes for the loop."""
     t0 = compat.ticks_us()
     while compat.ticks_diff(compat.ticks_us(), t0) < GRACE_MS * 1000:
         data = read()
         if data:
             if b"\x01" not in data:
                 _out(MARK + BANNER)
-            return _feed(buf, data, ns)
+            return data
     _out(MARK + BANNER)
     return None
 
 
-def _loop(current, read, buf, ns):
+def _loop(current, read, buf, ns, data):
     cur = step = None
     k = t0 = hz = 0
     since = 0
@@ -166,7 +164,7 @@ def _loop(current, read, buf, ns):
                 ticks, diff, hz = rt.ticks, rt.diff, rt.hz
                 t0 = ticks()
                 k = 0
-        if step is not None:
+        if step is not None and data is None:
             if diff(ticks(), t0) >= (k * 1000000) // hz:
                 step()
                 k += 1
@@ -174,11 +172,31 @@ def _loop(current, read, buf, ns):
                 if since < POLL_EVERY:
                     continue
         since = 0
-        data = read()
-        if data:
-            r = _feed(buf, data, ns)
-            if r == LEAVE:
-                return r
-            if r == RAN and step is not None and current() is cur:
-                t0 = ticks()        # the request took the time: no catching up
-                k = 0
+        if data is None:
+            data = read()
+        ran = False
+        while data:
+            what, code, data = _take(buf, data)
+            if what == LEAVE:
+                return LEAVE
+            if what == RAN:         # one request, answered as the raw REPL answers it
+                ran = True
+                _out("OK")
+                try:
+                    exec(code, ns)
+                except KeyboardInterrupt as e:   # framed, then the display stops
+                    _out("\x04")
+                    compat.print_exception(e)
+                    _out("\x04>")
+                    raise
+                except BaseException as e:      # SystemExit too: the raw REPL reports it
+                    _out("\x04")
+                    compat.print_exception(e)
+                    _out("\x04>")
+                else:
+                    _out("\x04\x04>")
+                code = None
+        data = None
+        if ran and step is not None and current() is cur:
+            t0 = ticks()            # the request took the time: no catching up
+            k = 0

@@ -7,8 +7,6 @@ is tests/host/test_emulated_cpy.py's, through texelpad's CLI and mpremote on
 the emulated CircuitPython Pico."""
 from __future__ import annotations
 
-import ast
-
 import pytest
 
 from support import mpy
@@ -39,7 +37,7 @@ class _Rt:
 INT = object()                      # a Ctrl-C at this read
 
 
-def run(name, chunks, rt=None):
+def run(name, chunks, rt=None, repl=True):
     # serve's output goes to stdout, as on a board; the case's frame around it
     state = {"rt": rt, "stops": 0}
     def read():
@@ -54,7 +52,7 @@ def run(name, chunks, rt=None):
         state["rt"] = None
     sys.stdout.write("@@<" + name + ">@@")
     try:
-        serve.serve(lambda: state["rt"], stop, read)
+        serve.serve(lambda: state["rt"], stop, read, repl=repl)
         how = "returned"
     except KeyboardInterrupt:
         how = "interrupt"
@@ -71,6 +69,8 @@ run("session", [b"\r\x01", b"x = 6\nprint(x ", b"* 7)", b"\x04", None,
 run("reset", [b"\x01y = 1\x04\x04"])
 # a Ctrl-C: the display stops, then (no Ctrl-A came) the banner; then a request
 run("ctrl_c", [b"\x01", INT, None, b"print('after')\x04\x02"])
+# code.py's serve (repl=False): a Ctrl-C stops the display and ends it, as a program ends
+run("ctrl_c_end", [b"\x01", INT, b"print('never')\x04"], repl=False)
 rt = _Rt()
 run("plays", [None] * 40 + [b"\x01print('hi')\x04"] + [None] * 40 + [b"\x02"], rt)
 print("\nsteps", rt.steps)
@@ -103,7 +103,7 @@ def _run(name):
         out = mpy.run(code, exe=toolchain.interpreter(name), timeout=120)
     out = out.replace("\r\n", "\n")
     res = {}
-    for case in ("session", "reset", "ctrl_c", "plays"):
+    for case in ("session", "reset", "ctrl_c", "ctrl_c_end", "plays"):
         body = out.split("@@<%s>@@" % case, 1)[1]
         body, end = body.split("@@</%s " % case, 1)
         how, stops = end.split(">@@", 1)[0].split()
@@ -131,6 +131,8 @@ def test_serve_answers_as_the_raw_repl_does(name):
     how, out, stops = r["ctrl_c"]
     assert how == "returned" and stops == 1
     assert out.count(BANNER) == 2 and out.endswith(BANNER + "OKafter\n\x04\x04>")
+    how, out, stops = r["ctrl_c_end"]
+    assert how == "interrupt" and stops == 1 and out.count(BANNER) == 1 and "never" not in out
 
 
 @pytest.mark.parametrize("name", _interpreters())

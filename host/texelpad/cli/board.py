@@ -136,13 +136,21 @@ def _refused(e: ValueError, kind: str, args: argparse.Namespace) -> CliError:
     return refused_scene(e, kind == "texel")
 
 
+# What `push --board` starts a board with, the instant before the push replaces it: one
+# millimetre of constant 0 (valid on every display). The default split screen would be
+# built only to be thrown away - 2 s and a 19 KB map on a CircuitPython Pico, whose
+# fragmented heap then had no room for the pushed scene (tests/host/test_emulated_cpy.py).
+QUIET_START = {"regions": [{"start_mm": 0, "end_mm": 1,
+                            "texture": {"kind": "constant", "level": 0}}]}
+
+
 def cmd_push(args: argparse.Namespace) -> int:
     from ..link.board import full_screen
     kind, what = _what_to_push(args)
     progress = _UploadProgress()
     # not running: --board starts it; a ValueError (LiteralError, DeviceError, the
     # host-side check: the board's own code) names the flag it came from (_refused)
-    with running_board(args, _fitting_hint, start=args.board,
+    with running_board(args, _fitting_hint, start=args.board, start_scene=QUIET_START,
                        refused=lambda e: _refused(e, kind, args)) as (b, st):
         if args.board and args.board != st.get("board"):    # another board file runs
             raise CliError("--board", "%s already runs board file %r, not %r; the scene "

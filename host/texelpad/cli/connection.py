@@ -70,19 +70,21 @@ def connected_board(args: argparse.Namespace, check: bool = True, import_image: 
 def running_board(args: argparse.Namespace, hint: str | Callable[[Any], str] = START_HINT,
                   start: str | None = None, stopped_ok: bool = False,
                   refused: Callable[[ValueError], CliError] | None = None,
+                  start_scene: dict[str, Any] | None = None,
                   ) -> Iterator[tuple[Any, dict[str, Any]]]:
     """`with running_board(args) as (b, st):` a connected_board on which
     texelpad runs, and its status. Where it does not: board file `start`
     is started (in real time: a virtual board started from the host plays
     in real time, stepped it would play nothing; other ports ignore it),
     or with `stopped_ok` the board is taken as it is (st says so), or else
-    not_running(port, hint) - hint a text or hint(board) - one line, exit 1."""
+    not_running(port, hint) - hint a text or hint(board) - one line, exit 1.
+    start_scene: what the start plays (None: the board's default scene)."""
     with connected_board(args, refused=refused) as b:
         st = b.status()
         if not st.get("running") and not stopped_ok:
             if not start:
                 raise not_running(b.port, hint(b) if callable(hint) else hint)
-            st = b.start(start, realtime=True)
+            st = b.start(start, start_scene, realtime=True)
         yield b, st
 
 

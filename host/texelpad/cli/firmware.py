@@ -22,6 +22,11 @@ def add_firmware(p: argparse.ArgumentParser) -> None:
     g = p.add_mutually_exclusive_group()
     g.add_argument("--board", default=None, metavar="NAME",
                    help="a board folder shipped in boards/ (pico, pico_bridge; default pico)")
+    g.add_argument("--circuitpython", action="store_true",
+                   help="instead: DIR/texelpad-circuitpython.zip, what a CircuitPython board's "
+                        "CIRCUITPY drive needs (lib/texel as sources, code.py starting the "
+                        "power-up scene, README.txt); unzip it onto the drive "
+                        "(docs/firmware.md, \"CircuitPython\")")
     g.add_argument("--board-dir", default=None, metavar="DIR",
                    help="a board folder of your own (mpconfigboard.h, mpconfigboard.cmake, "
                         "pins.csv, manifest.py, board.json: copy boards/pico)")
@@ -77,8 +82,53 @@ def _board_check(board_dir: Path) -> None:
                                                                path, "it" if n == 1 else "them")]))
 
 
+CPY_README = """texelpad for CircuitPython (texel %(version)s): copy onto the CIRCUITPY drive
+
+1. Install CircuitPython 10 on the board (circuitpython.org/downloads; e.g. the
+   Raspberry Pi Pico's .uf2: hold BOOTSEL, plug it in, drag the .uf2 onto RPI-RP2).
+2. Copy lib/ and code.py from here onto the CIRCUITPY drive that appears
+   (code.py replaces the drive's own: keep a copy if you wrote one).
+3. The board restarts and plays the power-up scene; /texelpad.json, if you add
+   one (texelpad scene boot), chooses the board file and scene.
+4. From a computer: texelpad status --port PORT, texelpad push --port PORT ...
+   (the display plays on between commands: texel.app.serve, docs/runtime.md).
+
+Board file: pico_cpy (wiring in lib/texel/boards.d/pico_cpy.json and texelpad's
+hardware/README.md). %(files)d files, %(bytes)d bytes.
+"""
+
+
+def _circuitpython_zip(out: str) -> int:
+    """DIR/texelpad-circuitpython.zip: the CIRCUITPY layout texelpad deploy writes,
+    with the power-up script as code.py (CircuitPython runs code.py first)."""
+    import zipfile
+    from .. import image
+    from texel import __version__
+    files = image.build_image(image.TARGETS["circuitpython"], include_main=True)
+    d = Path(out)
+    d.mkdir(parents=True, exist_ok=True)
+    path = d / "texelpad-circuitpython.zip"
+    tmp = path.with_name(path.name + ".tmp")
+    n = sum(f.size for f in files)
+    with zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED) as z:
+        for f in files:
+            name = "code.py" if f.remote == image.REMOTE_MAIN else f.remote.lstrip("/")
+            z.writestr(name, f.data)
+        z.writestr("README.txt", CPY_README % {"version": __version__, "files": len(files),
+                                                "bytes": n})
+    tmp.replace(path)
+    print("%s  (CircuitPython: %d files, %d bytes on the drive)" % (path, len(files), n))
+    print("  unzip it onto the CIRCUITPY drive (lib/ and code.py); README.txt inside says how")
+    return EXIT_OK
+
+
 def cmd_firmware(args: argparse.Namespace) -> int:
     from ..firmware.build import FirmwareError, build_firmware
+    if args.circuitpython:
+        if args.micropython or args.ulab:
+            raise CliError("--circuitpython", "builds no firmware: CircuitPython's own .uf2 "
+                                              "comes from circuitpython.org")
+        return _circuitpython_zip(args.out)
     if args.ulab and not args.micropython:
         raise CliError("--ulab", "goes with --micropython (the offline kit has its own ulab)")
     d = _board_dir(args)

@@ -31,7 +31,7 @@ from typing import Any, Callable
 from .. import image
 from ..link import protocol
 from ..link.board import UNIX_PLATFORMS, on_board_path
-from ..link.transport import LinkError, LinkTimeout
+from ..link.transport import BoardError, LinkError, LinkTimeout
 
 # Filesystems allocate whole blocks: count each file as its size rounded up to
 # 4 KB (littlefs on an RP2040) plus one block, so "fits" means it fits.
@@ -57,6 +57,9 @@ def on_board(board: Any) -> Callable[[str], str]:
     return lambda p: on_board_path(board, p)
 
 
+SURVEY_BATCH = 12           # paths per survey request on CircuitPython (survey)
+
+
 def survey(board: Any, files: list[image.ImageFile]) -> tuple[dict, list[str], int | None]:
     """{image path: sha256 hex, '' or None}, also for each file's leftover
     "<path>.new" of an interrupted deploy; the files under the package
@@ -64,8 +67,26 @@ def survey(board: Any, files: list[image.ImageFile]) -> tuple[dict, list[str], i
     dev = on_board(board)
     back = {dev(f.remote): f.remote for f in files}
     back.update({dev(f.remote) + TMP: f.remote + TMP for f in files})
-    hashes, present, free = board.link.eval(
-        protocol.survey(list(back), dev(image.REMOTE_PACKAGE)), timeout=60)
+    paths = list(back)
+    # One round trip on MicroPython; CircuitPython's heap (with its modules compiled
+    # from source and a scene playing) has no block for a 100-path request and its
+    # answer: SURVEY_BATCH paths a request there, the package listed with the last
+    step = SURVEY_BATCH if board.firmware["implementation"] == "circuitpython" else len(paths)
+    hashes, present, free = {}, [], None
+    for i in range(0, len(paths), max(step, 1)):
+        last = i + step >= len(paths)
+        try:
+            h, p, free = board.link.eval(protocol.survey(
+                paths[i:i + step], dev(image.REMOTE_PACKAGE) if last else ""), timeout=60)
+        except BoardError as e:
+            if "MemoryError" not in e.traceback:
+                raise
+            raise image.ImageError(
+                "cannot deploy: %s has too little free memory to survey its files (%s); stop "
+                "its display (texelpad stop --port %s) or reset it, then deploy again; nothing "
+                "was changed" % (board.port, str(e).split(": ", 1)[-1], board.port)) from None
+        hashes.update(h)
+        present += p
     lead = "" if dev("/x") == "/x" else "/"
     return ({back[p]: h for p, h in hashes.items()}, [lead + p for p in present], free)
 
@@ -314,8 +335,8 @@ def _writable_for_code(board: Any, say: Callable[[str], None]) -> None:
     if why:
         say("CircuitPython: the drive stays read-only to code (%s)" % why)
     else:
-        say("CircuitPython: the drive remounted writable for code (storage.remount) until "
-            "the board resets")
+        say("CircuitPython: the drive remounted writable for code (storage.remount), "
+            "auto-reload off, until the board resets")
 
 
 def write_plan(board: Any, plan: Plan, say: Callable[[str], None],
@@ -430,8 +451,18 @@ def _restart(board: Any, was: tuple, say: Callable[[str], None]) -> str:
     """Start the display again on the new image with the scene it played (or,
     if the new image refuses that scene, its default scene)."""
     name, scene, virtual = was
-    say("starting %s again with the new image and the scene it played" % name)
     err: LinkError
+    if board.link.serving:
+        # CircuitPython: the reset reloaded code.py, whose power-up scene plays again and
+        # serves; when that is what played, a second start would only cost its heap
+        try:
+            st = board.status()
+            if st.get("running") and st.get("board") == name and board.scene_source() == scene:
+                say("%s plays the scene it played again (code.py started it)" % name)
+                return name
+        except LinkError:
+            pass
+    say("starting %s again with the new image and the scene it played" % name)
     try:
         # a fresh import on the board: the modules were dropped (PURGE)
         board.restart(name, scene, virtual)

@@ -328,6 +328,8 @@ def _h(p):
   f.close()
 def _ls(d):
  out = []
+ if not d:
+  return out
  try:
   # CircuitPython has no os.ilistdir: os.listdir and os.stat's mode
   for n in os.listdir(d):
@@ -353,9 +355,12 @@ def survey(paths: Sequence[str], package_dir: str) -> str:
     return _SURVEY_CODE % (literal(list(paths)), literal(package_dir))
 
 
-# CircuitPython: lend the CIRCUITPY drive to code (deploy); prints '' or why not
+# CircuitPython: lend the CIRCUITPY drive to code (deploy); prints '' or why not.
+# Auto-reload off first: with it on (code.py running serve), the writes restart the VM
+# in the middle of the deploy (on until the board resets).
 REMOUNT_WRITABLE = """try:
- import storage
+ import storage, supervisor
+ supervisor.runtime.autoreload = False
  storage.remount('/', readonly=False)
  print(repr(''))
 except Exception as _e:

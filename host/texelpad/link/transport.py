@@ -266,13 +266,23 @@ class _Transport(SerialTransport):
             # the banner and its ">" are the last the board sends, and the ">"
             # is left for exec_raw to read, as mpremote does.
             keep = len(self.RAW_PROMPT) + 1
+            tail = len(SERVE_MARK) + len(self.RAW_PROMPT)
             data = b""
+            again = time.monotonic() + RETRY_CTRL_A_S
             while not data.endswith(self.RAW_PROMPT):
                 n = self.serial.in_waiting        # raises at the deadline
                 new = self.serial.read(n - keep if n > keep else 1)
                 if new:
-                    data = (data + new)[-len(self.RAW_PROMPT):]
+                    data = (data + new)[-tail:]
+                elif time.monotonic() > again:
+                    # CircuitPython throws its console input away at a Ctrl-C (the
+                    # Ctrl-A behind it may be gone) and code.py's end waits for a key
+                    self.serial.write(b"\r\x01")
+                    again = time.monotonic() + RETRY_CTRL_A_S
         self.in_raw_repl = True
+        self.serve_banner = data.endswith(SERVE_MARK + self.RAW_PROMPT)
+
+    serve_banner = False        # the last banner came from texel.app.serve() (SERVE_MARK)
 
     def knock(self, seconds: float) -> str | None:
         """Ctrl-A alone, no Ctrl-C: a board at its REPL (either) answers with
@@ -331,7 +341,25 @@ class _Transport(SerialTransport):
 
     def exec_raw_no_follow(self, command: Any) -> None:
         self.settle()
-        super().exec_raw_no_follow(command)
+        if self.use_raw_paste:
+            super().exec_raw_no_follow(command)
+            return
+        # The standard raw mode (a serving CircuitPython board: texel/serve.py), as
+        # mpremote sends it, but the "OK" waited for until the operation's deadline:
+        # serve reads the console between refreshes, and an emulated board under
+        # load (a pin probe, a moving finger) takes longer than mpremote's one read.
+        data = bytes(command, "utf8") if isinstance(command, str) else bytes(command)
+        if not self.read_until(1, b">").endswith(b">"):
+            raise TransportError("could not enter raw repl")
+        for i in range(0, len(data), 256):
+            self.serial.write(data[i:i + 256])
+            time.sleep(0.01)
+        self.serial.write(b"\x04")
+        got = b""
+        while len(got) < 2:
+            got += self.serial.read(2 - len(got))       # raises at the deadline
+        if got != b"OK":
+            raise TransportError("could not exec command (response: %r)" % got)
 
     def exec_reply_first(self, command: bytes, timeout: float | None = None
                          ) -> tuple[bytes, bytes]:
@@ -386,8 +414,10 @@ class _Transport(SerialTransport):
 SERVE_MARK = b"\x1etexel-serve\r\n"
 # s a board at its REPL takes to answer a bare Ctrl-A (Link: after it, Ctrl-C)
 KNOCK_S = 1.0
+# s without a banner after which _enter_raw_repl sends Ctrl-A again
+RETRY_CTRL_A_S = 1.5
 # The link's last command on a CircuitPython board that plays (Link.close(serve=True))
-HAND_OVER = b"import texel.app as _a\n_a.serve(False)\n_a = None"
+HAND_OVER = b"import texel.app as _a\n_a.serve(False, True)\n_a = None"
 
 
 class Link:
@@ -493,14 +523,28 @@ class Link:
         if self.t is None:
             raise LinkError("the link to %s is closed" % self.port)
         t = self.timeout if timeout is None else timeout
-        if self.serving:                # out of texel.app.serve() into the raw REPL first
+        was_serving = self.serving
+        if was_serving:
+            # out of texel.app.serve(): Ctrl-C stops its display. Run by the link's hand-over
+            # in the raw REPL, it then answers as the raw REPL would, and a Ctrl-B ends it
+            # (that raw REPL's prompt follows); run by code.py, code.py ends, and the
+            # resync is at CircuitPython's own raw REPL already
             self.resync(t)
+        if was_serving and self.t.serve_banner:
+            with self.t.deadline(t):
+                self.t.serial.write(b"\x02")
+                # serve reads what comes with its Ctrl-B and drops it: the Ctrl-D waits for
+                # the raw REPL's prompt, or code.py's "Press any key ... CTRL-D to reload."
+                end = b""
+                while not end.endswith(b"\x04>"):
+                    end = (end + self.t.serial.read(1))[-32:]
         try:
             self.t.settle()
             with self.t.deadline(t):
                 self.t.serial.write(b"\x04")
                 self.t.read_until(1, b"soft reboot\r\n", timeout=t)
-                # then boot.py may print; the banner ends it (its ">" is left for exec)
+                # then boot.py may print; the banner ends it (its ">" is left for exec) - or,
+                # after code.py's reload, code.py plays and serves again: knock for its banner
                 self.t.read_until(1, _Transport.RAW_PROMPT, timeout=t)
         except (TransportError, serial.SerialException, OSError) as e:
             raise LinkTimeout("%s did not come back from a soft reset (%s)"
