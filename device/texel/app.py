@@ -10,7 +10,7 @@
 #   texel.app.telemetry()                    -> ([(t_us, position, amplitude), ...], lost)
 #   texel.app.stop()
 #   texel.app.run_loop(seconds=None)         CircuitPython: the paced loop (below)
-#   texel.app.serve(idle=True)               CircuitPython: the paced loop that also
+#   texel.app.serve(idle=True, repl=False)   CircuitPython: the paced loop that also
 #                                               answers the host's link (texel/serve.py)
 # What the host's link calls besides (uploads, JSON scenes, base64 maps, the
 # virtual board's time and finger) is texel.wire; the contract's version is
@@ -468,14 +468,22 @@ def run_loop(seconds=None):
     hz = rt.hz
     t0 = ticks()
     k = 0
+    secs = 0                        # whole seconds the schedule moved on
+    q, r = divmod(1000000, hz)
     late = 0
     limit = None if seconds is None else int(seconds * 1000000)
     try:
         while True:
+            if k >= hz:
+                # a second's refreshes done: move the schedule on a second, so the tick
+                # difference stays inside its wrap (2^29 us, ~9 minutes; texel/serve.py)
+                k -= hz
+                secs += 1
+                t0 = compat.ticks_add(t0, 1000000)
             now = diff(ticks(), t0)
-            if limit is not None and now >= limit:
+            if limit is not None and secs * 1000000 + now >= limit:
                 break
-            due = (k * 1000000) // hz
+            due = k * q + (k * r) // hz
             if now >= due:
                 if now - due > rt.period_us:
                     late += 1
@@ -485,8 +493,9 @@ def run_loop(seconds=None):
         pass
     finally:
         rt.hw.off()
-    el = diff(ticks(), t0)
-    rt.loop = {"refreshes": k, "seconds": el / 1e6, "rate_hz": (k * 1000000 // el) if el > 0 else 0,
+    el = secs + diff(ticks(), t0) / 1e6
+    n = secs * hz + k
+    rt.loop = {"refreshes": n, "seconds": el, "rate_hz": int(n / el) if el > 0 else 0,
                "late": late}
     return rt.loop
 

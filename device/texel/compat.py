@@ -236,7 +236,7 @@ def fastest(name, viper_module, py_fn, engine=None):
 # that measures intervals runs unchanged everywhere.
 TICKS_MASK = 0x3FFFFFFF
 try:
-    from time import ticks_us, ticks_diff
+    from time import ticks_us, ticks_diff, ticks_add
 except ImportError:
     import time as _time
     _ns = getattr(_time, "perf_counter_ns", None) or _time.monotonic_ns
@@ -246,6 +246,9 @@ except ImportError:
 
     def ticks_diff(a, b):
         return ((a - b + 0x20000000) & TICKS_MASK) - 0x20000000
+
+    def ticks_add(a, b):
+        return (a + b) & TICKS_MASK
 
 try:
     from array import array

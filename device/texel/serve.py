@@ -19,10 +19,12 @@
 #                      then sends in the standard mode)
 #   Ctrl-D alone    -> a soft reset, as the raw REPL does one (SystemExit: the
 #                      port restarts its VM and prints "soft reboot")
-#   Ctrl-B          -> serve() returns: the raw REPL itself again
+#   Ctrl-B          -> the display stops, serve() returns: the raw REPL itself again
 #   Ctrl-C          -> the port's own KeyboardInterrupt: the display stops
-#                      (app.stop: carrier off, pins released) and serve goes on
-#                      answering as the raw REPL would. CircuitPython throws
+#                      (app.stop: carrier off, pins driven low) and, in the
+#                      link's hand-over (repl=True), serve goes on answering as
+#                      the raw REPL would; under code.py (repl=False) the
+#                      interrupt ends it, as CircuitPython's programs end. CircuitPython throws
 #                      away its console input at a Ctrl-C (supervisor's
 #                      tud_cdc_rx_wanted_cb flushes the FIFO), so a tool's Ctrl-A
 #                      sent right behind it (mpremote, texelpad's resync) may be
@@ -67,7 +69,7 @@ def _take(buf, data):
         c = data[0]
         data = data[1:]
         if c == 1:                          # Ctrl-A
-            if b"".join(buf) == b"\x05A":    # raw-paste asked: not offered
+            if buf and buf[0] is not _CUT and b"".join(buf) == b"\x05A":  # raw-paste: no
                 _out("R\x00")
             else:
                 _out(MARK + BANNER)
@@ -77,7 +79,7 @@ def _take(buf, data):
                 _out("OK\r\n")
                 raise SystemExit            # the raw REPL's soft reset
             try:
-                code = b"".join(buf).decode()
+                code = None if buf[0] is _CUT else b"".join(buf).decode()
             except MemoryError:     # no block for the request's text: a heap with a scene
                 code = None
             buf.clear()
@@ -93,6 +95,7 @@ def _take(buf, data):
 
 RAN = 1
 LEAVE = 2
+_CUT = b"\x00cut"                  # buf's first piece after a MemoryError lost some of it
 
 
 def serve(current, stop, read=None, repl=True):
@@ -115,6 +118,7 @@ def serve(current, stop, read=None, repl=True):
         while True:
             try:
                 if _loop(current, read, buf, ns, pending) == LEAVE:
+                    stop()          # nothing would refresh it any more: carrier off
                     return
             except KeyboardInterrupt:
                 stop()
@@ -123,10 +127,11 @@ def serve(current, stop, read=None, repl=True):
                 buf.clear()
                 pending = _grace(read)
             except MemoryError:     # outside a request (reading the console): serve on;
-                buf.clear()         # the host's request, if one was cut, times out and resyncs
+                buf.clear()         # the cut request's end must not run as a request
+                buf.append(_CUT)
                 pending = None
                 gc.collect()
-            except SystemExit:
+            except BaseException:   # SystemExit (a soft reset), or a fault: carrier off
                 stop()
                 raise
     finally:
@@ -137,23 +142,23 @@ _active = False                     # a serve() loop runs (requests run inside i
 
 
 def _grace(read):
-    """After a Ctrl-C: what arrives within GRACE_MS (a tool's Ctrl-A is
-    answered as usual); without a Ctrl-A (CircuitPython threw it away with
-    its input) the banner first. Returns the bytes for the loop."""
+    """After a Ctrl-C: what arrives within GRACE_MS, for the loop to answer
+    (a tool's Ctrl-A among it gets the banner there); without a Ctrl-A
+    (CircuitPython threw it away with its input) the banner first, once."""
     t0 = compat.ticks_us()
+    got = b""
     while compat.ticks_diff(compat.ticks_us(), t0) < GRACE_MS * 1000:
         data = read()
         if data:
-            if b"\x01" not in data:
-                _out(MARK + BANNER)
-            return data
-    _out(MARK + BANNER)
-    return None
+            got += data
+    if b"\x01" not in got:
+        _out(MARK + BANNER)
+    return got or None
 
 
 def _loop(current, read, buf, ns, data):
     cur = step = None
-    k = t0 = hz = 0
+    k = t0 = hz = q = r = 0
     since = 0
     while True:
         rt = current()
@@ -162,10 +167,17 @@ def _loop(current, read, buf, ns, data):
             step = rt.refresh.step if rt is not None and rt.loop_mode else None
             if step is not None:
                 ticks, diff, hz = rt.ticks, rt.diff, rt.hz
+                q, r = divmod(1000000, hz)
                 t0 = ticks()
                 k = 0
         if step is not None and data is None:
-            if diff(ticks(), t0) >= (k * 1000000) // hz:
+            if k >= hz:
+                # a second's refreshes done: the schedule moves on by a second, so the
+                # tick difference stays far inside its wrap (2^29 us, ~9 minutes) and
+                # k * q small (no bigints)
+                k -= hz
+                t0 = compat.ticks_add(t0, 1000000)
+            if diff(ticks(), t0) >= k * q + (k * r) // hz:
                 step()
                 k += 1
                 since += 1

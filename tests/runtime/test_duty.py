@@ -26,7 +26,7 @@ from support import mpy
 from texel.runtime.duty import DutyLaw
 
 # TOP of the boards at 34 kHz: RP2040 125 MHz (3675), STM32F405 TIM1/8 168 MHz
-# (4940), RP2350 150 MHz (4411), CircuitPython rp2 (cpu // freq = 3676)
+# (4940), RP2350 150 MHz (4411), a TOP of 3676 (an odd one out)
 BOARD_TOPS = (3675, 4940, 4411, 3676)
 
 

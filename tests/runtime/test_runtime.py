@@ -382,7 +382,7 @@ def test_circuitpython_paced_loop_reports_its_rate():
     board's ticks and reports the rate it achieved (here on the recording
     pwmio/analogio fakes; the rate is printed, never asserted)."""
     r = mpy.run_json(CPY, extra_path=FAKES, timeout=120)
-    assert r["port"] == "circuitpython" and r["top"] == 3676
+    assert r["port"] == "circuitpython" and r["top"] == 3675     # pwmio: cpu // freq - 1
     loop = r["loop"]
     assert loop == r["status_loop"]
     assert loop["refreshes"] == r["refreshes"] > 0

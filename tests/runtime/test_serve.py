@@ -34,6 +34,15 @@ class _Rt:
     def step(self):
         self.steps += 1
 
+class _WrapRt(_Rt):
+    # a clock that wraps at 2^30 us as CircuitPython's (compat.ticks_us) does, 0.1 s a read
+    hz = 10
+    def ticks(self):
+        self.t = (self.t + 100000) & 0x3FFFFFFF
+        return self.t
+    def diff(self, a, b):
+        return ((a - b + 0x20000000) & 0x3FFFFFFF) - 0x20000000
+
 INT = object()                      # a Ctrl-C at this read
 
 
@@ -42,7 +51,7 @@ def run(name, chunks, rt=None, repl=True):
     state = {"rt": rt, "stops": 0}
     def read():
         if not chunks:
-            raise KeyboardInterrupt      # the script's end: as a Ctrl-C would
+            return None                  # (each case ends itself: Ctrl-B, Ctrl-D, Ctrl-C)
         c = chunks.pop(0)
         if c is INT:
             raise KeyboardInterrupt
@@ -74,6 +83,12 @@ run("ctrl_c_end", [b"\x01", INT, b"print('never')\x04"], repl=False)
 rt = _Rt()
 run("plays", [None] * 40 + [b"\x01print('hi')\x04"] + [None] * 40 + [b"\x02"], rt)
 print("\nsteps", rt.steps)
+# a Ctrl-C, then a tool's Ctrl-A in two reads ("\r", then "\x01"): one banner
+run("split", [INT, b"\r", b"\x01", b"\x02"])
+# hours on a clock that wraps every 2^30 us: the refresh stays paced
+wr = _WrapRt()
+run("wraps", [None] * 6000 + [b"\x02"], wr)
+print("\nwrapsteps", wr.steps, wr.t)
 """
 
 # (line ends compared as "\n": the unix ports' and CPython's stdout are text streams)
@@ -103,12 +118,13 @@ def _run(name):
         out = mpy.run(code, exe=toolchain.interpreter(name), timeout=120)
     out = out.replace("\r\n", "\n")
     res = {}
-    for case in ("session", "reset", "ctrl_c", "ctrl_c_end", "plays"):
+    for case in ("session", "reset", "ctrl_c", "ctrl_c_end", "plays", "split", "wraps"):
         body = out.split("@@<%s>@@" % case, 1)[1]
         body, end = body.split("@@</%s " % case, 1)
         how, stops = end.split(">@@", 1)[0].split()
         res[case] = (how, body, int(stops))
-    res["steps"] = int(out.rsplit("steps", 1)[1].split()[0])
+    res["steps"] = int(out.split("\nsteps", 1)[1].split()[0])
+    res["wrapsteps"] = int(out.rsplit("wrapsteps", 1)[1].split()[0])
     return res
 
 
@@ -116,7 +132,7 @@ def _run(name):
 def test_serve_answers_as_the_raw_repl_does(name):
     r = _run(name)
     how, out, stops = r["session"]
-    assert how == "returned" and stops == 0
+    assert how == "returned" and stops == 1        # Ctrl-B: nothing would refresh: stopped
     parts = out.split(BANNER)
     assert parts[0] == "\x1etexel-serve\n" and len(parts) == 2      # the start mark, one banner
     rest = parts[1]
@@ -129,8 +145,10 @@ def test_serve_answers_as_the_raw_repl_does(name):
     how, out, stops = r["reset"]
     assert how == "exit" and out.endswith(BANNER + "OK\x04\x04>OK\n")
     how, out, stops = r["ctrl_c"]
-    assert how == "returned" and stops == 1
+    assert how == "returned" and stops == 2        # the Ctrl-C, then the Ctrl-B
     assert out.count(BANNER) == 2 and out.endswith(BANNER + "OKafter\n\x04\x04>")
+    how, out, stops = r["split"]
+    assert how == "returned" and out.count(BANNER) == 1, out
     how, out, stops = r["ctrl_c_end"]
     assert how == "interrupt" and stops == 1 and out.count(BANNER) == 1 and "never" not in out
 
@@ -139,8 +157,18 @@ def test_serve_answers_as_the_raw_repl_does(name):
 def test_serve_refreshes_between_requests_and_after_them(name):
     r = _run(name)
     how, out, stops = r["plays"]
-    assert how == "returned" and stops == 0
+    assert how == "returned" and stops == 1
     assert out.endswith(BANNER + "OKhi\n\x04\x04>")
     # 81 console reads, the loop paced at 1 kHz on a clock that moves 250 us at each
     # read of it (four a period): the refresh ran between the reads
     assert 10 <= r["steps"] <= 81, r["steps"]
+
+
+@pytest.mark.parametrize("name", _interpreters())
+def test_serve_keeps_pacing_across_the_clocks_wrap(name):
+    """6,000 console reads, 16 refreshes between reads at 10 Hz on a clock moving 0.1 s a
+    read: ~2.7 hours, 18 wraps of CircuitPython's 2^30 us clock. Scheduling refresh k at
+    k * 1e6 // hz after the start stopped refreshing after 2^29 us (~9 minutes): the
+    difference of two wrapping ticks never grows past that."""
+    r = _run(name)
+    assert r["wrapsteps"] >= 6000 * 15, r["wrapsteps"]

@@ -331,6 +331,10 @@ def _writable_for_code(board: Any, say: Callable[[str], None]) -> None:
     storage.remount('/', readonly=False) lends it to code where no computer
     has it mounted (a board whose drive is hidden, the emulated one). Where
     one has, the remount is refused and preflight's EROFS says what to do."""
+    if board.link.eval(protocol.FOREIGN_CODE_PY, timeout=30):
+        say("CircuitPython runs /code.py before /main.py: this board has a /code.py, so "
+            "texelpad's /main.py will not start at power-up (rename or remove code.py, or use "
+            "texelpad firmware --circuitpython's code.py)")
     why = board.link.eval(protocol.REMOUNT_WRITABLE, timeout=30)
     if why:
         say("CircuitPython: the drive stays read-only to code (%s)" % why)
@@ -452,16 +456,6 @@ def _restart(board: Any, was: tuple, say: Callable[[str], None]) -> str:
     if the new image refuses that scene, its default scene)."""
     name, scene, virtual = was
     err: LinkError
-    if board.link.serving:
-        # CircuitPython: the reset reloaded code.py, whose power-up scene plays again and
-        # serves; when that is what played, a second start would only cost its heap
-        try:
-            st = board.status()
-            if st.get("running") and st.get("board") == name and board.scene_source() == scene:
-                say("%s plays the scene it played again (code.py started it)" % name)
-                return name
-        except LinkError:
-            pass
     say("starting %s again with the new image and the scene it played" % name)
     try:
         # a fresh import on the board: the modules were dropped (PURGE)

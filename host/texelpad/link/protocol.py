@@ -369,6 +369,16 @@ except Exception as _e:
 """
 
 
+# CircuitPython: True when /code.py exists and is not texelpad's power-up script (the zip's)
+FOREIGN_CODE_PY = """try:
+ with open('/code.py') as _f:
+  print(repr('texel.app' not in _f.read()))
+except OSError:
+ print(repr(False))
+_f = None
+"""
+
+
 # Drop the texel modules from sys.modules, so the next import loads the new image.
 PURGE = """import sys, gc
 for _k in [k for k in sys.modules if k == 'texel' or k.startswith('texel.')]:

@@ -274,6 +274,7 @@ class _Transport(SerialTransport):
                 new = self.serial.read(n - keep if n > keep else 1)
                 if new:
                     data = (data + new)[-tail:]
+                    again = time.monotonic() + RETRY_CTRL_A_S     # after RETRY_CTRL_A_S quiet
                 elif time.monotonic() > again:
                     # CircuitPython throws its console input away at a Ctrl-C (the
                     # Ctrl-A behind it may be gone) and code.py's end waits for a key
@@ -281,6 +282,8 @@ class _Transport(SerialTransport):
                     again = time.monotonic() + RETRY_CTRL_A_S
         self.in_raw_repl = True
         self.serve_banner = data.endswith(SERVE_MARK + self.RAW_PROMPT)
+        if self.serve_banner:
+            self.use_raw_paste = False      # serve answers the standard raw mode only
 
     serve_banner = False        # the last banner came from texel.app.serve() (SERVE_MARK)
 
@@ -295,7 +298,9 @@ class _Transport(SerialTransport):
         data = b""
         try:
             with self.deadline(seconds):
-                self.serial.write(b"\r\x01")
+                # Ctrl-A alone: a friendly REPL acts on it only at an empty line, so a
+                # half-typed line is neither run nor lost (then no banner: the Ctrl-C path)
+                self.serial.write(b"\x01")
                 while not data.endswith(self.RAW_PROMPT):
                     n = self.serial.in_waiting            # raises at the deadline
                     keep = len(self.RAW_PROMPT) + 1       # the ">" stays for exec_raw
@@ -477,7 +482,15 @@ class Link:
             return
         try:
             self.t.settle()             # the last answer's tail (a collection) first
-            if not self.serving and not (serve and self._hand_over()):
+            handed = False
+            if serve and not self.serving:
+                try:
+                    handed = self._hand_over()
+                except Exception:
+                    # Ctrl-B below: a serve that did start returns and stops its display,
+                    # else CircuitPython's VM restarts; either way nothing is left driven
+                    handed = False
+            if not self.serving and not handed:
                 self.t.exit_raw_repl()
         except Exception:
             pass
@@ -543,8 +556,8 @@ class Link:
             with self.t.deadline(t):
                 self.t.serial.write(b"\x04")
                 self.t.read_until(1, b"soft reboot\r\n", timeout=t)
-                # then boot.py may print; the banner ends it (its ">" is left for exec) - or,
-                # after code.py's reload, code.py plays and serves again: knock for its banner
+                # then boot.py may print; the banner ends it (its ">" is left for exec);
+                # a soft reset from the raw REPL runs no main.py/code.py, on either port
                 self.t.read_until(1, _Transport.RAW_PROMPT, timeout=t)
         except (TransportError, serial.SerialException, OSError) as e:
             raise LinkTimeout("%s did not come back from a soft reset (%s)"
