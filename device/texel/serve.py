@@ -196,15 +196,12 @@ def _loop(current, read, buf, ns, data):
                 _out("OK")
                 try:
                     exec(code, ns)
-                except KeyboardInterrupt as e:   # framed, then the display stops
-                    _out("\x04")
-                    compat.print_exception(e)
-                    _out("\x04>")
-                    raise
                 except BaseException as e:      # SystemExit too: the raw REPL reports it
                     _out("\x04")
                     compat.print_exception(e)
                     _out("\x04>")
+                    if isinstance(e, KeyboardInterrupt):
+                        raise                   # framed, then the display stops (serve)
                 else:
                     _out("\x04\x04>")
                 code = None

@@ -455,8 +455,8 @@ def _restart(board: Any, was: tuple, say: Callable[[str], None]) -> str:
     """Start the display again on the new image with the scene it played (or,
     if the new image refuses that scene, its default scene)."""
     name, scene, virtual = was
-    err: LinkError
     say("starting %s again with the new image and the scene it played" % name)
+    err: LinkError
     try:
         # a fresh import on the board: the modules were dropped (PURGE)
         board.restart(name, scene, virtual)

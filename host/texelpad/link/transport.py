@@ -261,29 +261,36 @@ class _Transport(SerialTransport):
                 self.serial.read(n)
                 n = self.serial.in_waiting
             self.serial.write(b"\r\x01")         # Ctrl-A: the raw REPL
-            # Output still in flight (a program that printed until Ctrl-C) is
-            # read in bulk, but never the last len(banner) + 1 bytes waiting:
-            # the banner and its ">" are the last the board sends, and the ">"
-            # is left for exec_raw to read, as mpremote does.
-            keep = len(self.RAW_PROMPT) + 1
-            tail = len(SERVE_MARK) + len(self.RAW_PROMPT)
-            data = b""
-            again = time.monotonic() + RETRY_CTRL_A_S
-            while not data.endswith(self.RAW_PROMPT):
-                n = self.serial.in_waiting        # raises at the deadline
-                new = self.serial.read(n - keep if n > keep else 1)
-                if new:
-                    data = (data + new)[-tail:]
-                    again = time.monotonic() + RETRY_CTRL_A_S     # after RETRY_CTRL_A_S quiet
-                elif time.monotonic() > again:
-                    # CircuitPython throws its console input away at a Ctrl-C (the
-                    # Ctrl-A behind it may be gone) and code.py's end waits for a key
-                    self.serial.write(b"\r\x01")
-                    again = time.monotonic() + RETRY_CTRL_A_S
+            self._read_banner(retry=True)
+
+    def _read_banner(self, retry: bool) -> bool:
+        """Read up to the raw REPL's banner (under the running deadline) and
+        leave its ">" for exec_raw, as mpremote does; True when texel.app.serve()
+        answered it (SERVE_MARK before it: it takes the standard raw mode only).
+        Output still in flight (a program that printed until Ctrl-C) is read in
+        bulk, but never the last len(banner) + 1 bytes waiting: the banner and
+        its ">" are the last the board sends. retry: Ctrl-A again after
+        RETRY_CTRL_A_S of quiet - CircuitPython throws its console input away
+        at a Ctrl-C (the Ctrl-A behind it may be gone) and code.py's end waits
+        for a key."""
+        keep = len(self.RAW_PROMPT) + 1
+        tail = len(SERVE_MARK) + len(self.RAW_PROMPT)
+        data = b""
+        again = time.monotonic() + RETRY_CTRL_A_S
+        while not data.endswith(self.RAW_PROMPT):
+            n = self.serial.in_waiting        # raises at the deadline
+            new = self.serial.read(n - keep if n > keep else 1)
+            if new:
+                data = (data + new)[-tail:]
+                again = time.monotonic() + RETRY_CTRL_A_S
+            elif retry and time.monotonic() > again:
+                self.serial.write(b"\r\x01")
+                again = time.monotonic() + RETRY_CTRL_A_S
         self.in_raw_repl = True
         self.serve_banner = data.endswith(SERVE_MARK + self.RAW_PROMPT)
         if self.serve_banner:
-            self.use_raw_paste = False      # serve answers the standard raw mode only
+            self.use_raw_paste = False
+        return self.serve_banner
 
     serve_banner = False        # the last banner came from texel.app.serve() (SERVE_MARK)
 
@@ -294,26 +301,14 @@ class _Transport(SerialTransport):
         the raw REPL does; a Ctrl-C would stop its display). Returns "serve",
         "raw", or None when no banner came within `seconds` (a program runs:
         enter_raw_repl's Ctrl-C is for that). Never a soft reset."""
-        tail = len(SERVE_MARK) + len(self.RAW_PROMPT)
-        data = b""
         try:
             with self.deadline(seconds):
                 # Ctrl-A alone: a friendly REPL acts on it only at an empty line, so a
                 # half-typed line is neither run nor lost (then no banner: the Ctrl-C path)
                 self.serial.write(b"\x01")
-                while not data.endswith(self.RAW_PROMPT):
-                    n = self.serial.in_waiting            # raises at the deadline
-                    keep = len(self.RAW_PROMPT) + 1       # the ">" stays for exec_raw
-                    new = self.serial.read(n - keep if n > keep else 1)
-                    if new:
-                        data = (data + new)[-tail:]
+                return "serve" if self._read_banner(retry=False) else "raw"
         except TransportError:
             return None
-        self.in_raw_repl = True
-        if data.endswith(SERVE_MARK + self.RAW_PROMPT):
-            self.use_raw_paste = False      # serve answers the standard raw mode only
-            return "serve"
-        return "raw"
 
     def read_until(self, min_num_bytes: int, ending: bytes, timeout: float | None = 10,
                    data_consumer: Any = None, timeout_overall: float | None = None) -> bytes:
