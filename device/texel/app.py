@@ -25,7 +25,6 @@ import gc
 import sys
 from . import __version__, compat
 from .protocol import PROTOCOL
-from .runtime import boards as _boards
 from .runtime import scene as _scene
 from .runtime.duty import DutyLaw
 from .runtime.refresh import Refresh
@@ -75,6 +74,8 @@ class _Runtime:
         self.started_us = 0         # ticks() at start
         self.ticks = None           # the clock (compat.ticks_us / ticks_diff)
         self.diff = None
+        self.pace_clock = None      # the paced loop's (runtime/pace.py)
+        self.pacer = None           # serve()'s schedule, while it serves
         self.last_push = None       # the last push's timings (status()["last_push"])
         self.tel_tail = 0           # telemetry read up to here
         self.pushes = 0
@@ -86,10 +87,32 @@ class _Runtime:
 _backend = compat.backend      # port -> its hardware class (compat.PORT_TABLE)
 
 
+def _boards():
+    # imported where used: a lean port forgets it after a start (_forget_builders)
+    from .runtime import boards
+    return boards
+
+
+# Where the code itself takes the heap (compat.LEAN: CircuitPython compiles
+# the sources into RAM), tidy() forgets the board files' checks after a start
+# (runtime.boards, 13 KB: only start() needs them; the next start imports them
+# again). No module a playing board keeps imports it at its top
+# (tests/runtime/test_lean.py).
+LEAN = compat.LEAN
+
+
+def _forget_builders():
+    """Forget the board files' checks (LEAN, above): True when they were loaded."""
+    if "texel.runtime.boards" not in sys.modules:
+        return False
+    compat.forget("texel.runtime.boards")
+    return True
+
+
 def _fits(board):
     """None when this board can run board file `board`, else why not: the
     firmware's port (runtime.boards.fits), then the backend's import."""
-    why = _boards.fits(board)
+    why = _boards().fits(board)
     if why is None:
         try:
             _backend(board["port"])
@@ -108,7 +131,7 @@ def _make_hw(board, opts):
 
 def fitting():
     """Names of the board files on this board that it can run."""
-    return _boards.fitting(_fits)
+    return _boards().fitting(_fits)
 
 
 def _reader(hw, i):
@@ -124,7 +147,7 @@ def _checked_board(board_name):
     plays."""
     playing = "; the display keeps playing" if _rt is not None else ""
     try:
-        board = _boards.load(board_name)
+        board = _boards().load(board_name)
     except ValueError as e:
         raise ValueError(str(e) + playing)
     if board["refresh"]["mode"] == "core1_viper":
@@ -169,7 +192,7 @@ def full_screen(texture):
     if _rt is not None:
         d = _rt.board["display"]
     else:
-        d = _boards.load(default_board())["display"]
+        d = _boards().load(default_board())["display"]
     return {"regions": [{"start_mm": 0, "end_mm": d["positions"] * d["dx_um"] / 1000.0,
                          "texture": texture}]}
 
@@ -268,12 +291,16 @@ def _start(board, canonical, realtime, fast, hw_opts):
             rt.mode = "viper" if callback is None else "viper-irq"
         else:
             rt.refresh = Refresh(rt.sensor, rt.law, hw.set_duty, ticks, diff, rt.period_us, idle,
-                                 getattr(hw, "cost_ticks", None))
+                                 getattr(hw, "cost_ticks", None), getattr(hw, "cost_every", 1))
             rt.mode = "python"
         if callback is None:
             callback = rt.refresh.step
         rt.started_us = ticks()
         rt.ticks = ticks
+        # the paced loop's clock (runtime/pace.py): the board's, else its ticks
+        # here, else compat's (milliseconds on CircuitPython)
+        rt.pace_clock = getattr(hw, "pace_clock", None) or (
+            (ticks, diff, compat.ticks_add, 1) if hasattr(hw, "ticks_us") else compat.PACE_CLOCK)
         rt.diff = diff
         rt.last_push = None
         rt.tel_tail = 0
@@ -348,12 +375,15 @@ def push(scene):
 
 def tidy():
     """Collect what the last push left (the old scene's buffers), if it
-    left anything: texel.wire.reply runs this after the host has its answer,
-    and status() collects anyway. Returns True when it collected."""
+    left anything, and forget what LEAN says (_forget_builders):
+    texel.wire.reply runs this after the host has its answer, and status()
+    collects anyway. Returns True when it collected."""
     rt = _rt
-    if rt is None or not rt.collect_due:
+    lean = LEAN and _forget_builders()
+    if not lean and (rt is None or not rt.collect_due):
         return False
-    rt.collect_due = False
+    if rt is not None:
+        rt.collect_due = False
     gc.collect()
     return True
 
@@ -372,6 +402,8 @@ def status(collect=True):
     if collect:
         if rt is not None:
             rt.collect_due = False
+        if LEAN:
+            _forget_builders()
         free = compat.heap_free()
     else:
         free = None
@@ -402,6 +434,11 @@ def status(collect=True):
         # up to 19,200 ints with every status call
         "scene": sc.describe() if sc is not None else None,
         "pushes": rt.pushes, "last_push": rt.last_push,
+        # the paced loop (CircuitPython): refreshes started more than a period
+        # late since serve() last (re)started its schedule; the refresh's body
+        # is timed once in timed_every refreshes (worst_us, overruns)
+        "late": rt.pacer.late if rt.pacer is not None else None,
+        "timed_every": getattr(r, "cost_every", 1),
         "loop": getattr(rt, "loop", None)})
     return st
 
@@ -457,46 +494,33 @@ def stop():
 
 def run_loop(seconds=None):
     """CircuitPython (no timer IRQ): a best-effort loop paced to the board's
-    refresh rate on the board's own microsecond ticks. Refresh k is due at
-    start + k*1e6//hz; when the loop falls behind it runs late refreshes back
-    to back (counted as overruns by the refresh when they take too long) and
-    measures the rate it really achieved: status()["rate_hz"] and the
-    "loop" entry. Runs until Ctrl-C, or for `seconds`."""
+    refresh rate on the board's own clock (runtime/pace.py; milliseconds on
+    CircuitPython). When the loop falls behind it runs the missed refreshes
+    back to back (late ones counted), and it measures the rate it really
+    achieved: status()["rate_hz"] and the "loop" entry. Runs until Ctrl-C, or
+    for `seconds`."""
+    from .runtime.pace import Pacer, clock_of
     rt = _running()
     step = rt.refresh.step
-    ticks, diff = rt.ticks, rt.diff
-    hz = rt.hz
-    t0 = ticks()
-    k = 0
-    secs = 0                        # whole seconds the schedule moved on
-    q, r = divmod(1000000, hz)
-    late = 0
-    limit = None if seconds is None else int(seconds * 1000000)
+    p = Pacer(rt.hz, clock_of(rt))
+    due = p.due
+    limit = None if seconds is None else int(seconds * p.per_s)
     try:
         while True:
-            if k >= hz:
-                # a second's refreshes done: move the schedule on a second, so the tick
-                # difference stays inside its wrap (2^29 us, ~9 minutes; texel/serve.py)
-                k -= hz
-                secs += 1
-                t0 = compat.ticks_add(t0, 1000000)
-            now = diff(ticks(), t0)
-            if limit is not None and secs * 1000000 + now >= limit:
-                break
-            due = k * q + (k * r) // hz
-            if now >= due:
-                if now - due > rt.period_us:
-                    late += 1
+            if due():
                 step()
-                k += 1
+                if p.k != 1:            # the time limit: checked while waiting and,
+                    continue            # for a loop that never waits, once a second
+            if limit is not None and p.elapsed() >= limit:
+                break
     except KeyboardInterrupt:
         pass
     finally:
         rt.hw.off()
-    el = secs + diff(ticks(), t0) / 1e6
-    n = secs * hz + k
+    el = p.elapsed() / p.per_s
+    n = p.refreshes()
     rt.loop = {"refreshes": n, "seconds": el, "rate_hz": int(n / el) if el > 0 else 0,
-               "late": late}
+               "late": p.late}
     return rt.loop
 
 

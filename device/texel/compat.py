@@ -30,20 +30,30 @@ except ImportError:
 #   rom        the texelpad firmware exists for it: package data and tables in its
 #              ROMFS partition (rom.py), read in place
 #   chip       what messages call it
+#   lean       its code takes the heap (CircuitPython compiles the sources into RAM; no
+#              ROM, no texelpad .mpy): app.tidy() forgets the board files' checks
+#              after a start (13 KB; the next start imports them again). Forgetting
+#              the generator after each push too would free 18 KB more, but every push
+#              compiled it again (+0.5 s) and soon found the heap too fragmented for
+#              its buffers (measured on the emulated Pico): not done.
+#   loop_hz    the most refreshes a second its paced loop ("loop" mode) can be
+#              asked for: 1000 where that loop is paced in milliseconds
+#              (PACE_CLOCK, CircuitPython), else None (runtime/boards.py's bound)
 # Everything else (which pins, which timer) is the board file's (runtime/boards.py).
 PORT_TABLE = {
     "rp2": {"platform": "rp2", "backend": ("rp2", "Hw"), "probe": "machine.freq", "arch": "armv6m",
             "board": "pico", "modes": ("timer_irq", "core1_viper", "loop"), "rom": True,
-            "chip": "an RP2040 (MicroPython rp2 port)"},
+            "chip": "an RP2040 (MicroPython rp2 port)", "loop_hz": None, "lean": False},
     "stm32": {"platform": "pyboard", "backend": ("stm32", "Hw"), "probe": "pyb",
               "arch": "armv7emsp", "board": "pyboard", "modes": ("timer_irq", "loop"),
-              "rom": False, "chip": "an STM32 (MicroPython stm32 port, sys.platform 'pyboard')"},
+              "rom": False, "chip": "an STM32 (MicroPython stm32 port, sys.platform 'pyboard')",
+              "loop_hz": None, "lean": False},
     "circuitpython": {"platform": None, "backend": ("cpy", "Hw"), "probe": "pwmio", "arch": None,
                       "board": "pico_cpy", "modes": ("loop",), "rom": False,
-                      "chip": "CircuitPython"},
+                      "chip": "CircuitPython", "loop_hz": 1000, "lean": True},
     "virtual": {"platform": None, "backend": ("virtual", "VirtualHw"), "probe": None,
                 "arch": "x64", "board": "virtual", "modes": ("stepped",), "rom": False,
-                "chip": "any firmware (the virtual board)"},
+                "chip": "any firmware (the virtual board)", "loop_hz": None, "lean": False},
 }
 PORTS = ("rp2", "stm32", "circuitpython", "virtual")     # PORT_TABLE's keys, in this order
 # sys.platform of the MicroPython unix port (where the virtual board runs): no
@@ -64,6 +74,20 @@ def port_of(impl, platform):
 
 
 PORT = port_of(IMPL, sys.platform)      # this interpreter's port, or None
+LEAN = PORT is not None and PORT_TABLE[PORT]["lean"]     # (its comment above)
+
+
+def forget(name):
+    """Drop module `name` from sys.modules and from its package, so that
+    once nothing else holds its functions the collector frees its code (a
+    lean port, PORT_TABLE); importing it again compiles it afresh."""
+    m = sys.modules.pop(name, None)
+    if m is None:
+        return
+    pkg, _, leaf = name.rpartition(".")
+    p = sys.modules.get(pkg)
+    if p is not None and getattr(p, leaf, None) is m:
+        delattr(p, leaf)
 
 
 def const_view(raw, typecode):
@@ -235,10 +259,15 @@ def fastest(name, viper_module, py_fn, engine=None):
 # has no ticks_us; it allocates bigints, so keep it out of IRQ code), so code
 # that measures intervals runs unchanged everywhere.
 TICKS_MASK = 0x3FFFFFFF
+_ms = None                              # CircuitPython's ms ticks (PACE_CLOCK)
 try:
     from time import ticks_us, ticks_diff, ticks_add
 except ImportError:
     import time as _time
+    try:
+        from supervisor import ticks_ms as _ms
+    except ImportError:
+        pass
     _ns = getattr(_time, "perf_counter_ns", None) or _time.monotonic_ns
 
     def ticks_us():
@@ -249,6 +278,25 @@ except ImportError:
 
     def ticks_add(a, b):
         return (a + b) & TICKS_MASK
+
+# The paced refresh loop's clock (runtime/pace.py): (ticks, diff, add,
+# microseconds a tick). The microsecond ticks above where they allocate
+# nothing; on CircuitPython they do (time.monotonic_ns: a bigint, 32 B a call
+# on the emulated Pico), and a loop that allocates stalls ~15 ms at every
+# garbage collection (bench/results/circuitpython.txt), so it is paced there on
+# supervisor.ticks_ms: a small int, 1 ms, wrapping at 2^29 ms.
+def ms_diff(a, b):
+    """supervisor.ticks_ms's difference a - b (it wraps at 2^29 ms)."""
+    return ((a - b + 0x10000000) & 0x1FFFFFFF) - 0x10000000
+
+
+def ms_add(a, b):
+    return (a + b) & 0x1FFFFFFF
+
+
+PACE_CLOCK = (ticks_us, ticks_diff, ticks_add, 1)
+if _ms is not None:
+    PACE_CLOCK = (_ms, ms_diff, ms_add, 1000)
 
 try:
     from array import array

@@ -35,6 +35,7 @@
 import gc
 import sys
 from . import compat
+from .runtime.pace import Pacer, clock_of
 
 MARK = "\x1etexel-serve\r\n"        # never in host code: its text is ASCII repr() literals
 BANNER = "raw REPL; CTRL-B to exit\r\n>"
@@ -157,8 +158,7 @@ def _grace(read):
 
 
 def _loop(current, read, buf, ns, data):
-    cur = step = None
-    k = t0 = hz = q = r = 0
+    cur = step = pacer = None
     since = 0
     while True:
         rt = current()
@@ -166,20 +166,11 @@ def _loop(current, read, buf, ns, data):
             cur = rt
             step = rt.refresh.step if rt is not None and rt.loop_mode else None
             if step is not None:
-                ticks, diff, hz = rt.ticks, rt.diff, rt.hz
-                q, r = divmod(1000000, hz)
-                t0 = ticks()
-                k = 0
+                pacer = Pacer(rt.hz, clock_of(rt))
+                rt.pacer = pacer    # its late count: status()["loop"]
         if step is not None and data is None:
-            if k >= hz:
-                # a second's refreshes done: the schedule moves on by a second, so the
-                # tick difference stays far inside its wrap (2^29 us, ~9 minutes) and
-                # k * q small (no bigints)
-                k -= hz
-                t0 = compat.ticks_add(t0, 1000000)
-            if diff(ticks(), t0) >= k * q + (k * r) // hz:
+            if pacer.due():
                 step()
-                k += 1
                 since += 1
                 if since < POLL_EVERY:
                     continue
@@ -207,5 +198,4 @@ def _loop(current, read, buf, ns, data):
                 code = None
         data = None
         if ran and step is not None and current() is cur:
-            t0 = ticks()            # the request took the time: no catching up
-            k = 0
+            pacer.restart()         # the request took the time: no catching up

@@ -201,8 +201,21 @@ def test_defaults_filled_in():
              "carrier": {"drive": "single", "pins": pins, "pwm": pwm},
              "sensor": {"kind": "adc_linear", "pins": spins}}
         b = boards.validate(d, "m.json")
-        assert b["refresh"] == {"hz": 8333, "mode": mode}        # optional keys stay out
+        # optional keys stay out; a millisecond-paced loop defaults to its most
+        hz = 1000 if port == "circuitpython" else 8333
+        assert b["refresh"] == {"hz": hz, "mode": mode}
         assert b["carrier"]["pwm"] == pwm and "deadtime_ns" not in b["carrier"]
+
+
+def test_a_millisecond_paced_loop_is_asked_no_more_than_it_can_pace():
+    d = _raw("pico_cpy")
+    d["refresh"]["hz"] = 1001
+    with pytest.raises(ValueError, match=r"refresh.hz: 1001 Hz: a paced loop on port "
+                                         r"'circuitpython' refreshes at most 1000 times"):
+        boards.validate(d, "pico_cpy.json")
+    d = _raw("pico")                    # a loop paced in microseconds: no such bound
+    d["refresh"] = {"hz": 5000, "mode": "loop"}
+    assert boards.validate(d, "pico.json")["refresh"]["hz"] == 5000
 
 
 def test_accepted_variants():

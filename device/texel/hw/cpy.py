@@ -28,7 +28,6 @@ import pwmio
 import analogio
 import board as _pins
 
-from ..compat import ticks_us, ticks_diff
 
 
 def _pin(p):
@@ -101,10 +100,11 @@ class Hw:
         s = board.get("sensor", {})
         self._adc = tuple(_claim(("adc", p), lambda p=p: analogio.AnalogIn(_pin(p)))
                           for p in s.get("pins", ()))
-        # CircuitPython has no time.ticks_us: compat's wraps monotonic_ns
-        # (allocates bigints; fine in the paced loop, which runs no IRQ code)
-        self.ticks_us = ticks_us
-        self.ticks_diff = ticks_diff
+
+    # CircuitPython's microsecond clock allocates (compat.PACE_CLOCK): the
+    # refresh times its body once in cost_every refreshes (Refresh.cost_every),
+    # about once a second at 1000 Hz, so the paced loop seldom collects garbage
+    cost_every = 1024
 
     def set_duty(self, counts):
         # counts: compare value 0..max_counts (clamped); small ints only

@@ -545,8 +545,10 @@ def _sensor(c, b, port, carrier_pins):
 
 def _refresh(c, b, port, freq):
     """b["refresh"] checked and made canonical (freq: the carrier's, Hz)."""
+    # the default rate: 8333 Hz, or the most a port's millisecond-paced loop runs
+    hz = PORT_TABLE[port]["loop_hz"] or REFRESH_KEYS[0][2]
     r = _section(c, "refresh", b["refresh"],
-                 (REFRESH_KEYS[0], ("mode", "s", DEFAULT_MODE[port]), REFRESH_KEYS[2]))
+                 (("hz", "i", hz), ("mode", "s", DEFAULT_MODE[port]), REFRESH_KEYS[2]))
     b["refresh"] = r
     _range(c, "refresh.hz", r["hz"], REFRESH_HZ_MIN, REFRESH_HZ_MAX, " Hz")
     if r["hz"] > freq:
@@ -556,6 +558,11 @@ def _refresh(c, b, port, freq):
     if r["mode"] not in PORT_MODES[port]:
         fail(c + "refresh.mode", "%r is not available on port %r (use %s)"
                  % (r["mode"], port, ", ".join(PORT_MODES[port])))
+    most = PORT_TABLE[port]["loop_hz"]
+    if r["mode"] == "loop" and most is not None and r["hz"] > most:
+        # its paced loop counts milliseconds (compat.PACE_CLOCK)
+        fail(c + "refresh.hz", "%d Hz: a paced loop on port %r refreshes at most %d times a "
+                               "second (its clock counts milliseconds)" % (r["hz"], port, most))
     if "timer" in r:
         if port != "stm32":
             fail(c + "refresh.timer", "only stm32 boards choose the refresh timer (pyb.Timer id)")

@@ -215,6 +215,10 @@ def format_status(st: dict[str, Any]) -> str:
                 st["amplitude"], st["duty"]),
              "free memory %s bytes; %s" % (st.get("mem_free"), fw),
              "scene (%s pushes):" % st.get("pushes"), describe_scene(st.get("scene"))]
+    if st.get("late") is not None:
+        # CircuitPython's paced loop (docs/runtime.md, "CircuitPython: serve")
+        lines.insert(1, "paced loop: %s refreshes started late; the refresh timed once in %s"
+                     % (st["late"], st.get("timed_every", 1)))
     return "\n".join(lines)
 
 

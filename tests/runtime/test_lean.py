@@ -1,0 +1,149 @@
+"""A lean port (compat.PORT_TABLE "lean": CircuitPython, which compiles the
+sources into its heap): app.tidy() forgets the board files' checks
+(texel.runtime.boards) after a start, so their code is freed while the display
+plays; the next start imports them again. Checked on CPython (the code really becomes garbage) and on the
+real CircuitPython unix build (the heap it frees); the figures on the chip:
+bench/results/circuitpython.txt."""
+from __future__ import annotations
+
+import ast
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from texel import compat
+from texelpad import toolchain
+
+from support import mpy
+
+ROOT = Path(__file__).resolve().parents[2]
+DEVICE = ROOT / "device" / "texel"
+TEXEL = {"kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7, "v": 2}
+
+
+def _top_imports(path: Path) -> set[str]:
+    """Modules a device file imports at its top level (run at import)."""
+    rel = path.relative_to(DEVICE.parent).with_suffix("")
+    pkg = list(rel.parts)[:-1]          # a module's package; an __init__'s own
+    out = set()
+    tree = ast.parse(path.read_text())
+    for node in tree.body:
+        nodes = [node]
+        if isinstance(node, ast.Try):
+            nodes = node.body + [n for h in node.handlers for n in h.body]
+        for n in nodes:
+            if isinstance(n, ast.ImportFrom):
+                base = pkg[:len(pkg) - (n.level - 1)] if n.level else []
+                mod = ".".join(base + ([n.module] if n.module else []))
+                out.add(mod)
+                out.update(mod + "." + a.name for a in n.names)
+            elif isinstance(n, ast.Import):
+                out.update(a.name for a in n.names)
+    return out
+
+
+def test_no_module_imports_the_board_checks_at_its_top():
+    # else forgetting them would free nothing (and a second import would hold them twice)
+    users = sorted(str(p.relative_to(DEVICE)) for p in DEVICE.rglob("*.py")
+                   if "texel.runtime.boards" in _top_imports(p))
+    assert users == []
+
+
+CPYTHON_SCRIPT = r"""
+import gc, json, sys, weakref
+sys.path.insert(0, %(device)r)
+import texel.app as app
+app.LEAN = True
+out = {}
+app.start("virtual", app.full_screen(%(tex)r), report=False)
+boards = sys.modules["texel.runtime.boards"]
+code = weakref.ref(boards.validate)         # a function of the module: its code
+del boards
+out["tidied"] = app.tidy()
+gc.collect()
+out["gone"] = ["texel.runtime.boards" not in sys.modules,
+               not hasattr(sys.modules["texel.runtime"], "boards"), code() is None]
+st = app.push(app.full_screen(dict(%(tex)r, seed=8)))
+out["pushed"] = st["scene"]["regions"][0]["seed"]
+app.tidy()
+out["after_push"] = "texel.runtime.boards" in sys.modules
+out["running"] = app.status()["running"]
+app.stop()
+app.start("virtual", app.full_screen(%(tex)r), report=False)     # imported again
+out["again"] = app.status()["board"]
+app.stop()
+print(json.dumps(out))
+"""
+
+
+def test_tidy_forgets_the_board_checks_after_a_start_and_they_come_back():
+    # a fresh interpreter: in the test process other modules hold texel.runtime.boards
+    p = subprocess.run([sys.executable, "-c", CPYTHON_SCRIPT % {"device": str(DEVICE.parent),
+                                                                 "tex": TEXEL}],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    out = json.loads(p.stdout.strip().splitlines()[-1])
+    assert out["tidied"] is True
+    assert out["gone"] == [True, True, True]    # nothing held its code: freed
+    assert out["pushed"] == 8
+    assert out["after_push"] is False           # a push does not need them
+    assert out["running"] is True and out["again"] == "virtual"
+
+
+def test_a_port_that_is_not_lean_keeps_them(monkeypatch):
+    import texel.app as app
+    monkeypatch.setattr(app, "LEAN", False)
+    app.start("virtual", app.full_screen(TEXEL), report=False)
+    try:
+        app.tidy()
+        assert "texel.runtime.boards" in sys.modules
+    finally:
+        app.stop()
+
+
+def test_the_port_table_says_which_ports_are_lean():
+    assert {p: r["lean"] for p, r in compat.PORT_TABLE.items()} == {
+        "rp2": False, "stm32": False, "circuitpython": True, "virtual": False}
+    assert compat.LEAN is False                 # CPython: a development host
+
+
+CPY_SCRIPT = r"""
+import gc, sys, json
+import texel.app as app
+from texel import compat
+out = {"lean": compat.LEAN}
+app.start("pico_cpy", app.full_screen(%(tex)r), report=False)
+gc.collect()
+out["started"] = gc.mem_free()
+out["loaded"] = "texel.runtime.boards" in sys.modules
+out["tidied"] = app.tidy()
+gc.collect()
+out["after"] = gc.mem_free()
+out["gone"] = "texel.runtime.boards" not in sys.modules
+st = app.push(app.full_screen(dict(%(tex)r, seed=8)))
+out["pushed"] = st["scene"]["regions"][0]["seed"]
+app.stop()
+app.start("pico_cpy", app.full_screen(%(tex)r), report=False)
+out["again"] = app.status()["running"]
+app.stop()
+print(json.dumps(out))
+"""
+
+
+@pytest.mark.instruments
+def test_circuitpython_frees_the_board_checks_heap():
+    exe = toolchain.interpreter("circuitpython")
+    if exe is None:
+        pytest.skip("CircuitPython is not on this machine (../shared/instruments)")
+    out = mpy.run_json(CPY_SCRIPT % {"tex": TEXEL}, exe=exe, extra_path=mpy.FAKES,
+                       heapsize="4M", timeout=300)
+    assert out["lean"] is True and out["loaded"] is True
+    assert out["tidied"] is True and out["gone"] is True
+    # the board checks' compiled code, freed (13 KB on the emulated Pico)
+    assert out["after"] - out["started"] >= 8000, out
+    print("\nCircuitPython (unix build): %d B free started, %d B after tidy()"
+          % (out["started"], out["after"]))
+    assert out["pushed"] == 8 and out["again"] is True
