@@ -332,9 +332,12 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
         from ..compat import memory_words
         block = _biggest_block(c, spans, engine)
         raise ValueError("scene: out of memory while building (needs %d bytes: %d of sample "
-                         "buffers and plans + %d of region table; %s%s)"
+                         "buffers and plans + %d of region table; %s%s)%s"
                          % (need, nbuf, ntab, memory_words(block, nbuf) or "the heap is full",
-                            ", and a region needs one block of %d" % block if block else ""))
+                            ", and a region needs one block of %d" % block if block else "",
+                            "" if reuse is None else
+                            "; the scene playing (%d bytes) plays on: to make room, push a "
+                            "small scene first (texelpad push --constant 0)" % reuse.nbytes))
     return sc
 
 

@@ -339,8 +339,9 @@ def _demo_title(fig: Any, title: str, out: dict, dx_um: float) -> None:
     if finger is not None:
         summary.append(finger)
     import textwrap
-    fig.suptitle(textwrap.fill(title or "texelpad demo", 130) + "\n" + "; ".join(summary[:2])
-                 + ("\n" + summary[2] if len(summary) > 2 else ""))
+    # every line wrapped to the figure's width (a long played-words line was cut at both edges)
+    fig.suptitle("\n".join(textwrap.fill(line, 130) for line in
+                           [title or "texelpad demo", "; ".join(summary[:2])] + summary[2:3]))
 
 
 def _demo_map(ax_map: Any, d: _Demo) -> None:
