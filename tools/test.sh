@@ -42,6 +42,8 @@ if [ "$unit" = 0 ]; then
     .venv/bin/python -m mypy --no-error-summary               # host/texelpad ([tool.mypy] files)
     .venv/bin/python -m mypy --no-error-summary bench         # the research benchmarks, on their own
 fi
+# the full run lists its slowest tests: where CI's minutes go (its aim: 25 on 2 cores)
+if [ "$unit" = 0 ] && [ "$#" = 0 ]; then args+=(--durations=25); fi
 workers="${TEXELPAD_TEST_WORKERS:-2}"
 xdist=()
 if [ "$workers" != 0 ]; then xdist=(-n "$workers" --dist loadfile); fi

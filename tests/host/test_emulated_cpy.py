@@ -9,6 +9,8 @@ was released) and the next start plays. And the plain `mpremote connect PORT exe
 No timing asserted; wall times printed."""
 from __future__ import annotations
 
+import hashlib
+import json
 import random
 import re
 import shutil
@@ -128,6 +130,7 @@ def test_circuitpython_survives_ctrl_c_and_soft_reloads(tmp_path, capsys):
 # The finger: a slow sweep from t = 0 (12-bit ADC counts; AnalogIn.value = raw << 4 | raw >> 8)
 FINGER_JS = "(ch, t) => ch === 0 ? 600 + Math.floor((t * 700) % 3000) : 0"
 TEXEL = ("--pitch-db", "6.3", "--irregularity-db", "-12.9", "--seed", "7")
+V2_MAP = {"pitch_db": 13.0, "irregularity_db": -10.0, "seed": 3, "v": 2, "length_samples": 9600}
 
 
 def _ticks_and_refreshes(b) -> tuple[int, int]:
@@ -144,10 +147,13 @@ def test_texelpad_cli_plays_on_circuitpython_between_commands(tmp_path, capsys):
     the scene's at that position; a refused push changes nothing; the carrier is pwmio's
     TOP 3675 (34,004 Hz, on the pin probe too); a plain mpremote exec stops the display
     cleanly and the next push starts it again; a soft reload (Ctrl-D at the friendly
-    REPL) runs the power-up script again, which plays and serves. The drive holds what
+    REPL) runs the power-up script again, which plays and serves; scene pull saves what
+    plays, demo --port plays the split screen and draws the swept finger's telemetry, and
+    the int engine's format-2 map hashes as CPython's (issue 35 item 4). The drive holds what
     `texelpad firmware --circuitpython` zips for makers (item 5), unzipped as they would:
     its code.py starts the power-up scene at boot and serves."""
     import zipfile
+    import texel
     import texelpad
     from support.cli import run_cli
     from texel.runtime import scene as S
@@ -223,6 +229,8 @@ def test_texelpad_cli_plays_on_circuitpython_between_commands(tmp_path, capsys):
         assert code == 0, err
         assert out.startswith("board pico_cpy (circuitpython), refresh python at 1000 Hz"), out
         assert "carrier 34004 Hz (PWM top 3675)" in out, out
+        assert re.search(r"\npaced loop: \d+ refreshes started late; the refresh timed once "
+                         r"in 1024\n", out), out
         say("status (a new link: the board was serving)", t0)
         with texelpad.connect(port, timeout=60) as b:
             assert b.link.serving                       # knocked, no Ctrl-C
@@ -248,6 +256,23 @@ def test_texelpad_cli_plays_on_circuitpython_between_commands(tmp_path, capsys):
             st2 = b.status()
         assert st2["running"] and st2["refreshes"] > st["refreshes"]
         assert st2["scene"] == st["scene"] and st2["pushes"] == st["pushes"]
+        # scene pull: the file holds what plays
+        pulled = tmp_path / "pulled.json"
+        code, out, err = run_cli(capsys, "scene", "pull", "--port", port, "--timeout", "60",
+                                 str(pulled))
+        assert code == 0 and "saved the scene playing" in out, out + err
+        assert json.loads(pulled.read_text()) == source
+        # demo --port: the study's split screen pushed, the swept finger's telemetry drawn
+        t0 = time.monotonic()
+        png = tmp_path / "demo.png"
+        code, out, err = run_cli(capsys, "demo", "--port", port, "--timeout", "120",
+                                 "--seconds", "1", "--out", str(png))
+        assert code == 0, err
+        m = re.search(r"played on \S+ \(pico_cpy\): (\d+) telemetry samples \((\d+) lost\), "
+                      r"(\d+) with the finger down", out)
+        assert m and int(m.group(1)) > 20 and int(m.group(3)) > 20, out
+        assert png.stat().st_size > 50_000 and "0 faults" in out, out
+        say("demo --port (the split screen, 1 s of telemetry, the figure)", t0)
         # a teacher's plain mpremote exec: its Ctrl-C stops the display, cleanly
         t0 = time.monotonic()
         mp = str(Path(sys.executable).with_name("mpremote"))
@@ -257,6 +282,16 @@ def test_texelpad_cli_plays_on_circuitpython_between_commands(tmp_path, capsys):
         say("plain mpremote exec", t0)
         code, out, err = run_cli(capsys, "status", "--port", port, "--timeout", "60")
         assert code == 0 and out.startswith("texelpad is not running"), out + err
+        # format 2 on the chip: the int engine's samples, bit for bit CPython's
+        t0 = time.monotonic()
+        with texelpad.connect(port, timeout=120) as b:
+            board_hash = b.link.eval(
+                "import texel, hashlib\n_m = texel.render_u16(%r, engine='int')\n"
+                "print(repr(hashlib.new('sha256', _m).digest().hex()))\n_m = None" % (V2_MAP,),
+                timeout=120)
+        host = texel.render_u16(V2_MAP, engine="int")
+        assert board_hash == hashlib.sha256(bytes(host)).hexdigest()
+        say("format-2 map (9,600 samples, int engine): the same sha256 as CPython", t0)
         # Ctrl-D at the friendly REPL: a soft reload runs /main.py, which plays and serves
         t0 = time.monotonic()
         r = Raw(port, _Emu(proc))
