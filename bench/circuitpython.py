@@ -142,11 +142,17 @@ def rate(hz, serving, seconds=SECONDS):
     return end[0]
 
 res["timed_every"] = a._rt.refresh.cost_every
+import texel.serve, texel.runtime.pace     # compiled before the clock runs, not in the first row
 rows = []
 for hz in RATES:
     rows.append(rate(hz, False))
     rows.append(rate(hz, True))
 rows.append(rate(RATES[0], True, LONG))
+a.stream(125)                       # telemetry on (texelpad demo --port): its stamps allocate
+row = rate(RATES[0], True)
+row[1] = "serve+telemetry"
+rows.append(row)
+a.stream(0)
 res["rates"] = rows
 a.stop()
 print("RESULT " + repr(res))
@@ -210,7 +216,7 @@ GOALS = {"push_ms": 200.0,          # a format-2 full-screen texel, call -> retu
 
 def _goals(res: dict[str, Any]) -> list[str]:
     push = max(us for us, _ in res["pushes"]) / 1000
-    long = res["rates"][-1]
+    long = [r for r in res["rates"] if r[1] == "serve"][-1]
     hz = long[2] * 1e6 / long[3]
     rows = [("format-2 full-screen push", "<= %.0f ms" % GOALS["push_ms"], "%.1f ms" % push,
              push <= GOALS["push_ms"]),
@@ -255,10 +261,10 @@ def report(res: dict[str, Any]) -> str:
     out.append("")
     out.append("paced refresh with a moving finger (the loop's clock: ms; a refresh's body "
                "timed 1 in %d):" % res.get("timed_every", 1))
-    out.append("%8s %6s %5s %10s %6s %9s %9s %12s" % ("asked", "loop", "s", "reached", "late",
+    out.append("%8s %15s %5s %10s %6s %9s %9s %12s" % ("asked", "loop", "s", "reached", "late",
                                                       "overruns", "worst us", "heap used B"))
     for hz, how, n, us, over, worst, late, used in res["rates"]:
-        out.append("%8d %6s %5.0f %7.0f Hz %6d %9d %9d %12d"
+        out.append("%8d %15s %5.0f %7.0f Hz %6d %9d %9d %12d"
                    % (hz, how, us / 1e6, n * 1e6 / us, late, over, worst, used))
     out.append("(late: refreshes started more than a period after due - a garbage collection "
                "stalls ~15 ms; heap used: what the loop allocated, net)")

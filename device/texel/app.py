@@ -268,33 +268,7 @@ def _start(board, canonical, realtime, fast, hw_opts):
             ticks, diff = hw.ticks_us, hw.ticks_diff
         else:
             ticks, diff = compat.ticks_us, compat.ticks_diff
-        idle = board["carrier"].get("idle_amplitude", 0)
-        if fast is None:
-            fast = compat.HAS_VIPER and s["kind"] == "adc_linear"
-        callback = None
-        if fast:
-            try:
-                from .runtime.refresh_fast import FastRefresh, irq_rp2, _engine
-                # the refresh's machine code: the C core's, else the viper core (a
-                # port without a native emitter cannot compile it)
-                _engine()
-            except (ImportError, SyntaxError):
-                fast = False
-        if fast:
-            rt.refresh = FastRefresh(rt.sensor, rt.law, hw.set_duty, reads[0], ticks, diff,
-                                     rt.period_us, idle, getattr(hw, "cost_ticks", None))
-            rt.refresh.threaded = realtime and hasattr(hw, "run_realtime")
-            regs = hw.direct_registers() if hasattr(hw, "direct_registers") else None
-            if regs is not None:
-                rt.refresh.use_rp2_registers(regs[0], regs[1], int(s["pins"][0]) - 26)
-                callback = irq_rp2
-            rt.mode = "viper" if callback is None else "viper-irq"
-        else:
-            rt.refresh = Refresh(rt.sensor, rt.law, hw.set_duty, ticks, diff, rt.period_us, idle,
-                                 getattr(hw, "cost_ticks", None), getattr(hw, "cost_every", 1))
-            rt.mode = "python"
-        if callback is None:
-            callback = rt.refresh.step
+        callback = _make_refresh(rt, board, reads, ticks, diff, fast, realtime)
         rt.started_us = ticks()
         rt.ticks = ticks
         # the paced loop's clock (runtime/pace.py): the board's, else its ticks
@@ -328,6 +302,39 @@ def _start(board, canonical, realtime, fast, hw_opts):
             hw.off()
             _rt = None
         raise
+
+
+def _make_refresh(rt, board, reads, ticks, diff, fast, realtime):
+    """rt.refresh and rt.mode for the board: the fused refresh (viper or the C
+    core's) where it runs, else the Python one. Returns what the timer calls."""
+    hw = rt.hw
+    s = board["sensor"]
+    idle = board["carrier"].get("idle_amplitude", 0)
+    if fast is None:
+        fast = compat.HAS_VIPER and s["kind"] == "adc_linear"
+    callback = None
+    if fast:
+        try:
+            from .runtime.refresh_fast import FastRefresh, irq_rp2, _engine
+            # the refresh's machine code: the C core's, else the viper core (a
+            # port without a native emitter cannot compile it)
+            _engine()
+        except (ImportError, SyntaxError):
+            fast = False
+    if fast:
+        rt.refresh = FastRefresh(rt.sensor, rt.law, hw.set_duty, reads[0], ticks, diff,
+                                 rt.period_us, idle, getattr(hw, "cost_ticks", None))
+        rt.refresh.threaded = realtime and hasattr(hw, "run_realtime")
+        regs = hw.direct_registers() if hasattr(hw, "direct_registers") else None
+        if regs is not None:
+            rt.refresh.use_rp2_registers(regs[0], regs[1], int(s["pins"][0]) - 26)
+            callback = irq_rp2
+        rt.mode = "viper" if callback is None else "viper-irq"
+    else:
+        rt.refresh = Refresh(rt.sensor, rt.law, hw.set_duty, ticks, diff, rt.period_us, idle,
+                             getattr(hw, "cost_ticks", None), getattr(hw, "cost_every", 1))
+        rt.mode = "python"
+    return rt.refresh.step if callback is None else callback
 
 
 def _install(canonical, validate_us=0, checked=None):
@@ -435,8 +442,9 @@ def status(collect=True):
         "scene": sc.describe() if sc is not None else None,
         "pushes": rt.pushes, "last_push": rt.last_push,
         # the paced loop (CircuitPython): refreshes started more than a period
-        # late since serve() last (re)started its schedule; the refresh's body
-        # is timed once in timed_every refreshes (worst_us, overruns)
+        # late since serve began pacing this display (its start, or serve
+        # entered); the refresh's body is timed once in timed_every refreshes
+        # (worst_us, overruns)
         "late": rt.pacer.late if rt.pacer is not None else None,
         "timed_every": getattr(r, "cost_every", 1),
         "loop": getattr(rt, "loop", None)})
@@ -509,8 +517,8 @@ def run_loop(seconds=None):
         while True:
             if due():
                 step()
-                if p.k != 1:            # the time limit: checked while waiting and,
-                    continue            # for a loop that never waits, once a second
+                if p.k & 31 != 1:       # the time limit: checked while waiting and, for
+                    continue            # a loop that never waits, every 32 refreshes
             if limit is not None and p.elapsed() >= limit:
                 break
     except KeyboardInterrupt:

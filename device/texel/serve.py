@@ -167,7 +167,7 @@ def _loop(current, read, buf, ns, data):
             step = rt.refresh.step if rt is not None and rt.loop_mode else None
             if step is not None:
                 pacer = Pacer(rt.hz, clock_of(rt))
-                rt.pacer = pacer    # its late count: status()["loop"]
+                rt.pacer = pacer    # its late count: status()["late"]
         if step is not None and data is None:
             if pacer.due():
                 step()

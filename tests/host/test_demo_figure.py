@@ -164,6 +164,8 @@ def test_title_uses_the_words(tmp_path, monkeypatch):
     truth[truth[:, 1] >= 0, 1] += 4
     demo_figure(tmp_path / "t.png", SPLIT, tel, truth=truth, title="split")
     (title,) = titles
+    assert all(len(line) <= 130 for line in title.splitlines())    # wrapped to the figure
+    title = " ".join(title.split())
     assert "200 telemetry samples, 180 with the finger down; the board's played friction " \
            "differed from the map by at most 7 steps of 65,535 at 1 of 180 samples" in title
     assert "the board sensed the finger at most 4 positions (21.2 \u00b5m) from where it truly was" \

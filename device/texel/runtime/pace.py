@@ -14,7 +14,8 @@
 # virtual board's stepped one). On CircuitPython it counts milliseconds
 # (supervisor.ticks_ms): its microsecond clock allocates (compat.py says why),
 # and a paced loop that allocates stalls ~15 ms at every garbage collection.
-# So a loop paced there runs at most 1000 Hz (runtime/boards.py LOOP_HZ_MAX).
+# So a loop paced there runs at most 1000 Hz (compat.PORT_TABLE loop_hz, which
+# runtime/boards.py checks).
 from ..compat import ticks_add
 
 

@@ -335,7 +335,7 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
                          "buffers and plans + %d of region table; %s%s)%s"
                          % (need, nbuf, ntab, memory_words(block, nbuf) or "the heap is full",
                             ", and a region needs one block of %d" % block if block else "",
-                            "" if reuse is None else
+                            "" if reuse is None or reuse.nbytes < 1024 else
                             "; the scene playing (%d bytes) plays on: to make room, push a "
                             "small scene first (texelpad push --constant 0)" % reuse.nbytes))
     return sc
