@@ -74,7 +74,7 @@ class _Runtime:
         self.started_us = 0         # ticks() at start
         self.ticks = None           # the clock (compat.ticks_us / ticks_diff)
         self.diff = None
-        self.pace_clock = None      # the paced loop's (runtime/pace.py)
+        self.pace_clock = None      # the paced loop's clock, None: ticks (runtime/pace.py)
         self.pacer = None           # serve()'s schedule, while it serves
         self.last_push = None       # the last push's timings (status()["last_push"])
         self.tel_tail = 0           # telemetry read up to here
@@ -271,10 +271,10 @@ def _start(board, canonical, realtime, fast, hw_opts):
         callback = _make_refresh(rt, board, reads, ticks, diff, fast, realtime)
         rt.started_us = ticks()
         rt.ticks = ticks
-        # the paced loop's clock (runtime/pace.py): the board's, else its ticks
-        # here, else compat's (milliseconds on CircuitPython)
-        rt.pace_clock = getattr(hw, "pace_clock", None) or (
-            (ticks, diff, compat.ticks_add, 1) if hasattr(hw, "ticks_us") else compat.PACE_CLOCK)
+        # the paced loop's clock (runtime/pace.py clock_of): a board with a clock of
+        # its own (the virtual board's stepped one) paces on its ticks (None),
+        # the others on compat's (milliseconds on CircuitPython)
+        rt.pace_clock = None if hasattr(hw, "ticks_us") else compat.PACE_CLOCK
         rt.diff = diff
         rt.last_push = None
         rt.tel_tail = 0
