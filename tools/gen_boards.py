@@ -3,7 +3,7 @@
 one source: `texelpad firmware` builds from the folder), into the device
 package as device/texel/boards.d/NAME.json, byte for byte, so an installed
 texelpad (a wheel, which has no boards/) deploys it. The package's other
-board files (pico_cpy, pyboard, virtual: no firmware folder) have no second
+board files (pico_cpy, virtual: no firmware folder) have no second
 copy. tests/host/test_port_table.py fails while a copy differs:
 
     python tools/gen_boards.py            # after editing boards/*/board.json

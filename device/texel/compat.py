@@ -46,7 +46,7 @@ PORT_TABLE = {
             "chip": "an RP2040 (MicroPython rp2 port)", "loop_hz": None, "lean": False},
     "stm32": {"platform": "pyboard", "backend": ("stm32", "Hw"), "probe": "pyb",
               "arch": "armv7emsp", "board": "pyboard", "modes": ("timer_irq", "loop"),
-              "rom": False, "chip": "an STM32 (MicroPython stm32 port, sys.platform 'pyboard')",
+              "rom": True, "chip": "an STM32 (MicroPython stm32 port, sys.platform 'pyboard')",
               "loop_hz": None, "lean": False},
     "circuitpython": {"platform": None, "backend": ("cpy", "Hw"), "probe": "pwmio", "arch": None,
                       "board": "pico_cpy", "modes": ("loop",), "rom": False,

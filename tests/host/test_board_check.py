@@ -179,8 +179,9 @@ def test_stm32_timer_and_adc_pins():
     assert len(msgs) == 2 and "is pin PC6, also carrier.pins[0]" in msgs[0], msgs
 
 
-def test_texelpad_firmware_runs_rp2_only():
-    (path, msg), = _errors(_load("pyboard"), "texelpad")
+def test_texelpad_firmware_runs_rp2_and_stm32_only():
+    assert _errors(_load("pyboard"), "texelpad") == []          # boards/pyboard (issue 34)
+    (path, msg), = _errors(_load("pico_cpy"), "texelpad")
     assert path == "port" and "--firmware stock" in msg
 
 

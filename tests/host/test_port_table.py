@@ -82,7 +82,7 @@ def test_main_py_asks_the_table():
 
 def test_every_board_file_has_one_source():
     c = gen_boards.copies()
-    assert sorted(p.name for p in c) == ["pico.json", "pico_bridge.json"]
+    assert sorted(p.name for p in c) == ["pico.json", "pico_bridge.json", "pyboard.json"]
     for path, data in c.items():
         assert path.read_bytes() == data, "%s differs from boards/: python tools/gen_boards.py" % path
     folders = {p.stem for p in c}

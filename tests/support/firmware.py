@@ -17,12 +17,17 @@ import pytest
 from texelpad.image import cache_root
 
 
-def why_not_build() -> str | None:
+def why_not_build(port: str = "rp2") -> str | None:
     from texelpad import toolchain
     d = toolchain.instruments_dir()
-    if d is None or not (d / "mpfirmware" / "build.sh").is_file():
+    if port == "stm32":
+        from texelpad.firmware.build_stm32 import kit_sources
+        if kit_sources() is None:
+            return "no stm32 MicroPython sources (../shared/instruments/stm32emu/micropython/src)"
+    elif d is None or not (d / "mpfirmware" / "build.sh").is_file():
         return "no firmware kit (../shared/instruments/mpfirmware)"
-    for t in ("arm-none-eabi-gcc", "cmake", "make"):
+    for t in (("arm-none-eabi-gcc", "make") if port == "stm32" else
+              ("arm-none-eabi-gcc", "cmake", "make")):
         if not shutil.which(t):
             return ("%s not installed (Debian: gcc-arm-none-eabi libnewlib-arm-none-eabi cmake)"
                     % t)
@@ -42,13 +47,15 @@ def build_dir(board: str) -> Path:
 _built: dict[str, object] = {}
 
 
-def built(board: str = "pico"):
-    """texelpad.firmware.build.Built for boards/<board>, built once per session."""
-    if board not in _built:
-        why = why_not_build()
+def built(board: str = "pico", qemu: bool = False):
+    """texelpad.firmware.build.Built for boards/<board> (qemu: an STM32 board's emulated
+    twin), built once per session."""
+    key = board + ("-qemu" if qemu else "")
+    if key not in _built:
+        why = why_not_build("stm32" if board == "pyboard" else "rp2")
         if why:
             skip_or_fail(why)
         from texelpad.firmware.build import build_firmware
         root = Path(__file__).resolve().parents[2]
-        _built[board] = build_firmware(root / "boards" / board, build_dir(board))
-    return _built[board]
+        _built[key] = build_firmware(root / "boards" / board, build_dir(board), qemu=qemu)
+    return _built[key]

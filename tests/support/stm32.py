@@ -75,14 +75,29 @@ class EmulatedSTM32:
         return ""           # QEMU's errors end the process: alive() says it
 
 
+def twin_args(firmware) -> tuple[dict, list[str]]:
+    """(environment, run.sh arguments) that boot texelpad firmware's emulated twin (a
+    texelpad.firmware.build.Built with qemu=True): its .elf instead of the kit's firmware,
+    its ROMFS partition loaded where its linker script puts it."""
+    env = dict(os.environ, FW=str(firmware.elf))
+    return env, ["--no-romfs", "-device", "loader,file=%s,addr=0x%08x,force-raw=on"
+                 % (firmware.romfs, firmware.romfs_base)]
+
+
 @contextmanager
-def emulated_stm32(romfs: Path, adc: str = "const:2000") -> Iterator[EmulatedSTM32]:
+def emulated_stm32(romfs: Path | None = None, adc: str = "const:2000",
+                   firmware=None) -> Iterator[EmulatedSTM32]:
+    """The emulated F405 on a pty: stock MicroPython with texel in a ROMFS image (romfs), or
+    texelpad firmware's twin (firmware: a Built with qemu=True, booting its power-up)."""
     why = why_not()
     if why:
         pytest.skip(why)
+    env, extra = twin_args(firmware) if firmware is not None else (None, [])
+    opts = ["--romfs", str(romfs)] if romfs is not None else []
     proc = subprocess.Popen([str(stm32emu_dir() / "run.sh"), "--pty", "--icount", "3",
-                             "--adc", adc, "--romfs", str(romfs)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+                             "--adc", adc] + opts + extra,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
+                            env=env)
     try:
         assert proc.stdout is not None
         port = proc.stdout.readline().decode().strip()

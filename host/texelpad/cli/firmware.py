@@ -21,7 +21,8 @@ def add_firmware(p: argparse.ArgumentParser) -> None:
         "or --micropython DIR).")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--board", default=None, metavar="NAME",
-                   help="a board folder shipped in boards/ (pico, pico_bridge; default pico)")
+                   help="a board folder shipped in boards/ (pico, pico_bridge, pyboard; "
+                        "default pico)")
     g.add_argument("--circuitpython", action="store_true",
                    help="instead: DIR/texelpad-circuitpython.zip, what a CircuitPython board's "
                         "CIRCUITPY drive needs (lib/texel as sources, code.py starting the "
@@ -29,7 +30,8 @@ def add_firmware(p: argparse.ArgumentParser) -> None:
                         "(docs/firmware.md, \"CircuitPython\")")
     g.add_argument("--board-dir", default=None, metavar="DIR",
                    help="a board folder of your own (mpconfigboard.h, mpconfigboard.cmake, "
-                        "pins.csv, manifest.py, board.json: copy boards/pico)")
+                        "pins.csv, manifest.py, board.json: copy boards/pico; an STM32 board: "
+                        "copy boards/pyboard)")
     p.add_argument("--out", default="firmware", metavar="DIR",
                    help="where the .uf2 goes (default ./firmware), beside texelpad-NAME.romfs "
                         "(the partition alone) and .elf (for a debugger), and the build's own: "
@@ -40,6 +42,10 @@ def add_firmware(p: argparse.ArgumentParser) -> None:
                    help="a MicroPython v1.28.0 checkout to build with (default: the offline kit)")
     p.add_argument("--ulab", default=None, metavar="DIR",
                    help="with --micropython: a ulab 6.12 checkout, built in as a user C module")
+    p.add_argument("--qemu", action="store_true",
+                   help="an STM32 board (pyboard): build its emulated twin instead "
+                        "(DIR/texelpad-NAME-qemu.*: the same firmware with the board folder's "
+                        "qemu/ definition, for ../shared/instruments/stm32emu; docs/firmware.md)")
     p.set_defaults(func=cmd_firmware)
 
 
@@ -135,7 +141,8 @@ def cmd_firmware(args: argparse.Namespace) -> int:
     _board_check(d)
     try:
         b = build_firmware(d, args.out, args.micropython, args.ulab,
-                           progress=lambda m: print("firmware: " + m, file=sys.stderr, flush=True))
+                           progress=lambda m: print("firmware: " + m, file=sys.stderr, flush=True),
+                           qemu=args.qemu)
     except FirmwareError as e:
         msg = str(e)
         flag = "--board-dir" if ("board folder" in msg or "board.json" in msg
@@ -145,6 +152,8 @@ def cmd_firmware(args: argparse.Namespace) -> int:
         print("texelpad firmware: " + msg, file=sys.stderr)
         return EXIT_FAIL
     kb = 1024
+    if b.port == "stm32":
+        return _stm32_done(b)
     print("%s  (board %s)" % (b.uf2, b.board))
     print("  MicroPython 1.28 + ulab: %d KB of flash; texelpad's ROMFS: %d of %d KB at 0x%06x; "
           "your files (littlefs): %d KB" % (b.firmware_bytes // kb, b.romfs_bytes // kb,
@@ -152,4 +161,22 @@ def cmd_firmware(args: argparse.Namespace) -> int:
                                             b.storage_bytes // kb))
     print("  built in %.0f s. Hold BOOTSEL, plug the Pico in, drag the .uf2 onto RPI-RP2; it "
           "reboots playing. Then: texelpad demo --port PORT" % b.seconds)
+    return EXIT_OK
+
+
+def _stm32_done(b) -> int:
+    kb = 1024
+    print("%s  (board %s%s)" % (b.image, b.board, ", the emulated twin" if b.qemu else ""))
+    print("  MicroPython 1.28 with texelpad frozen in: %d KB of flash; texelpad's ROMFS: %d of %d "
+          "KB at 0x%08x; the same blocks as .bin files beside it" % (
+              b.firmware_bytes // kb, b.romfs_bytes // kb, b.romfs_capacity // kb, b.romfs_base))
+    if b.qemu:
+        print("  built in %.0f s. Boot it on the emulated STM32F405 (docs/firmware.md):\n"
+              "  FW=%s ../shared/instruments/stm32emu/run.sh --pty --icount 3 --no-romfs "
+              "-device loader,file=%s,addr=0x%08x,force-raw=on" % (b.seconds, b.elf, b.romfs,
+                                                                  b.romfs_base))
+    else:
+        print("  built in %.0f s. Set the board's BOOT0 jumper (DFU mode), plug it in, then: "
+              "dfu-util -a 0 -D %s; remove the jumper and reset. Then: texelpad demo --port PORT"
+              % (b.seconds, b.image))
     return EXIT_OK

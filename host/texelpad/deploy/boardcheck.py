@@ -27,9 +27,10 @@ from texel.runtime import boards
 FIRMWARES = ("stock", "texelpad")
 FIRMWARE_TEXT = {
     "stock": "stock firmware (MicroPython >= 1.26, or CircuitPython) with texelpad deploy",
-    # boards/pico, boards/pico_bridge: MicroPython v1.28 + ulab for the Pico, texelpad in ROMFS
+    # boards/pico, boards/pico_bridge: MicroPython v1.28 + ulab for the Pico, texelpad in ROMFS;
+    # boards/pyboard: MicroPython v1.28 for the pyboard v1.1 (STM32F405), texelpad frozen in
     "texelpad": "the texelpad firmware (MicroPython v1.28 + ulab for the Raspberry Pi Pico, "
-                "RP2040)",
+                "RP2040; MicroPython v1.28 for the pyboard v1.1, STM32F405)",
 }
 FILE_BYTES_MAX = 65536      # a board file is a few KB; the board json.load()s it whole
 READ_BYTES_MAX = 1 << 20    # read (and parsed, for a better diagnosis) up to this
@@ -354,8 +355,9 @@ _Found = list[tuple[Problem, tuple[str, ...]]]
 def _hardware(d: dict[str, Any], firmware: str) -> _Found:
     found: _Found = []
     port: Any = d.get("port")           # unchecked here: a board file's own value
-    if firmware == "texelpad" and port not in ("rp2", "virtual"):
-        found.append((Problem("port", "%r: %s runs 'rp2' board files (or 'virtual'); for this "
+    if firmware == "texelpad" and port not in ("rp2", "stm32", "virtual"):
+        found.append((Problem("port", "%r: %s runs 'rp2' and 'stm32' board files (or "
+                                      "'virtual'); for this "
                                       "board use --firmware stock" % (port, FIRMWARE_TEXT[
                                           "texelpad"])), ("port",)))
     pins = _get(d, "carrier.pins")
@@ -621,6 +623,8 @@ def summary(board: dict[str, Any], firmware: str = "stock") -> list[str]:
           "circuitpython": "CircuitPython", "virtual": "the virtual board, any firmware"}[port]
     if firmware == "texelpad" and port == "rp2":
         on = "the texelpad firmware (MicroPython v1.28 + ulab, Raspberry Pi Pico)"
+    elif firmware == "texelpad" and port == "stm32":
+        on = "the texelpad firmware (MicroPython v1.28, pyboard v1.1 / STM32F405)"
     elif port in ("rp2", "stm32"):
         on = "stock %s (MicroPython >= 1.26: hard timer IRQs)" % on
     lines = ["%s: fine: port %s, for %s" % (board["name"], port, on)]

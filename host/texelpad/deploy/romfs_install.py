@@ -62,6 +62,16 @@ def firmware_info(board: Any) -> dict | None:
     return info if isinstance(info, dict) else damaged
 
 
+def frozen_stm32_board(board: Any) -> str | None:
+    """The board of a texelpad firmware for an STM32 board (texelpad firmware --board pyboard:
+    its code frozen in, its ROMFS partition written with it), or None (stock firmware)."""
+    from ..firmware.build import board_of_build
+    if board.firmware.get("platform") != "pyboard":
+        return None
+    _text, build = board.link.eval(FIRMWARE_INFO)
+    return board_of_build(build)
+
+
 def _board_json(board: Any, name: str) -> bytes:
     """The board file to carry: the shipped one of that name, else the one the
     partition holds now (a maker's own board, from `texelpad firmware --board-dir`)."""

@@ -28,58 +28,20 @@ import json
 import os
 import re
 import shutil
-import subprocess
 import time
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterator
 
-from .. import __version__, toolchain
+from .. import toolchain
 from .. import image
 from . import romfs
+from .common import (BUILD_PREFIX, FIRMWARE_INFO, FROZEN_BOOT, FROZEN_MAIN,  # noqa: F401
+                     MICROPYTHON_VERSION, TEXELCORE_DIR, Built, FirmwareError,
+                     board_of_build, finish_payload, run_logged as _run)
 
-MICROPYTHON_VERSION = "1.28.0"
-BOARD_FILES = ("mpconfigboard.h", "mpconfigboard.cmake", "pins.csv", "manifest.py", "board.json")
 FLASH_BYTES = 2 * 1024 * 1024         # a Pico's W25Q16 (PICO_FLASH_SIZE_BYTES for "pico")
-FROZEN_MAIN = Path(__file__).with_name("frozen_main.py")
-FROZEN_BOOT = Path(__file__).with_name("frozen_boot.py")
-FIRMWARE_INFO = "firmware.json"       # at the ROMFS root: /rom/firmware.json on the board
-# The C core (MicroPython module _texelcore: texel.compat.core() finds it, and
-# format 2's plan, the int engine and the brush painter run it where the
-# firmware has it): device/cmod/texelcore in a checkout, beside the texel package.
-TEXELCORE_DIR = image.PACKAGE_DIR.parent / "cmod" / "texelcore"
-
-
-# The firmware's build name (sys.implementation._build on the board) is the
-# staged board folder's: BUILD_PREFIX + the board's name in capitals.
-BUILD_PREFIX = "TEXELPAD_"
-
-
-def board_of_build(build: str) -> str | None:
-    """The board a texelpad firmware was built for, from its build name
-    ("TEXELPAD_PICO_BRIDGE" -> "pico_bridge"), or None for another firmware."""
-    if not isinstance(build, str) or not build.startswith(BUILD_PREFIX):
-        return None
-    return build[len(BUILD_PREFIX):].lower() or None
-
-
-class FirmwareError(Exception):
-    """One line: what is wrong and what to do."""
-
-
-@dataclass
-class Built:
-    uf2: Path
-    romfs: Path
-    elf: Path
-    board: str
-    firmware_bytes: int               # the MicroPython part (.bin)
-    romfs_bytes: int                  # texelpad's image in the partition
-    romfs_capacity: int
-    romfs_base: int                   # flash offset of the partition
-    storage_bytes: int                # the littlefs left for the user's files
-    seconds: float
-
+# every board folder's (rp2 folders also hold mpconfigboard.cmake, stm32 ones mpconfigboard.mk)
+BOARD_FILES = ("mpconfigboard.h", "pins.csv", "manifest.py", "board.json")
 
 def repo_boards_dir() -> Path | None:
     """boards/ of the checkout this package runs from (None from a wheel)."""
@@ -137,10 +99,21 @@ def check_board_dir(board_dir: Path) -> dict:
         raise FirmwareError("%s: not a board file (nested too deep)" % real) from None
     except ValueError as e:
         raise FirmwareError(str(e).replace(as_named, real).splitlines()[0][:400]) from None
+    if board["port"] == "stm32":
+        from . import build_stm32
+        try:
+            build_stm32.check_stm32_dir(board_dir)
+        except build_stm32.LayoutError as e:
+            raise FirmwareError(str(e)) from None
+        return board
     if board["port"] != "rp2":
         raise FirmwareError("%s/board.json: port %r: the texelpad firmware is built for RP2040 "
-                            "boards (port rp2); other ports take `texelpad deploy` on their "
-                            "stock firmware" % (board_dir, board["port"]))
+                            "and STM32 boards (ports rp2, stm32); other ports take `texelpad "
+                            "deploy` on their stock firmware" % (board_dir, board["port"]))
+    missing = [f for f in ("mpconfigboard.cmake",) if not (board_dir / f).is_file()]
+    if missing:
+        raise FirmwareError("%s: not a texelpad board folder: %s missing (boards/pico is an "
+                            "example)" % (board_dir, ", ".join(missing)))
     layout(board_dir)
     return board
 
@@ -159,13 +132,7 @@ def payload_for(name: str, board_json: bytes, code: bool = False,
     what `texelpad deploy` compares); with code, texelpad's .mpy image too
     (it then runs instead of the frozen copy: FROZEN_BOOT)."""
     files = romfs.romfs_files(image.TARGETS["rp2"], code=code)
-    files["lib/texel/boards.d/%s.json" % name] = board_json
-    info = {"board": name, "texelpad": __version__, "micropython": MICROPYTHON_VERSION,
-            "frozen_code_sha256": frozen_code or romfs.code_digest(), "code_in_romfs": code,
-            "image_sha256": image.hashlib.sha256(
-                b"".join(k.encode() + v for k, v in sorted(files.items()))).hexdigest()}
-    files[FIRMWARE_INFO] = (json.dumps(info, sort_keys=True) + "\n").encode()
-    return files, romfs.romfs_image(files)
+    return finish_payload(name, board_json, files, frozen_code or romfs.code_digest(), code)
 
 
 def stage_board(board_dir: Path, stage: Path) -> None:
@@ -192,15 +159,6 @@ def _needs() -> None:
     if missing:
         raise FirmwareError("%s not found: install Debian's gcc-arm-none-eabi "
                             "libnewlib-arm-none-eabi cmake build-essential" % ", ".join(missing))
-
-
-def _run(args: list[str], log: Path, env: dict | None = None) -> None:
-    with open(log, "ab") as f:
-        p = subprocess.run(args, stdout=f, stderr=subprocess.STDOUT, env=env)
-    if p.returncode:
-        tail = log.read_text(errors="replace").strip().splitlines()[-12:]
-        raise FirmwareError("the MicroPython build failed (exit %d); the end of %s:\n  %s"
-                            % (p.returncode, log, "\n  ".join(tail)))
 
 
 def user_modules(out: Path, ulab_cmake: Path | None, say: Callable[[str], None]) -> Path:
@@ -240,14 +198,24 @@ def user_modules(out: Path, ulab_cmake: Path | None, say: Callable[[str], None])
 def build_firmware(board_dir: str | os.PathLike, out_dir: str | os.PathLike,
                    micropython: str | os.PathLike | None = None,
                    ulab: str | os.PathLike | None = None,
-                   progress: Callable[[str], None] | None = None) -> Built:
+                   progress: Callable[[str], None] | None = None, qemu: bool = False) -> Built:
+    """The firmware of a board folder: an rp2 board's .uf2 (_build), an stm32 board's .dfu
+    (build_stm32; qemu: its emulated twin instead)."""
     say = progress or (lambda m: None)
     t0 = time.monotonic()
     board_dir = Path(board_dir).resolve()
     board = check_board_dir(board_dir)
+    if board["port"] != "stm32" and qemu:
+        raise FirmwareError("--qemu: an emulated twin is built for STM32 boards (their qemu/ "
+                            "folder); the Pico's firmware boots on rp2emu as it is")
+    if board["port"] == "stm32" and ulab is not None:
+        raise FirmwareError("--ulab: the STM32 firmware is built without ulab")
     out = Path(out_dir).resolve()
     out.mkdir(parents=True, exist_ok=True)
     with _one_build_at_a_time(out, say):
+        if board["port"] == "stm32":
+            from .build_stm32 import build_stm32
+            return build_stm32(board_dir, board, out, micropython, qemu, say, t0)
         return _build(board_dir, board, out, micropython, ulab, say, t0)
 
 

@@ -50,19 +50,23 @@ def code_files(target: image.Target | None = None) -> dict[str, bytes]:
     return out
 
 
-def romfs_files(target: image.Target | None = None, code: bool = True) -> dict[str, bytes]:
+def romfs_files(target: image.Target | None = None, code: bool = True, maps: bool = True,
+                ram: bool = True) -> dict[str, bytes]:
     """The partition's files: texelpad's package data (the shipped boards of
-    the port, reference_noise.bin), the references' flash maps and the
-    generator's tables under lib/texel/, the RAM modules; with code,
+    the port, reference_noise.bin), the references' flash maps (maps) and the
+    generator's tables under lib/texel/, the rp2 RAM modules (ram); with code,
     code_files() too. The firmware freezes the code and carries the data
-    only; `texelpad deploy` adds the code when this host's differs."""
+    only; `texelpad deploy` adds the code when this host's differs. The
+    STM32 firmware's partition has neither maps nor RAM modules (build_stm32)."""
     target = target or image.TARGETS["rp2"]
     out = {f.remote.lstrip("/"): f.data for f in image.build_image(target, include_main=False)
            if not f.remote.endswith(CODE_SUFFIX)}
     if code:
         out.update(code_files(target))
-    out.update(ram_modules())
-    out.update(reference_maps())
+    if ram:
+        out.update(ram_modules())
+    if maps:
+        out.update(reference_maps())
     out.update(const_tables())
     return out
 
@@ -150,7 +154,9 @@ def frozen_sources(target: image.Target | None = None) -> dict[str, bytes]:
     for p in image.package_modules(target.port):
         inner = p.relative_to(image.PACKAGE_DIR).as_posix()
         rel = "texel/" + inner
-        if inner in RAM_MODULES:
+        # only the rp2 firmware loads its viper modules into RAM (RAM_MODULES): an
+        # STM32F4 runs frozen Thumb-2 code from flash at zero wait states (ART)
+        if inner in RAM_MODULES and target.port == "rp2":
             name = inner.rsplit("/", 1)[-1][:-3]
             out[rel] = RAM_SHIM % {b"pkg": RAM_PACKAGE.encode(), b"name": name.encode()}
         else:

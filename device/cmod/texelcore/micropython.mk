@@ -1,0 +1,13 @@
+# _texelcore as a user C module for MicroPython's make-based ports (the stm32 port:
+# `texelpad firmware --board pyboard`, host/texelpad/firmware/build_stm32.py); the rp2 port's
+# CMake build reads micropython.cmake beside this file. Same sources; the refresh stays in
+# flash here (no TC_IN_RAM: an STM32F4 runs flash code through its ART accelerator at zero
+# wait states).
+TEXELCORE_DIR := $(USERMOD_DIR)
+SRC_USERMOD_C += $(TEXELCORE_DIR)/brush_core.c $(TEXELCORE_DIR)/texel_core.c \
+	$(TEXELCORE_DIR)/refresh_core.c $(TEXELCORE_DIR)/modtexelcore.c
+CFLAGS_USERMOD += -I$(TEXELCORE_DIR)
+# -O2 for the plan's and painter's loops (the stm32 port builds with -Os)
+$(BUILD)/$(TEXELCORE_DIR)/brush_core.o: CFLAGS += -O2
+$(BUILD)/$(TEXELCORE_DIR)/texel_core.o: CFLAGS += -O2
+$(BUILD)/$(TEXELCORE_DIR)/refresh_core.o: CFLAGS += -O2
