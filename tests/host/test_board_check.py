@@ -319,3 +319,18 @@ def test_bad_file_installs_nothing_and_keeps_the_old_one(capsys, tmp_path, flash
                              "--port", port)
     assert code == 2 and "not valid JSON" in err
     assert (flash / "boards" / "keep.json").read_bytes() == before
+
+
+def test_the_black_pill_file_is_clean_and_a_pyboard_pin_still_warns():
+    """Issue 34: the WeAct Black Pill (STM32F411CE) board file names pyb's CPU pins (A8, B13,
+    A1: its MicroPython names no header pins) and runs TIM1 at 96 MHz: no problem, and none
+    of the pyboard-only warnings. A pyboard file (X/Y names) on PA8 still hears of the SD
+    card switch."""
+    doc = _load("blackpill_f411")
+    assert bc.check(doc, "stock").problems == []
+    rep = bc.check(doc, "stock")
+    assert rep.board is not None and rep.board["refresh"]["timer"] == 11
+    py = _load("pyboard")
+    py["carrier"]["pins"] = ["X19", "A8"]
+    py["sensor"]["pins"] = ["X20"]
+    assert any("SD card switch" in m for _p, m in _warnings(py))

@@ -80,6 +80,7 @@ def twin_args(firmware) -> tuple[dict, list[str]]:
     texelpad.firmware.build.Built with qemu=True): its .elf instead of the kit's firmware,
     its ROMFS partition loaded where its linker script puts it."""
     env = dict(os.environ, FW=str(firmware.elf))
+    # (run.sh: --no-romfs among its options, before a script; -device after it, for QEMU)
     return env, ["--no-romfs", "-device", "loader,file=%s,addr=0x%08x,force-raw=on"
                  % (firmware.romfs, firmware.romfs_base)]
 

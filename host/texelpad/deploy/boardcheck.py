@@ -558,7 +558,13 @@ def _stm32(found: _Found, d: dict[str, Any], pins: list[Any], sens: list[Any]) -
         if len(n) >= 3 and n[0] == "P" and n[1] in "ABCDEFGHI" and n[2:].isdigit() \
                 and int(n[2:]) <= 15:
             return n[:2] + str(int(n[2:]))
+        # pyb's own CPU pin names (pyb.Pin("A8") = Pin.cpu.A8; pyb has no "PA8")
+        if len(n) >= 2 and n[0] in "ABCDEFGHI" and n[1:].isdigit() and int(n[1:]) <= 15:
+            return "P" + n[0] + str(int(n[1:]))
         return None
+    # a pyboard's file names its header pins (X1 .. Y12); a file naming CPU pins only is
+    # another STM32 board (a Black Pill): no pyboard-only warnings for it
+    pyboard = any(isinstance(n, str) and n.upper()[:1] in ("X", "Y") for n in pins + sens)
     owners: dict[str, str] = {}
     for sensor, lst in ((False, pins), (True, sens)):
         for i, name in enumerate(lst):
@@ -580,7 +586,7 @@ def _stm32(found: _Found, d: dict[str, Any], pins: list[Any], sens: list[Any]) -
                 adc = [k for k, v in PYBV11_PINS.items() if v in F405_ADC]
                 found.append((Problem(path, "%r (%s) has no ADC input on an STM32F405: use one "
                                             "of %s" % (name, cp, ", ".join(adc))), (path,)))
-            if not sensor and cp in PYBV11_USED:
+            if not sensor and pyboard and cp in PYBV11_USED:
                 found.append((Problem(path, "%r (%s) is %s on a pyboard v1.1"
                                             % (name, cp, PYBV11_USED[cp]), "warning"), (path,)))
     timer, chan = _get(d, "carrier.pwm.timer"), _get(d, "carrier.pwm.channel")
@@ -602,7 +608,7 @@ def _stm32(found: _Found, d: dict[str, Any], pins: list[Any], sens: list[Any]) -
                                       % (pins[i], cp, timer, label, ", ".join(names))),
                               ("carrier.pins[%d]" % i, "carrier.pwm")))
     cpu = d.get("cpu_hz")
-    if _is_int(cpu) and cpu != F405_TIM18_HZ:
+    if pyboard and _is_int(cpu) and cpu != F405_TIM18_HZ:
         found.append((Problem("cpu_hz", "%s Hz: on a pyboard v1.x (STM32F405) TIM1 and TIM8 "
                                         "run at %s Hz (Timer(n).source_freq()); hw/stm32 refuses "
                                         "to start when they differ" % (_n(cpu), _n(F405_TIM18_HZ)),
