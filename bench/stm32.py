@@ -229,10 +229,10 @@ def report(s: dict[str, Any]) -> list[str]:
            "heap free playing the power-up scene: %s B" % n(s["heap_power_up_b"]),
            "heap free playing a full-screen texel: %s B   (goal %s)"
            % (n(s["heap_full_screen_b"]), _met("heap_full_screen_b", s["heap_full_screen_b"])),
-           "push -> playing, full-screen texel without \"v\" (max of 5): %.2f ms   (goal %s); "
-           "last: call %d us = validate %s + build %s + swap %s + the rest"
-           % ((s["push_texel_ms"], _met("push_texel_ms", s["push_texel_ms"]))
-              + tuple(s["push_texel_breakdown_us"])),
+           "push -> playing, full-screen texel without \"v\" (max of 5): %s ms   (goal %s); "
+           "last: call %s us = validate %s + build %s + swap %s + the rest"
+           % ((str(s["push_texel_ms"]), _met("push_texel_ms", s["push_texel_ms"]))
+              + tuple(str(v) for v in s["push_texel_breakdown_us"])),
            "push -> playing, 16 texel regions (max of 3): %.2f ms; last: %s us"
            % (s["push_regions16_ms"], s["push_regions16_breakdown_us"]),
            "push -> playing, full-screen reference rendered on the board (3 in a row): %s ms"

@@ -329,6 +329,15 @@ def _make_refresh(rt, board, reads, ticks, diff, fast, realtime):
         if regs is not None:
             rt.refresh.use_rp2_registers(regs[0], regs[1], int(s["pins"][0]) - 26)
             callback = irq_rp2
+        elif hasattr(hw, "stm32_registers"):
+            # an STM32: the core reads ADC1 and writes the CCR itself (hw/stm32.py)
+            regs = hw.stm32_registers()
+            if regs is not None:
+                from .hw import stm32_irq
+                from .runtime import refresh_fast
+                rt.refresh.use_stm32_registers(*regs)
+                callback = stm32_irq.arm(refresh_fast)
+                rt.refresh.irq_code = stm32_irq.ENGINE
         rt.mode = "viper" if callback is None else "viper-irq"
     else:
         rt.refresh = Refresh(rt.sensor, rt.law, hw.set_duty, ticks, diff, rt.period_us, idle,

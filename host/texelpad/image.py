@@ -293,7 +293,8 @@ def _wanted_module(p: Path, port: str | None) -> bool:
     if rel == Path("main.py") or rel.as_posix() in HOST_ONLY:
         return False
     if port is not None and rel.parts[0] == HW_DIR and rel.name != "__init__.py":
-        return rel.stem == PORT_BACKEND[port]
+        # the port's backend, and its own helpers (hw/stm32_irq.py goes with hw/stm32.py)
+        return rel.stem == PORT_BACKEND[port] or rel.stem.startswith(PORT_BACKEND[port] + "_")
     return True
 
 

@@ -46,7 +46,8 @@ MODULES = [p for p in ALL_MODULES if p.relative_to(PKG.parent).as_posix() not in
 BOARD_JSONS = sorted((PKG / "boards.d").glob("*.json"))
 NATIVE = {"texel/gen/engine_int_viper.py", "texel/gen/plan_int_viper.py",
           "texel/gen/brush_viper.py", "texel/gen/reference_viper.py",
-          "texel/runtime/refresh_viper.py", "texel/runtime/scene_viper.py"}
+          "texel/runtime/refresh_viper.py", "texel/runtime/scene_viper.py",
+          "texel/hw/stm32_irq.py"}           # (in the stm32 port's image only)
 # each target's port: its image carries that hardware backend and those boards only
 PORT = {"rp2": "rp2", "pyboard": "stm32", "unix": "virtual", "circuitpython": "circuitpython"}
 BACKEND = {"rp2": "rp2", "stm32": "stm32", "virtual": "virtual", "circuitpython": "cpy"}
@@ -59,7 +60,8 @@ def rel(p: Path) -> str:
 
 def modules_for(port: str | None) -> list[Path]:
     return [p for p in MODULES if port is None or p.parent.name != "hw"
-            or p.name == "__init__.py" or p.stem == BACKEND[port]]
+            or p.name == "__init__.py" or p.stem == BACKEND[port]
+            or p.stem.startswith(BACKEND[port] + "_")]
 
 
 def boards_for(port: str | None) -> list[Path]:
@@ -178,8 +180,12 @@ def test_layout_agrees_with_the_device():
     assert image.BOARDS_DIR == PKG / "boards.d" and image.MAIN_PY == PKG / "main.py"
     # every port the boards know has its backend module
     assert set(image.PORT_BACKEND) == set(boards.PORTS)
+    # (and a backend's own helpers, named after it: hw/stm32_irq.py goes with hw/stm32.py)
     assert {p.stem for p in (PKG / "hw").glob("*.py")} == set(image.PORT_BACKEND.values()) | {
-        "__init__"}
+        "__init__", "stm32_irq"}
+    assert "texel/hw/stm32_irq.py" in {"texel/" + p.relative_to(PKG).as_posix()
+                                       for p in image.package_modules("stm32")}
+    assert not any(p.name == "stm32_irq.py" for p in image.package_modules("rp2"))
 
 
 @pytest.mark.parametrize("where, want", [
@@ -242,9 +248,11 @@ def test_bytecode_modules_are_the_same_for_every_arch(images):
     backends = {"/lib/texel/hw/rp2.mpy", "/lib/texel/boards.d/pico.json",
                 "/lib/texel/boards.d/pico_bridge.json"}
     assert rp2.keys() - pyb.keys() == backends
-    assert pyb.keys() - rp2.keys() == {"/lib/texel/hw/stm32.mpy", "/lib/texel/boards.d/pyboard.json"}
+    assert pyb.keys() - rp2.keys() == {"/lib/texel/hw/stm32.mpy", "/lib/texel/hw/stm32_irq.mpy",
+                                       "/lib/texel/boards.d/pyboard.json",
+                                       "/lib/texel/boards.d/blackpill_f411.json"}
     differ = {r for r in rp2.keys() & pyb.keys() if rp2[r].data != pyb[r].data}
-    assert differ == {"/lib/" + n[:-3] + ".mpy" for n in NATIVE}
+    assert differ == {"/lib/" + n[:-3] + ".mpy" for n in NATIVE} - {"/lib/texel/hw/stm32_irq.mpy"}
 
 
 def test_source_image(images):

@@ -35,7 +35,9 @@ NATIVE_ONLY = {DEVICE / "texel" / "gen" / "engine_int_viper.py",
                DEVICE / "texel" / "gen" / "brush_viper.py",
                DEVICE / "texel" / "gen" / "reference_viper.py",
                DEVICE / "texel" / "runtime" / "refresh_viper.py",
-               DEVICE / "texel" / "runtime" / "scene_viper.py"}
+               DEVICE / "texel" / "runtime" / "scene_viper.py",
+               # imported only by app.py on a board whose backend has stm32_registers()
+               DEVICE / "texel" / "hw" / "stm32_irq.py"}
 
 # mpy header byte 2 holds the native architecture in its upper 6 bits
 # (py/persistentcode.h: MP_NATIVE_ARCH_*).

@@ -65,14 +65,20 @@ TC_RAMFUNC void tc_refresh(const uint32_t *w) {
     int32_t *s = (int32_t *)AT(W_S);
     volatile uint32_t *adc = (volatile uint32_t *)AT(W_ADC);
     int32_t cs = s[S_ADC_CS];
-    if (!(cs & 8)) {
+    if (!(cs & 24)) {
         adc[0] = (uint32_t)cs;                  // start one conversion
     }
     volatile uint32_t *clock = (volatile uint32_t *)AT(W_TIMER);
     uint32_t t0 = clock[0];
     int32_t touch = s[S_TOUCH];
     int32_t raw;
-    if (cs & 8) {                               // START_MANY: its last conversion
+    if (cs & 16) {
+        // STM32 (texel/hw/stm32_irq.py): W_ADC is ADC1's base; DR (word 19) holds the
+        // conversion the refresh before started, then CR2 (word 2) |= ADON | SWSTART
+        // starts the next one - no wait (a conversion takes ~1.5 us, a period 120)
+        raw = (int32_t)(adc[19] & 0xFFF);
+        adc[2] = adc[2] | 0x40000001u;
+    } else if (cs & 8) {                        // START_MANY: its last conversion
         raw = (int32_t)adc[1];
         if ((int32_t)(adc[0] & 0x1F700F) != cs) {
             adc[0] = (uint32_t)((cs ^ 8) | 4);

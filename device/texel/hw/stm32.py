@@ -53,6 +53,18 @@ _MOE = const(0x8000)                # BDTR: main output enable
 _OSSR = const(0x0800)               # BDTR: off-state selection, run mode
 _OSSI = const(0x0400)               # BDTR: off-state selection, idle mode
 _REFRESH_TIMER = const(7)           # basic timer, unused by pyb itself
+_CLOCK_TIMER = const(2)             # 32-bit: the refresh core's microsecond clock
+_CNT = const(0x24)
+_ARR = const(0x2C)
+_ADC_CR2 = const(0x08)
+
+
+def _adc1():
+    try:
+        import stm
+        return stm.ADC1
+    except (ImportError, AttributeError):
+        return 0x40012000           # STM32F4 (RM0090, RM0383)
 
 
 def _tim_base(n):
@@ -97,6 +109,8 @@ def _carrier(board):
     rt = int(board.get("refresh", {}).get("timer", _REFRESH_TIMER))
     if rt in (1, 8):
         raise ValueError("refresh.timer: %d is a carrier timer" % rt)
+    if rt == _CLOCK_TIMER:
+        raise ValueError("refresh.timer: %d is the refresh's microsecond clock (TIM2)" % rt)
     return c, freq, drive, pins, n, ch, rt
 
 
@@ -169,6 +183,8 @@ class Hw:
         self.deadtime_ticks = dead
         self._refresh_id = rt
         self._rt = None
+        self._direct = False
+        self._clock = None
 
         s = board.get("sensor", {})
         self._adc = tuple(pyb.ADC(pyb.Pin(p)) for p in s.get("pins", ()))
@@ -193,6 +209,27 @@ class Hw:
         m[self._bdtr] = self._safe
         m[self._ccr] = 0
 
+    def stm32_registers(self):
+        """(microsecond clock, ADC1, CCR) register addresses for the refresh core
+        to read the finger and write the duty itself (app.py, runtime/
+        stm32_irq.py): TIM2 set free-running at 1 MHz over all 32 bits (the
+        core's clock: worst_us, overruns, telemetry stamps), ADC1 converting the
+        sensor's channel (one pyb read selects it; the core sets ADON and starts
+        each next conversion itself), and this carrier's CCR. A drive that
+        goes through these registers sets MOE itself when the timer starts."""
+        if len(self._adc) != 1:
+            return None
+        clock = pyb.Timer(_CLOCK_TIMER, prescaler=pyb.Timer(_CLOCK_TIMER).source_freq()
+                          // 1000000 - 1, period=0x3FFFFFFF)
+        base = _tim_base(_CLOCK_TIMER)
+        self._mem[base + _ARR] = 0xFFFFFFFF         # wrap at 2^32, as the core's diff does
+        self._clock = clock
+        self._adc[0].read()                         # pyb selects the channel (SQR3)
+        adc = _adc1()
+        self._mem[adc + _ADC_CR2] = self._mem[adc + _ADC_CR2] | 1      # ADON
+        self._direct = True
+        return base + _CNT, adc, self._ccr
+
     def adc_read(self, i):
         # 12-bit pyb.ADC reading in read_u16 units (0..65535); allocation-free
         raw = self._adc[i].read()
@@ -202,6 +239,8 @@ class Hw:
         """Call callback(timer) hz times a second from the hard IRQ of
         pyb.Timer(refresh timer) (8,333 Hz on TIM7: 84 MHz / 10,080)."""
         self.stop_timer()
+        if self._direct:
+            self._mem[self._bdtr] = self._run      # the core writes only the CCR
         self._rt = pyb.Timer(self._refresh_id, freq=hz, callback=callback)
 
     def stop_timer(self):

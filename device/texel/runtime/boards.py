@@ -566,9 +566,10 @@ def _refresh(c, b, port, freq):
     if "timer" in r:
         if port != "stm32":
             fail(c + "refresh.timer", "only stm32 boards choose the refresh timer (pyb.Timer id)")
-        if r["timer"] < 1 or r["timer"] > 14 or r["timer"] in ADVANCED_TIMERS:
+        if r["timer"] < 1 or r["timer"] > 14 or r["timer"] in ADVANCED_TIMERS or r["timer"] == 2:
+            # (TIM2: hw/stm32's microsecond clock for the refresh core)
             fail(c + "refresh.timer", "%r: need a pyb timer 1 .. 14 other than the carrier "
-                     "timers 1 and 8" % (r["timer"],))
+                     "timers 1 and 8 and TIM2 (the refresh's clock)" % (r["timer"],))
 
 
 def _display(c, b):

@@ -297,6 +297,16 @@ class FastRefresh(Refresh):
         self._regs = (timer_addr, adc_addr, cc_addr, mul)
         self._install(self.scene)
 
+    def use_stm32_registers(self, clock_addr, adc_addr, ccr_addr):
+        """Let hw/stm32_irq.py drive the hardware directly (an STM32F4):
+        clock_addr a free-running 32-bit microsecond counter (hw/stm32's TIM2
+        CNT), adc_addr ADC1's base (core() reads DR, then starts the next
+        conversion: S_ADC_CS bit 4), ccr_addr the carrier channel's CCR."""
+        self._S[S_ADC_CS] = 16
+        self._S[S_ADC12] = 1
+        self._regs = (clock_addr, adc_addr, ccr_addr, 1)
+        self._install(self.scene)
+
     def _install(self, scene):
         global _W, _WA, _S
         bufs = scene.buffers() if scene is not None else ()

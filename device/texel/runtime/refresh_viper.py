@@ -127,13 +127,20 @@ def core(w: int):
     base = int(s) - int(ptr32(w)[W_S])
     adc = ptr32(base + int(ptr32(w)[W_ADC]))
     cs = int(s[S_ADC_CS])                   # rp2: EN | START_ONCE | AINSEL (or START_MANY)
-    if not (cs & 8):
+    if not (cs & 24):
         adc[0] = cs                         # start one conversion
     # while the conversion runs (2 us on an RP2040), what does not need it
     clock = ptr32(base + int(ptr32(w)[W_TIMER]))
     t0 = int(clock[0])
     touch = int(s[S_TOUCH])
-    if cs & 8:
+    if cs & 16:
+        # STM32 (hw/stm32_irq.py): adc is ADC1's registers; DR (word 19)
+        # holds the conversion the refresh before started, then CR2 (word 2) gets
+        # ADON | SWSTART for the next one: no wait (~1.5 us to convert, 120 between)
+        raw = int(adc[19]) & 0xFFF
+        sw = 1                              # (a literal 1 << 30 would fold to a long int)
+        adc[2] = int(adc[2]) | 1 | (sw << 30)
+    elif cs & 8:
         # START_MANY (the RP2040's refresh interrupt, irq_rp2.native_entry):
         # the ADC converts continuously and RESULT is its last conversion, at
         # most one conversion (2 us) old: no wait. Other code that used the
