@@ -322,6 +322,15 @@ def _make_refresh(rt, board, reads, ticks, diff, fast, realtime):
         except (ImportError, SyntaxError):
             fast = False
     if fast:
+        stm = None
+        if board["refresh"]["mode"] == "timer_irq" and hasattr(hw, "stm32_registers"):
+            # an STM32F2/F4/F7 (hw/stm32.py): the core reads ADC1 and writes the CCR itself,
+            # taking the conversion the refresh before started - the finger one period
+            # later, which the sensor's lead makes up (runtime/sensor.py, L)
+            stm = hw.stm32_registers()
+            if stm is not None:
+                rt.sensor = make_sensor(dict(s, latency_us=s["latency_us"] + rt.period_us),
+                                        reads, board["display"]["positions"], rt.hz)
         rt.refresh = FastRefresh(rt.sensor, rt.law, hw.set_duty, reads[0], ticks, diff,
                                  rt.period_us, idle, getattr(hw, "cost_ticks", None))
         rt.refresh.threaded = realtime and hasattr(hw, "run_realtime")
@@ -329,15 +338,12 @@ def _make_refresh(rt, board, reads, ticks, diff, fast, realtime):
         if regs is not None:
             rt.refresh.use_rp2_registers(regs[0], regs[1], int(s["pins"][0]) - 26)
             callback = irq_rp2
-        elif hasattr(hw, "stm32_registers"):
-            # an STM32: the core reads ADC1 and writes the CCR itself (hw/stm32.py)
-            regs = hw.stm32_registers()
-            if regs is not None:
-                from .hw import stm32_irq
-                from .runtime import refresh_fast
-                rt.refresh.use_stm32_registers(*regs)
-                callback = stm32_irq.arm(refresh_fast)
-                rt.refresh.irq_code = stm32_irq.ENGINE
+        elif stm is not None:
+            from .hw import stm32_irq
+            from .runtime import refresh_fast
+            rt.refresh.use_stm32_registers(*stm)
+            callback = stm32_irq.arm(refresh_fast)
+            rt.refresh.irq_code = stm32_irq.ENGINE
         rt.mode = "viper" if callback is None else "viper-irq"
     else:
         rt.refresh = Refresh(rt.sensor, rt.law, hw.set_duty, ticks, diff, rt.period_us, idle,
@@ -349,11 +355,18 @@ def _make_refresh(rt, board, reads, ticks, diff, fast, realtime):
 def _install(canonical, validate_us=0, checked=None):
     rt = _rt
     disp = rt.board["display"]
+    idle = rt.board["carrier"].get("idle_amplitude", 0)
     # real time, also on the virtual board (whose ticks are stepped)
     clock = getattr(rt.hw, "cost_ticks", rt.ticks)
     t0 = clock()
-    sc = _scene.build(canonical, disp, idle_default=rt.board["carrier"].get("idle_amplitude", 0),
-                      checked=checked, reuse=rt.refresh.scene)
+    silent = None
+    sc = _build_beside(rt, canonical, disp, idle, checked)
+    if sc is None:
+        # (outside the failed build's frame: MicroPython's collector scans the stack
+        # conservatively, and a slot there still naming the playing scene kept its
+        # 20-38 KB alive through _make_room - measured on the unix port)
+        sc = _make_room(rt, canonical, disp, idle, checked)
+        silent = True
     t1 = clock()
     old = rt.refresh.swap(sc)
     t2 = clock()
@@ -367,7 +380,57 @@ def _install(canonical, validate_us=0, checked=None):
     rt.pushes += 1
     rt.last_push = {"validate_us": validate_us, "build_us": rt.diff(t1, t0),
                     "swap_us": rt.diff(t2, t1), "scene_bytes": sc.nbytes}
+    if silent:
+        rt.last_push["made_room"] = True        # the display was idle while it built
     return sc
+
+
+# A push whose scene does not fit beside the one playing (runtime/scene.py OutOfMemory: e.g. a
+# full-screen reference rendered into RAM while another plays, on a board without flash maps)
+# is built in the playing scene's room: the display plays idle meanwhile (status()'s
+# last_push: made_room; build_us is how long), the old scene is dropped and the new one built.
+# If even that does not fit, the old scene is built again, plays on, and the push is refused
+# saying so. This is what the refusal used to ask the user to do by hand ("push a small scene
+# first"). False: refuse at once, the playing scene untouched throughout.
+MAKE_ROOM = True
+
+
+def _build_beside(rt, canonical, disp, idle, checked):
+    """The new scene built beside the playing one (sharing what it can), or
+    None when it does not fit there and MAKE_ROOM lets _make_room try."""
+    try:
+        return _scene.build(canonical, disp, idle_default=idle, checked=checked,
+                            reuse=rt.refresh.scene)
+    except _scene.OutOfMemory:
+        if not MAKE_ROOM or rt.refresh.scene is None:
+            raise
+    return None
+
+
+def _drop_playing(rt):
+    """Idle from the next refresh on; the playing scene's canonical source
+    (what rebuilds it). A function of its own, so that no slot of the caller's
+    frame still names the scene when the collector scans the stack."""
+    return rt.refresh.swap(None).source
+
+
+def _make_room(rt, canonical, disp, idle, checked):
+    source = _drop_playing(rt)
+    gc.collect()
+    try:
+        return _scene.build(canonical, disp, idle_default=idle, checked=checked)
+    except _scene.OutOfMemory as e:
+        why = str(e)
+    gc.collect()
+    try:
+        back = _scene.build(source, disp, idle_default=idle)
+    except ValueError:
+        raise _scene.OutOfMemory(why + "; not even in the playing scene's room, and that scene "
+                                 "no longer fits either: the display plays idle, push a "
+                                 "smaller scene")
+    rt.refresh.swap(back)
+    raise _scene.OutOfMemory(why + "; not even in the playing scene's room: that scene was "
+                             "built again and plays on")
 
 
 def push(scene):

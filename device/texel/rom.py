@@ -83,5 +83,10 @@ def const_table(module_file, name, raw, typecode):
         v = rom_view(path_beside(module_file, name), typecode, n)
         if v is not None:
             return v
+    if not isinstance(raw, tuple) and typecode in ("H", "i"):
+        # no copy in the partition (a ROMFS another tool wrote: a stock pyboard's): a view
+        # of the module's own literal where it is aligned, as without ROM (compat.const_view)
+        from .compat import const_view
+        return const_view(raw, typecode)
     from array import array
     return array(typecode, raw)

@@ -234,3 +234,22 @@ def test_deploy_refuses_the_frozen_firmware_and_changes_nothing(board, capsys):
     assert "texelpad firmware --board pyboard" in err
     with _connect(board.port) as b:
         assert b.status()["running"] == before
+
+
+def test_a_full_screen_reference_over_another_is_built_in_its_room(board):
+    """The pyboard's partition has no reference maps: a full-screen reference is 38.4 KB of
+    RAM, and a second one does not fit beside the first on the F405's heap. texel.app builds
+    it in the playing scene's room (MAKE_ROOM): both pushes play, the second says made_room."""
+    ref = lambda name: {"regions": [{"start_mm": 0, "end_mm": 101.76,              # noqa: E731
+                                     "texture": {"kind": "reference", "name": name}}]}
+    with _connect(board.port) as b:
+        b.start("pyboard", ref("2sin"))
+        st = b.push(ref("pink"))
+        assert st["running"] and st["last_push"].get("made_room") is True, st["last_push"]
+        src = b.scene_source()
+        st = b.status()
+    assert [r["texture"]["name"] for r in src["regions"]] == ["pink"]
+    assert st["faults"] == 0 and st["overruns"] == 0
+    print("\nreference over reference on the twin: made room, building took %.1f ms (the display "
+          "idle meanwhile), %s B free after" % (st["last_push"]["build_us"] / 1000.0,
+                                                format(st["mem_free"], ",")))

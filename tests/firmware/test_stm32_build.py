@@ -73,6 +73,26 @@ def test_a_makers_stm32_folder_is_refused_with_one_line_before_building(tmp_path
     ld.write_text(ld.read_text().replace("FLASH_TEXT (rx)", "FLASH_TXT (rx)"))
     with pytest.raises(build.FirmwareError, match="no MEMORY region FLASH_TEXT"):
         build.check_board_dir(d)
+    for k, (old_, new_, words) in enumerate((
+            ("FLASH_ROMFS (r) : ORIGIN = 0x080C0000", "FLASH_ROMFS (r) : ORIGIN = 0x080B0000",
+             "overlaps FLASH_TEXT"),
+            ("FLASH_TEXT (rx) : ORIGIN = 0x08020000, LENGTH = 640K",
+             "FLASH_TEXT (rx) : ORIGIN = 0x08020000, LENGTH = 512K", None),
+            ("FLASH_ROMFS (r) : ORIGIN = 0x080C0000, LENGTH = 256K",
+             "FLASH_ROMFS (r) : ORIGIN = 0x080C1000, LENGTH = 200K", "flash sector boundaries"))):
+        d = _copy(tmp_path / ("l%d" % k))
+        ld = d / "texelpad_f405.ld"
+        assert old_ in ld.read_text()
+        ld.write_text(ld.read_text().replace(old_, new_))
+        if words is None:
+            build.check_board_dir(d)                  # sectors 5-8 then 10-11: fine
+        else:
+            with pytest.raises(build.FirmwareError, match=words):
+                build.check_board_dir(d)
+    d = _copy(tmp_path / "h")
+    (d / "stm32f4xx_hal_conf.h").unlink()
+    with pytest.raises(build.FirmwareError, match="stm32f4xx_hal_conf.h"):
+        build.check_board_dir(d)
     with pytest.raises(build.FirmwareError, match="--ulab: the STM32 firmware is built without"):
         build.build_firmware(_copy(tmp_path / "e"), tmp_path / "out", ulab=tmp_path)
     with pytest.raises(build.FirmwareError, match="--qemu: an emulated twin is built for STM32"):

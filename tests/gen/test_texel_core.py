@@ -353,9 +353,15 @@ app.start("virtual", %(scene)r)
 r = app._rt.refresh
 app.stream(8333)
 S = r._S
+STM = %(stm)r
+adc = array("I", [0] * 20)      # an STM32's ADC1 registers: CR2 word 2, DR word 19
+if STM:
+    import uctypes
+    r.use_stm32_registers(uctypes.addressof(r._clk), uctypes.addressof(adc),
+                          uctypes.addressof(r._cc))
 rings = (S, r.tel_t, r.tel_pos, r.tel_amp)
 def snap():
-    return [list(a) for a in rings] + [r._cc[0]]
+    return [list(a) for a in rings] + [r._cc[0], adc[2]]
 def put(v):
     for a, b in zip(rings, v):
         for i in range(len(b)):
@@ -378,21 +384,27 @@ for k in range(%(n)d):
     raws.append(x)
 same = 0
 first = None
+cr2s = {}
 for k in range(len(raws)):
     r._clk[0] = (k * 120 + 5) & 0x3FFFFFFF
     r._adc[1] = raws[k]
+    adc[19] = (raws[k] >> 4) | (0xABC000 if k & 1 else 0)   # DR: 12 bits (and junk above)
+    adc[2] = k & 0x400                                       # CR2 before: EOCS or not
     before = snap()
     RV.core(RV._WA)
     a = snap()
     put(before)
     r._cc[0] = before[4]
+    adc[2] = before[5]
     c.refresh(RV._W)
+    cr2s[adc[2]] = 1
     b = snap()
     if a == b:
         same += 1
     elif first is None:
         first = (k, raws[k], [i for i in range(len(a[0])) if a[0][i] != b[0][i]])
 print(json.dumps({"same": same, "n": len(raws), "first": first, "code": c.BUILD,
+                  "cr2": sorted(cr2s),
                   "kinds": sorted(set(r.scene._t[4 * i + 2] for i in range(r.scene.count)))}))
 """
 
@@ -410,15 +422,21 @@ def test_the_c_refresh_is_the_viper_refresh_word_for_word(x64_module):
         {"start_mm": 60, "end_mm": 80, "texture": {"kind": "samples", "fit": "stretch",
                                                    "u16": [0, 65535, 100]}},
         {"start_mm": 85, "end_mm": 101.76, "texture": {"kind": "bump", "width_mm": 8}}]}
-    code = REFRESH_SCRIPT % {"scene": scene, "n": 6000}
-    info = mpy.run_json(code, exe=toolchain.require_micropython(), heapsize="8M", timeout=300,
-                        extra_path=str(x64_module))
-    # every way a region plays: K_CONST, K_BUF, K_PLAN, K_CHUNK (runtime/kinds/__init__.py)
-    assert info["code"] == "native" and info["kinds"] == [0, 1, 2, 3], info
-    assert info["same"] == info["n"], info
+    for stm in (False, True):
+        # stm: the STM32 path (S_ADC_CS bit 4: DR read, CR2 |= ADON | SWSTART) on a stand-in
+        # register block (hw/stm32_irq.py; the real one runs on the emulated F405)
+        code = REFRESH_SCRIPT % {"scene": scene, "n": 6000, "stm": stm}
+        info = mpy.run_json(code, exe=toolchain.require_micropython(), heapsize="8M",
+                            timeout=300, extra_path=str(x64_module))
+        # every way a region plays: K_CONST, K_BUF, K_PLAN, K_CHUNK (runtime/kinds/__init__.py)
+        assert info["code"] == "native" and info["kinds"] == [0, 1, 2, 3], info
+        assert info["same"] == info["n"], (stm, info)
+        if stm:
+            assert info["cr2"] == [0x40000001, 0x40000401], info
     # 16 texel regions: the table walk past many rows
     info = mpy.run_json(REFRESH_SCRIPT % {"scene": regions16({"positions": 19200,
-                                                               "dx_um": 5.3}, 2, 3), "n": 3000},
+                                                               "dx_um": 5.3}, 2, 3), "n": 3000,
+                                          "stm": False},
                         exe=toolchain.require_micropython(), heapsize="8M", timeout=300,
                         extra_path=str(x64_module))
     assert info["same"] == info["n"], info

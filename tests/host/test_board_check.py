@@ -328,6 +328,8 @@ def test_the_black_pill_file_is_clean_and_a_pyboard_pin_still_warns():
     card switch."""
     doc = _load("blackpill_f411")
     assert bc.check(doc, "stock").problems == []
+    (path, msg), = _errors(doc, "texelpad")           # no texelpad firmware for an F411
+    assert path == "cpu_hz" and "--firmware stock" in msg
     rep = bc.check(doc, "stock")
     assert rep.board is not None and rep.board["refresh"]["timer"] == 11
     py = _load("pyboard")

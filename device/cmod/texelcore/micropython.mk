@@ -7,7 +7,8 @@ TEXELCORE_DIR := $(USERMOD_DIR)
 SRC_USERMOD_C += $(TEXELCORE_DIR)/brush_core.c $(TEXELCORE_DIR)/texel_core.c \
 	$(TEXELCORE_DIR)/refresh_core.c $(TEXELCORE_DIR)/modtexelcore.c
 CFLAGS_USERMOD += -I$(TEXELCORE_DIR)
-# -O2 for the plan's and painter's loops (the stm32 port builds with -Os)
-$(BUILD)/$(TEXELCORE_DIR)/brush_core.o: CFLAGS += -O2
-$(BUILD)/$(TEXELCORE_DIR)/texel_core.o: CFLAGS += -O2
-$(BUILD)/$(TEXELCORE_DIR)/refresh_core.o: CFLAGS += -O2
+# -O2 for the plan's, painter's and refresh's loops (the stm32 port builds with -Os). py/py.mk
+# names a user module's objects after the module's folder: $(BUILD)/texelcore/x.o
+$(BUILD)/texelcore/brush_core.o: CFLAGS += -O2
+$(BUILD)/texelcore/texel_core.o: CFLAGS += -O2
+$(BUILD)/texelcore/refresh_core.o: CFLAGS += -O2

@@ -16,7 +16,7 @@
 
 // The functions and arguments below, as texel.compat.CORE_API expects them:
 // bump both with any change, so a board's older native module is not used.
-#define TC_API 5
+#define TC_API 6                // 6: the refresh reads an STM32 ADC (S_ADC_CS bit 4)
 #define MAX_CHUNKS 128          // 65,536 values of 512 (a full screen is 38 chunks)
 #define TC_U16_VALS 19200       // kinds/samples.py MAX_SAMPLES
 #define TC_TAB_I32 (512 + 32 * 32 + 1)     // plan_int_tables.table(): EXP_HI, EXP_MID, NORM

@@ -37,6 +37,7 @@
 # pyb Timer callbacks run in a hard IRQ (heap locked).
 # Sensor: pyb.ADC(pin).read() (12 bits), scaled to read_u16 units the way
 # machine.ADC.read_u16 does (raw << 4 | raw >> 8).
+import sys
 import time
 
 import pyb
@@ -56,7 +57,17 @@ _REFRESH_TIMER = const(7)           # basic timer, unused by pyb itself
 _CLOCK_TIMER = const(2)             # 32-bit: the refresh core's microsecond clock
 _CNT = const(0x24)
 _ARR = const(0x2C)
+_EGR = const(0x14)
 _ADC_CR2 = const(0x08)
+
+
+def _f247():
+    """True on an STM32F2, F4 or F7 (sys.implementation._machine names the MCU,
+    e.g. "PYBv1.1 with STM32F405RG"): their ADC1 (CR2 ADON/SWSTART, DR at 0x4C)
+    and TIM2 are what the refresh core drives. Other families (L4, G4, H7, WB)
+    lay their ADC out otherwise: there the refresh reads pyb.ADC in Python."""
+    m = getattr(sys.implementation, "_machine", "")
+    return "STM32F2" in m or "STM32F4" in m or "STM32F7" in m
 
 
 def _adc1():
@@ -64,7 +75,15 @@ def _adc1():
         import stm
         return stm.ADC1
     except (ImportError, AttributeError):
-        return 0x40012000           # STM32F4 (RM0090, RM0383)
+        return 0x40012000           # STM32F2/F4/F7 (RM0090, RM0383)
+
+
+def _tim2():
+    try:
+        import stm
+        return stm.TIM2
+    except (ImportError, AttributeError):
+        return 0x40000000           # STM32F2/F4/F7
 
 
 def _tim_base(n):
@@ -217,12 +236,15 @@ class Hw:
         sensor's channel (one pyb read selects it; the core sets ADON and starts
         each next conversion itself), and this carrier's CCR. A drive that
         goes through these registers sets MOE itself when the timer starts."""
-        if len(self._adc) != 1:
-            return None
+        if len(self._adc) != 1 or not _f247():
+            return None                             # pyb.ADC.read() in Python, as before
         clock = pyb.Timer(_CLOCK_TIMER, prescaler=pyb.Timer(_CLOCK_TIMER).source_freq()
                           // 1000000 - 1, period=0x3FFFFFFF)
-        base = _tim_base(_CLOCK_TIMER)
-        self._mem[base + _ARR] = 0xFFFFFFFF         # wrap at 2^32, as the core's diff does
+        base = _tim2()
+        # wrap at 2^32, as the core's diff does: ARR is preloaded (pyb sets ARPE), so an
+        # update event (EGR UG) loads it now, not at the first wrap 2^30 us away
+        self._mem[base + _ARR] = 0xFFFFFFFF
+        self._mem[base + _EGR] = 1
         self._clock = clock
         self._adc[0].read()                         # pyb selects the channel (SQR3)
         adc = _adc1()

@@ -283,6 +283,11 @@ def _biggest_block(c, spans, engine=None):
     return big
 
 
+class OutOfMemory(ValueError):
+    """build() found no room for a scene's buffers (a ValueError: callers that
+    only refuse need nothing more; texel.app makes room on this one)."""
+
+
 def build(canonical, display, engine=None, idle_default=0, max_bytes=None, checked=None,
           reuse=None):
     """Allocate and render what the scene's regions use and return a Scene.
@@ -331,7 +336,7 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
         # whatever was allocated is unreachable now: give it back (memory_words collects)
         from ..compat import memory_words
         block = _biggest_block(c, spans, engine)
-        raise ValueError("scene: out of memory while building (needs %d bytes: %d of sample "
+        raise OutOfMemory("scene: out of memory while building (needs %d bytes: %d of sample "
                          "buffers and plans + %d of region table; %s%s)%s"
                          % (need, nbuf, ntab, memory_words(block, nbuf) or "the heap is full",
                             ", and a region needs one block of %d" % block if block else "",

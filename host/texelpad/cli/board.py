@@ -186,8 +186,11 @@ def board_push_time(lp: dict[str, Any] | None) -> str:
                                            for k in ("validate_us", "build_us", "swap_us")):
         return ""
     v, b, s = lp["validate_us"], lp["build_us"], lp["swap_us"]
-    return ("; on the board's own clock: validate %.1f + build %.1f + swap %.1f = %.1f ms"
-            % (v / 1e3, b / 1e3, s / 1e3, (v + b + s) / 1e3))
+    return ("; on the board's own clock: validate %.1f + build %.1f + swap %.1f = %.1f ms%s"
+            % (v / 1e3, b / 1e3, s / 1e3, (v + b + s) / 1e3,
+               # texel/app.py MAKE_ROOM: the new scene did not fit beside the old one
+               "; it did not fit beside the scene that played, so the display was idle for "
+               "the %.1f ms of its build" % (b / 1e3) if lp.get("made_room") else ""))
 
 
 def add_status(p: argparse.ArgumentParser) -> None:

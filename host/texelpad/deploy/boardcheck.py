@@ -360,6 +360,14 @@ def _hardware(d: dict[str, Any], firmware: str) -> _Found:
                                       "'virtual'); for this "
                                       "board use --firmware stock" % (port, FIRMWARE_TEXT[
                                           "texelpad"])), ("port",)))
+    if firmware == "texelpad" and port == "stm32" and _is_int(d.get("cpu_hz")) \
+            and d.get("cpu_hz") != F405_TIM18_HZ:
+        # boards/pyboard is the one STM32 texelpad firmware (an F411's 512 KB do not hold it:
+        # hardware/README.md, "STM32 boards")
+        found.append((Problem("cpu_hz", "%s Hz: the texelpad firmware for STM32 is built for the "
+                                        "pyboard's STM32F405 (TIM1/8 at %s Hz) only; for this "
+                                        "board use --firmware stock"
+                                        % (_n(d["cpu_hz"]), _n(F405_TIM18_HZ))), ("cpu_hz",)))
     pins = _get(d, "carrier.pins")
     sens = _get(d, "sensor.pins")
     pins = pins if isinstance(pins, list) else []

@@ -196,20 +196,20 @@ def deploy(board: Any, source: bool = False, include_main: bool = True, dry_run:
     say = progress or (lambda m: None)
     t_start = time.perf_counter()
     fw = board.firmware
-    if not source:
-        from .romfs_install import deploy_romfs, firmware_info
-        info = firmware_info(board)
-        if info is not None:                # the texelpad firmware: texelpad is its ROMFS
-            return deploy_romfs(board, info, force=force, dry_run=dry_run, progress=say, bar=bar)
-        from .romfs_install import frozen_stm32_board
-        frozen = frozen_stm32_board(board)
-        if frozen:                          # its frozen code would shadow files deployed
-            raise image.ImageError(
+    from .romfs_install import frozen_stm32_board
+    frozen = frozen_stm32_board(board)
+    if frozen:                              # its frozen code would shadow files deployed
+        raise image.ImageError(
                 "%s runs the texelpad firmware for board %s: texelpad's code is frozen in it, "
                 "so files deployed to its filesystem would never run. To update it, build "
                 "and flash a new one: texelpad firmware --board %s, then dfu-util -a 0 -D "
                 "firmware/texelpad-%s.dfu (docs/firmware.md, \"pyboard\")"
                 % (board.port, frozen, frozen, frozen))
+    if not source:
+        from .romfs_install import deploy_romfs, firmware_info
+        info = firmware_info(board)
+        if info is not None:                # the texelpad firmware: texelpad is its ROMFS
+            return deploy_romfs(board, info, force=force, dry_run=dry_run, progress=say, bar=bar)
         if fw.get("platform") == "rp2":
             say("stock MicroPython found: the image goes into its filesystem as .mpy files "
                 "(the texelpad firmware keeps it in flash instead: texelpad firmware, "

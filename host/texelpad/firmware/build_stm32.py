@@ -7,7 +7,7 @@ What it makes, in out_dir (NAME the board's name; the twin's files are NAME-qemu
     texelpad-NAME.dfu        the firmware and texelpad's ROMFS partition in one DfuSe file:
                              `dfu-util -a 0 -D texelpad-NAME.dfu` (or MicroPython's
                              tools/pydfu.py -u) with the board in its DFU bootloader
-    texelpad-NAME-0x08000000.bin, -0x08020000.bin, -0x080a0000.bin
+    texelpad-NAME-0x08000000.bin, -0x08020000.bin, -0x080c0000.bin
                              the same three blocks as raw images (for st-flash / STM32CubeProgrammer)
     texelpad-NAME.romfs      the ROMFS partition alone (the third block)
     texelpad-NAME.elf        the firmware's symbols
@@ -28,8 +28,8 @@ pins.csv, stm32f4xx_hal_conf.h, a linker script with a FLASH_ROMFS region, manif
 texelpad's board file (board.json); qemu/ in it holds the emulated twin's differences, copied
 over the definition for --qemu (docs/firmware.md lists them). The partition holds texelpad's
 data: board files, the generator's tables, the references' noise rows - not the nine reference
-maps of the Pico's partition (345 KB; they do not fit beside the firmware in the F405's 1 MB:
-a reference is rendered on the board at push time, into 1 KB chunks).
+maps of the Pico's partition (345 KB, 418 KB with the data: more than the F405's 1 MB leaves
+beside the firmware; a reference is rendered on the board at push time, into 1 KB chunks).
 """
 from __future__ import annotations
 
@@ -84,13 +84,24 @@ def flash_layout(board_dir: Path) -> dict[str, tuple[int, int]]:
             raise LayoutError("%s: no MEMORY region %s (ORIGIN = 0x..., LENGTH = ...K)"
                               % (ld, region))
         out[key] = r
-    if out["romfs"][0] % 4 or out["romfs"][1] % 4:
-        raise LayoutError("%s: FLASH_ROMFS must start and end on a word" % ld)
+    (t0, tn), (r0, rn) = out["text"], out["romfs"]
+    if t0 < r0 + rn and r0 < t0 + tn:
+        raise LayoutError("%s: FLASH_ROMFS (0x%08x, %d K) overlaps FLASH_TEXT (0x%08x, %d K)"
+                          % (ld, r0, rn // 1024, t0, tn // 1024))
+    # the partition is erased and written a sector at a time (texelpad deploy, mpremote romfs):
+    # it must own whole sectors of the F2/F4/F7's flash (16 K x 4, 64 K, then 128 K each)
+    edges = [0x08000000 + 0x4000 * k for k in range(5)] + [
+        0x08020000 + 0x20000 * k for k in range(16)]
+    if r0 not in edges or (r0 + rn) not in edges:
+        raise LayoutError("%s: FLASH_ROMFS (0x%08x .. 0x%08x) must begin and end on flash sector "
+                          "boundaries (0x08020000 + n x 128 K on an STM32F4)" % (ld, r0, r0 + rn))
     return out
 
 
 def check_stm32_dir(board_dir: Path) -> None:
     missing = [f for f in STM32_FILES if not (board_dir / f).is_file()]
+    if not list(board_dir.glob("stm32*_hal_conf.h")):
+        missing.append("stm32f4xx_hal_conf.h (the port's HAL configuration)")
     if missing:
         raise LayoutError("%s: not a texelpad STM32 board folder: %s missing (boards/pyboard is "
                           "an example)" % (board_dir, ", ".join(missing)))
@@ -224,10 +235,12 @@ def build_stm32(board_dir: Path, board: dict, out: Path, micropython: str | os.P
          + (["USER_C_MODULES=%s" % mods] if mods else []), log, env=env)
     bins = [fw / "firmware0.bin", fw / "firmware1.bin"]
     text_bytes = bins[1].stat().st_size
-    if text_bytes > text_cap or bins[0].stat().st_size > lay["start"][1]:
-        raise FirmwareError("the firmware (%s bytes) does not fit FLASH_TEXT (%s bytes) in %s"
-                            % (format(text_bytes, ","), format(text_cap, ","),
-                               linker_script(board_dir)))
+    for name, size, cap in (("FLASH_TEXT", text_bytes, text_cap),
+                            ("FLASH_START", bins[0].stat().st_size, lay["start"][1])):
+        if size > cap:
+            raise FirmwareError("the firmware's %s part (%s bytes) does not fit it (%s bytes) in "
+                                "%s" % (name, format(size, ","), format(cap, ","),
+                                        linker_script(board_dir)))
     blocks = [(lay["start"][0], bins[0].read_bytes()), (text_base, bins[1].read_bytes()),
               (rom_base, img)]
     say("writing the .dfu (firmware and ROMFS partition) and the raw .bin blocks")

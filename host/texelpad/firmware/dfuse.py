@@ -5,7 +5,7 @@
 
 What dfu-util (`dfu-util -a 0 -D file.dfu`) and MicroPython's tools/pydfu.py flash onto an
 STM32 in its DFU bootloader (BOOT0 high): the pyboard's firmware (two blocks, 0x08000000 and
-0x08020000) and texelpad's ROMFS partition (0x080A0000) in one file. The layout is the one
+0x08020000) and texelpad's ROMFS partition (0x080C0000) in one file. The layout is the one
 MicroPython v1.28's tools/dfu.py writes (ST's UM0391: prefix "DfuSe" v1, a "Target" prefix with
 alternate setting 0, elements padded to 8 bytes, a 16-byte suffix "UFD" DFU 1.1a for USB
 0483:df11, CRC-32 of everything before it stored as its one's complement);

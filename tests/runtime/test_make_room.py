@@ -1,0 +1,109 @@
+"""A push whose scene does not fit beside the one playing is built in the playing scene's room
+(texel.app.MAKE_ROOM, issue 34: on a board without flash maps - the pyboard - 62 of 100 mixed
+pushes were refused for memory): the display plays idle while it builds, and status()'s
+last_push says made_room. If even that room is too small, the old scene is built again and
+plays on, and the push is refused saying so. Real MemoryErrors: the MicroPython unix port on
+heaps of several sizes, the virtual board playing the split screen, a full-screen reference
+pushed (its 38.4 KB map does not fit beside the split screen's 20 KB on the small heaps)."""
+from __future__ import annotations
+
+import pytest
+
+from support import mpy
+
+SCRIPT = r"""
+import json, gc
+import texel.app as app
+SPLIT = {"regions": [
+    {"start_mm": 0, "end_mm": 50.88, "texture": {"kind": "reference", "name": "4sin"}},
+    {"start_mm": 50.88, "end_mm": 101.76, "texture": {"kind": "texel", "pitch_db": 6.3,
+     "irregularity_db": -12.9, "seed": 7}}]}
+FULL = {"regions": [{"start_mm": 0, "end_mm": 101.76,
+                     "texture": {"kind": "reference", "name": "pink"}}]}
+try:
+    app.start("virtual", SPLIT, record=64)
+except Exception as e:
+    print(json.dumps({"no_start": repr(e)}))
+    raise SystemExit
+def playing():
+    sc = app._rt.refresh.scene
+    if sc is None:
+        return None
+    return [r["texture"].get("name", r["texture"]["kind"]) for r in sc.source["regions"]]
+app.MAKE_ROOM = %(make_room)r
+res = {"before": playing()}
+try:
+    st = app.push(FULL)
+    res["outcome"] = "made_room" if st["last_push"].get("made_room") else "beside"
+except ValueError as e:
+    res["outcome"] = str(e)
+res["after"] = playing()
+res["running"] = app.status()["running"]
+# the scene playing answers at every position (nothing left half-built)
+sc = app._rt.refresh.scene
+res["amps"] = [sc.amp(p) for p in (0, 9599, 9600, 19199)] if sc is not None else []
+print(json.dumps(res))
+"""
+
+
+_TREE: list = []
+
+
+def _run(kb: int, make_room: bool) -> dict:
+    # the compiled image, as a board loads it (compiling from source fragments the heap)
+    if not _TREE:
+        import tempfile
+        from pathlib import Path
+        from texelpad import image
+        tree = Path(tempfile.mkdtemp(prefix="make-room-")) / "image"
+        image.write_tree(image.build_image(image.TARGETS["unix"], include_main=False), tree)
+        _TREE.append(tree / "lib")
+    return mpy.run_json(SCRIPT % {"make_room": make_room}, heapsize="%dk" % kb, path=_TREE[0])
+
+
+def test_a_scene_too_big_beside_the_playing_one_is_built_in_its_room():
+    seen = {}
+    for kb in range(200, 401, 8):
+        res = _run(kb, True)
+        if "no_start" in res:
+            continue
+        out = res["outcome"]
+        seen.setdefault(out if out in ("beside", "made_room") else "refused", kb)
+        assert res["running"] and res["before"] == ["4sin", "texel"], (kb, res)
+        if out in ("beside", "made_room"):
+            assert res["after"] == ["pink"], (kb, res)
+        elif res["after"] is None:
+            # refused, and the old scene no longer fitted either: idle, and it says so
+            assert "no longer fits either: the display plays idle" in out, (kb, out)
+        else:
+            # refused: the old scene was built again and plays, and the refusal says so
+            assert "not even in the playing scene's room" in out, (kb, out)
+            assert res["after"] == ["4sin", "texel"], (kb, res)
+            assert "built again and plays on" in out, (kb, out)
+    print("\nfull-screen reference pushed over the split screen, first heap (KB) per outcome: %s"
+          % seen)
+    assert "made_room" in seen and "beside" in seen, seen
+    # without make-room, the heap that made room refuses and keeps the split screen untouched
+    res = _run(seen["made_room"], False)
+    assert res["outcome"].startswith("scene: out of memory") and "push a small scene first" \
+        in res["outcome"], res
+    assert res["after"] == ["4sin", "texel"] and res["running"], res
+
+
+@pytest.mark.parametrize("kb", [256])
+def test_the_refresh_plays_idle_not_garbage_while_it_makes_room(kb):
+    # (the swap to None is one store: refresh.scene None plays the idle amplitude)
+    res = _run(kb, True)
+    if "no_start" in res:
+        pytest.skip(res["no_start"])
+    assert all(0 <= a <= 65535 for a in res["amps"]), res
+
+
+def test_the_push_line_says_when_the_display_was_idle():
+    from texelpad.cli.board import board_push_time
+    lp = {"validate_us": 500, "build_us": 71000, "swap_us": 700}
+    assert board_push_time(lp) == ("; on the board's own clock: validate 0.5 + build 71.0 + "
+                                   "swap 0.7 = 72.2 ms")
+    assert board_push_time(dict(lp, made_room=True)).endswith(
+        "; it did not fit beside the scene that played, so the display was idle for the 71.0 "
+        "ms of its build")
