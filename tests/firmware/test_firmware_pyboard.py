@@ -75,8 +75,7 @@ def test_the_pyboard_image_builds_as_a_dfu_with_its_romfs():
         [0x08000000, 0x08020000, 0x080C0000]
     assert blocks[2][1][:len(fw.romfs.read_bytes())] == fw.romfs.read_bytes()
     assert len(blocks[1][1]) <= lay["text"][1] and fw.romfs_bytes <= lay["romfs"][1]
-    build_dir = fw.image.parent / "build-pyboard"
-    port_dfu = (build_dir / "firmware.dfu").read_bytes()      # the Makefile's tools/dfu.py
+    port_dfu = (fw.build_dir / "firmware.dfu").read_bytes()      # the Makefile's tools/dfu.py
     assert dfuse.dfuse_file(blocks[:2]) == port_dfu
     files = romfs.read_romfs(fw.romfs.read_bytes())
     info = json.loads(files["firmware.json"])

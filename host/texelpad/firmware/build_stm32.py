@@ -11,8 +11,8 @@ What it makes, in out_dir (NAME the board's name; the twin's files are NAME-qemu
                              the same three blocks as raw images (for st-flash / STM32CubeProgrammer)
     texelpad-NAME.romfs      the ROMFS partition alone (the third block)
     texelpad-NAME.elf        the firmware's symbols
-    build-NAME/, build-NAME.log, board-NAME/   the build's own (kept: a rebuild only recompiles
-                             what changed)
+    build-NAME-KEY/, build-NAME.log, board-NAME/   the build's own (kept: a rebuild only
+                             recompiles what changed; KEY names the source trees it was made from)
 
 The MicroPython build is the stm32 port of MicroPython v1.28.0 with texelpad's C core
 (_texelcore: device/cmod/texelcore, its micropython.mk) as a user C module and texel frozen in
@@ -33,6 +33,7 @@ beside the firmware; a reference is rendered on the board at push time, into 1 K
 """
 from __future__ import annotations
 
+import hashlib
 import os
 import re
 import shutil
@@ -219,8 +220,12 @@ def build_stm32(board_dir: Path, board: dict, out: Path, micropython: str | os.P
     _needs()
     log = out / ("build-%s.log" % tag)
     log.write_text("")
-    fw = out / ("build-" + tag)
     mods = TEXELCORE_DIR.parent if (TEXELCORE_DIR / "micropython.mk").is_file() else None
+    # make rebuilds what changed by the files' own paths: a build folder another checkout
+    # (or MicroPython tree) filled would keep objects of its sources, so the folder is
+    # named after both (two checkouts sharing a cache folder once played an older C core)
+    key = hashlib.sha256(("%s\n%s" % (src, mods)).encode()).hexdigest()[:8]
+    fw = out / ("build-%s-%s" % (tag, key))
     if mods is None:
         say("no %s: the firmware runs format 2 and the brush in viper, without the C core"
             % TEXELCORE_DIR)
@@ -256,4 +261,4 @@ def build_stm32(board_dir: Path, board: dict, out: Path, micropython: str | os.P
     shutil.copyfile(fw / "firmware.elf", elf)
     fw_bytes = sum(len(d) for _a, d in blocks[:2])
     return Built(dst, rom, elf, name, fw_bytes, len(img), rom_cap, rom_base, 0,
-                 time.monotonic() - t0, port="stm32", qemu=qemu)
+                 time.monotonic() - t0, port="stm32", qemu=qemu, build_dir=fw)

@@ -52,6 +52,7 @@ class Built:
     seconds: float
     port: str = "rp2"
     qemu: bool = False                # the STM32 board's emulated twin (build_stm32)
+    build_dir: Path | None = None     # the MicroPython build's own folder (stm32)
 
     @property
     def uf2(self) -> Path:
