@@ -1,5 +1,7 @@
-# texelpad firmware for the pyboard v1.1 (texelpad firmware --board pyboard): MicroPython's
-# boards/PYBV11/mpconfigboard.mk without Mboot, linked with texelpad_f405.ld (a ROMFS partition).
+# texelpad firmware for the pyboard v1.1 (texelpad firmware --board pyboard), and its emulated
+# twin (--qemu: qemu/ holds only the twin's header and board_init.c, which the stm32 Makefile
+# compiles as $(BOARD_DIR)/*.c): MicroPython's boards/PYBV11/mpconfigboard.mk without Mboot,
+# linked with texelpad_f405.ld (a ROMFS partition).
 MCU_SERIES = f4
 CMSIS_MCU = STM32F405xx
 AF_FILE = boards/stm32f405_af.csv
