@@ -70,28 +70,18 @@ def _f247():
     return "STM32F2" in m or "STM32F4" in m or "STM32F7" in m
 
 
-def _adc1():
+def _base(name, fallback):
+    """A peripheral's base address: the port's stm module knows it for its MCU;
+    fallback (the STM32F2/F4/F7's, RM0090) where it has no stm or no name."""
     try:
         import stm
-        return stm.ADC1
+        return getattr(stm, name)
     except (ImportError, AttributeError):
-        return 0x40012000           # STM32F2/F4/F7 (RM0090, RM0383)
-
-
-def _tim2():
-    try:
-        import stm
-        return stm.TIM2
-    except (ImportError, AttributeError):
-        return 0x40000000           # STM32F2/F4/F7
+        return fallback
 
 
 def _tim_base(n):
-    try:
-        import stm
-        return getattr(stm, "TIM%d" % n)
-    except (ImportError, AttributeError):
-        return _TIM1 if n == 1 else _TIM8
+    return _base("TIM%d" % n, _TIM1 if n == 1 else _TIM8)
 
 
 def timer_period(source_hz, freq_hz):
@@ -240,14 +230,14 @@ class Hw:
             return None                             # pyb.ADC.read() in Python, as before
         clock = pyb.Timer(_CLOCK_TIMER, prescaler=pyb.Timer(_CLOCK_TIMER).source_freq()
                           // 1000000 - 1, period=0x3FFFFFFF)
-        base = _tim2()
+        base = _base("TIM2", 0x40000000)
         # wrap at 2^32, as the core's diff does: ARR is preloaded (pyb sets ARPE), so an
         # update event (EGR UG) loads it now, not at the first wrap 2^30 us away
         self._mem[base + _ARR] = 0xFFFFFFFF
         self._mem[base + _EGR] = 1
         self._clock = clock
         self._adc[0].read()                         # pyb selects the channel (SQR3)
-        adc = _adc1()
+        adc = _base("ADC1", 0x40012000)
         self._mem[adc + _ADC_CR2] = self._mem[adc + _ADC_CR2] | 1      # ADON
         self._direct = True
         return base + _CNT, adc, self._ccr
