@@ -260,6 +260,7 @@ class _Transport(SerialTransport):
             while n > 0:                          # flush (bounded by the deadline)
                 self.serial.read(n)
                 n = self.serial.in_waiting
+            self.banners_owed += 1
             self.serial.write(b"\r\x01")         # Ctrl-A: the raw REPL
             self._read_banner(retry=True)
 
@@ -284,8 +285,12 @@ class _Transport(SerialTransport):
                 data = (data + new)[-tail:]
                 again = time.monotonic() + RETRY_CTRL_A_S
             elif retry and time.monotonic() > again:
+                self.banners_owed += 1
                 self.serial.write(b"\r\x01")
                 again = time.monotonic() + RETRY_CTRL_A_S
+        # one banner read (two read together count once: owed is an upper bound,
+        # as CircuitPython may drop a Ctrl-A); _answer reads past at most that many
+        self.banners_owed = max(0, self.banners_owed - 1)
         self.in_raw_repl = True
         self.serve_banner = data.endswith(SERVE_MARK + self.RAW_PROMPT)
         if self.serve_banner:
@@ -305,6 +310,7 @@ class _Transport(SerialTransport):
             with self.deadline(seconds):
                 # Ctrl-A alone: a friendly REPL acts on it only at an empty line, so a
                 # half-typed line is neither run nor lost (then no banner: the Ctrl-C path)
+                self.banners_owed += 1
                 self.serial.write(b"\x01")
                 return "serve" if self._read_banner(retry=False) else "raw"
         except TransportError:
@@ -339,25 +345,53 @@ class _Transport(SerialTransport):
         if err:
             self.late_error = err.decode("utf-8", "replace")
 
+    banners_owed = 0        # Ctrl-As sent whose raw-REPL banners may come yet
+
+    def _answer(self) -> bytes:
+        """The board's 2-byte answer (b"OK", b"R\\x01", ...), waited for until
+        the operation's deadline, past the banners still owed: a board slow
+        to answer Ctrl-A got it again (RETRY_CTRL_A_S) and answers both, the
+        second banner after _read_banner has returned (test_link_late_banner)."""
+        got = self._read_exact(2)
+        while self.banners_owed and got in (b"ra", b"\r\n", SERVE_MARK[:2]):
+            self.banners_owed -= 1
+            while not got.endswith(self.RAW_PROMPT + b">"):
+                got += self.serial.read(1)                  # raises at the deadline
+            got = self._read_exact(2)
+        self.banners_owed = 0       # any not come by now were dropped (CircuitPython)
+        return got
+
+    def _read_exact(self, n: int) -> bytes:
+        got = b""
+        while len(got) < n:
+            got += self.serial.read(n - len(got))        # raises at the deadline
+        return got
+
     def exec_raw_no_follow(self, command: Any) -> None:
+        """mpremote's, but every answer read by _answer: until the operation's
+        deadline (serve reads the console between refreshes, and an emulated
+        board under load takes longer than mpremote's one read), and past late
+        banners. The standard raw mode serves CircuitPython's texel/serve.py."""
         self.settle()
-        if self.use_raw_paste:
-            super().exec_raw_no_follow(command)
-            return
-        # The standard raw mode (a serving CircuitPython board: texel/serve.py), as
-        # mpremote sends it, but the "OK" waited for until the operation's deadline:
-        # serve reads the console between refreshes, and an emulated board under
-        # load (a pin probe, a moving finger) takes longer than mpremote's one read.
         data = bytes(command, "utf8") if isinstance(command, str) else bytes(command)
         if not self.read_until(1, b">").endswith(b">"):
             raise TransportError("could not enter raw repl")
+        if self.use_raw_paste:
+            self.serial.write(b"\x05A\x01")
+            got = self._answer()
+            if got == b"R\x01":
+                self.raw_paste_write(data)
+                return
+            if got != b"R\x00":        # no raw paste at all: it answered as Ctrl-A
+                banner = self.read_until(1, self.RAW_PROMPT + b">")
+                if not banner.endswith(self.RAW_PROMPT + b">"):
+                    raise TransportError("could not enter raw repl")
+            self.use_raw_paste = False
         for i in range(0, len(data), 256):
             self.serial.write(data[i:i + 256])
             time.sleep(0.01)
         self.serial.write(b"\x04")
-        got = b""
-        while len(got) < 2:
-            got += self.serial.read(2 - len(got))       # raises at the deadline
+        got = self._answer()
         if got != b"OK":
             raise TransportError("could not exec command (response: %r)" % got)
 
