@@ -45,8 +45,26 @@ def main():
         print("texelpad: playing on %s (%s refreshes/s)" % (st.get("board"), st.get("refresh_hz")))
         if st.get("refresh_mode") == "loop":      # no timer IRQ: this loop is the display,
             texel.app.serve()                     # and it answers the host (texel/serve.py)
+            return
     except Exception as e:          # never brick the REPL: report and stay off
         print("texelpad: not started:", repr(e))
+        return
+    _kit(cfg.get("playlist"))
+
+
+def _kit(playlist):
+    """The classroom kit (texel/kit.py): a playlist the button steps, until
+    a Ctrl-C (a laptop's texelpad or mpremote) hands the board to the REPL
+    with the scene playing."""
+    if not isinstance(playlist, list) or len(playlist) < 2:
+        return
+    try:
+        import texel.kit
+        print("texelpad: a playlist of %d scenes: the button steps it; Ctrl-C for the REPL"
+              % len(playlist))
+        texel.kit.run(playlist)
+    except Exception as e:          # the scene plays on; only the stepping is off
+        print("texelpad: the playlist does not step:", repr(e))
 
 
 main()

@@ -62,6 +62,9 @@ MAIN_PY = PACKAGE_DIR / "main.py"            # the board's /main.py, not a modul
 HW_DIR = "hw"                                # texel/hw/<backend>.py
 # The hardware backend module each board port runs (texel.compat.PORT_TABLE: texel.app's too).
 PORT_BACKEND = {p: PORT_TABLE[p]["backend"][0] for p in PORTS}
+# Hardware modules several ports share (texel/hw/<name>.py -> the ports that get
+# it): the classroom kit's button and LED on machine.Pin (texel/kit.py)
+HW_SHARED = {"pins": ("rp2", "stm32")}
 # Host-only modules of the texel package (paths under it), the ONE list: every
 # board image leaves them out - deploy's (.mpy and --source), mip's
 # package.json, the firmware's frozen code and ROMFS (texelpad.firmware builds
@@ -293,8 +296,10 @@ def _wanted_module(p: Path, port: str | None) -> bool:
     if rel == Path("main.py") or rel.as_posix() in HOST_ONLY:
         return False
     if port is not None and rel.parts[0] == HW_DIR and rel.name != "__init__.py":
-        # the port's backend, and its own helpers (hw/stm32_irq.py goes with hw/stm32.py)
-        return rel.stem == PORT_BACKEND[port] or rel.stem.startswith(PORT_BACKEND[port] + "_")
+        # the port's backend, its own helpers (hw/stm32_irq.py goes with hw/stm32.py)
+        # and what it shares (HW_SHARED)
+        return (rel.stem == PORT_BACKEND[port] or rel.stem.startswith(PORT_BACKEND[port] + "_")
+                or port in HW_SHARED.get(rel.stem, ()))
     return True
 
 

@@ -17,6 +17,7 @@ from pathlib import Path
 import pytest
 
 import texel
+import texel.app  # noqa: F401 (texel.app.DEFAULT_SCENE below; not imported by texel itself)
 import texel.runtime.scene as scene_mod
 import texelpad
 from texelpad.cli.errors import CliError
@@ -535,3 +536,51 @@ def test_texelpad_virtual_plays_its_power_up_scene(capsys, tmp_path):
             src = b.scene_source()
     assert _plain(src) == _plain(scene_mod.validate(texel.app.DEFAULT_SCENE, TPAD))
     assert "power-up" not in v.err
+
+
+# The host's Ctrl-C, as the kit's loop meets it: after `polls` polls (a test's
+# stand-in for a laptop plugged in; the button is the virtual board's scripted one)
+KIT_PREFIX = """import texel.kit as _k, texel.hw.virtual as _v
+_v.VirtualHw.button_levels = %r
+_n = [0]
+def _sleep(ms, _t=_k._sleep):
+    _n[0] += 1
+    if _n[0] > %d:
+        raise KeyboardInterrupt
+    _t(ms)
+_k._sleep = _sleep
+"""
+
+
+@pytest.mark.vboard
+def test_boot_with_several_files_is_a_playlist_the_button_steps(capsys, flash_board, tmp_path):
+    """`texelpad scene boot A B C`: a playlist in /texelpad.json; at power-up
+    main.py plays A and the board's button steps it (two presses: C), and a
+    Ctrl-C leaves C playing with the REPL the host's. A bad scene among the
+    files is refused and the file is left as it was."""
+    port, flash = flash_board
+    code, out, err = run_cli(capsys, "scene", "boot", "texel-sweep", "gradient", "constant-half",
+                             "--port", port)
+    assert code == 0, err
+    assert "playlist of 3 scenes (texel-sweep, gradient, constant-half)" in out, out
+    cfg = json.loads((flash / "texelpad.json").read_text())
+    assert [s.get("name") for s in cfg["playlist"]] == [
+        read_scene_file(n).get("name") for n in ("texel-sweep", "gradient", "constant-half")]
+    assert cfg["scene"] == cfg["playlist"][0]
+    levels = [0] * 4 + [1] * 6 + [0] * 6 + [1, 0, 1] + [1] * 6 + [0] * 4
+    exe = Path(sys.executable).parent / "mpremote"
+    r = subprocess.run([str(exe) if exe.exists() else "mpremote", "connect", port, "exec",
+                        KIT_PREFIX % (levels, len(levels) + 5) + MAIN_PY.read_text()],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert "a playlist of 3 scenes" in r.stdout and "texelpad: scene 3 of 3" in r.stdout, r.stdout
+    with texelpad.connect(port) as b:
+        st = b.status()
+    assert st["running"] and st["scene"]["name"] == read_scene_file("constant-half").get("name"), st
+    before = (flash / "texelpad.json").read_bytes()
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"regions": [{"start_mm": 0, "end_mm": 10, "texture": {
+        "kind": "texel", "pitch_db": 99.0}}]}))
+    code, out, err = run_cli(capsys, "scene", "boot", "gradient", str(bad), "--port", port)
+    assert code != 0 and "scene 2 of the playlist: regions[0].texture.pitch_db" in err, err
+    assert (flash / "texelpad.json").read_bytes() == before

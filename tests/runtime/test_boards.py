@@ -293,10 +293,10 @@ def _del(path: str):
 # (base board, mutation, expected "<key path>: <message>" after the file name)
 BAD = [
     ("pico", _set("colour", "red"),
-     "colour: unknown key (known: name, port, title, cpu_hz, carrier, sensor, refresh, display, wiring)"),
+     "colour: unknown key (known: name, port, title, cpu_hz, carrier, sensor, refresh, display, wiring, button, led)"),
     # two unknown keys: the alphabetically first is named, whatever the dict order
     ("pico", lambda d: d.update({"zeta": 1, "alpha": 2}),
-     "alpha: unknown key (known: name, port, title, cpu_hz, carrier, sensor, refresh, display, wiring)"),
+     "alpha: unknown key (known: name, port, title, cpu_hz, carrier, sensor, refresh, display, wiring, button, led)"),
     ("pico", _set("carrier.frq_hz", 34000),
      "carrier.frq_hz: unknown key (known: freq_hz, duty_cap, drive, pins, pwm, idle_amplitude, "
      "deadtime_ns)"),

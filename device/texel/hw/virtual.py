@@ -207,3 +207,26 @@ class VirtualHw:
     def clear_record(self):
         self.nrec = 0
         self.dropped = 0
+
+    # --- the classroom kit's button and LED (texel/kit.py) ------------------
+    button_levels = ()          # the button's scripted levels, one read each (then 0)
+    led_log = None              # [(virtual us, level), ...] the LED was set to
+
+    def kit_button(self, spec):
+        """The virtual button: reads button_levels front to back (a test or
+        the host scripts it), 0 when they run out. spec: the board file's
+        "button" (its pin is only a label here)."""
+        self.button_levels = list(self.button_levels)
+
+        def read():
+            lv = self.button_levels
+            return lv.pop(0) if lv else 0
+        return read
+
+    def kit_led(self, spec):
+        """The virtual LED: records (now, level) in led_log."""
+        self.led_log = []
+
+        def write(on):
+            self.led_log.append((self.now, 1 if on else 0))
+        return write

@@ -70,7 +70,10 @@ for _p in PORTS:
 OPTIONAL = "(optional)"
 TOP_KEYS = (("name", "s", None), ("port", "s", None), ("title", "s", ""),
             ("cpu_hz", "i", None), ("carrier", "d", None), ("sensor", "d", None),
-            ("refresh", "d", {}), ("display", "d", {}), ("wiring", "s", ""))
+            ("refresh", "d", {}), ("display", "d", {}), ("wiring", "s", ""),
+            # the classroom kit (texel/kit.py): the button that steps a playlist
+            # and the LED that shows it; rp2's defaults are BOOTSEL and "LED"
+            ("button", "d", OPTIONAL), ("led", "d", OPTIONAL))
 CARRIER_KEYS = (("freq_hz", "i", FREQ_DEFAULT_HZ), ("duty_cap", "n", 0.5),
                 ("drive", "s", None), ("pins", "p", None), ("pwm", "d", {}),
                 ("idle_amplitude", "i", 0),
@@ -90,6 +93,12 @@ SENSOR_KEYS = (("kind", "s", None), ("pins", "p", None),
 # default: 7, a basic timer without outputs)
 REFRESH_KEYS = (("hz", "i", 8333), ("mode", "s", None), ("timer", "i", OPTIONAL))
 DISPLAY_KEYS = (("positions", "i", 19200), ("dx_um", "n", 5.3))
+# button/led pin: a GPIO number (rp2, virtual), a pin name (stm32 "B3",
+# rp2 "LED"), or "bootsel" (rp2's button: rp2.bootsel_button()).
+# active_low: a button wired to GND with the pin's pull-up (the usual), an
+# LED wired from 3V3 (the Black Pill's C13)
+BUTTON_KEYS = (("pin", "x", None), ("active_low", "i", 1))
+LED_KEYS = (("pin", "x", None), ("active_low", "i", 0))
 # pwm sub-dict keys per port: RP2040 slice (derived from the pin when
 # missing), STM32 timer and channel; CircuitPython pwmio and the virtual
 # board choose for themselves.
@@ -331,7 +340,7 @@ def load(name, search=None):
 # c, in every check below: the head of its messages, "<source>: " (the file),
 # so an error reads "<source>: <key path>: <what is wrong>" (gen/check.fail).
 _KIND_NAMES = {"i": "an integer", "n": "a finite number", "s": "a string",
-               "d": "an object", "p": "a list of pins"}
+               "d": "an object", "p": "a list of pins", "x": "a pin (a number or a name)"}
 
 
 def _section(c, path, d, keys):
@@ -356,7 +365,8 @@ def _section(c, path, d, keys):
         v = d[key]
         ok = ((kind == "i" and is_int(v)) or (kind == "n" and is_num(v) and finite(v))
               or (kind == "s" and isinstance(v, str)) or (kind == "d" and isinstance(v, dict))
-              or (kind == "p" and isinstance(v, list)))
+              or (kind == "p" and isinstance(v, list))
+              or (kind == "x" and (is_int(v) or (isinstance(v, str) and v != ""))))
         if not ok:
             fail(c + p, "expected %s, got %s" % (_KIND_NAMES[kind], _show(v)))
         out[key] = v
@@ -446,7 +456,34 @@ def validate(d, source="board"):
     _sensor(c, b, port, car["pins"])
     _refresh(c, b, port, car["freq_hz"])
     _display(c, b)
+    _kit(c, b, port, car["pins"] + b["sensor"]["pins"])
     return b
+
+
+def _kit(c, b, port, used):
+    """b["button"] and b["led"] (the classroom kit, texel/kit.py) checked and
+    made canonical when present: a pin of the port's kind, none of the
+    carrier's or sensor's."""
+    for key, keys in (("button", BUTTON_KEYS), ("led", LED_KEYS)):
+        if key not in b:
+            continue
+        k = _section(c, key, b[key], keys)
+        b[key] = k
+        pin = k["pin"]
+        p = key + ".pin"
+        _range(c, key + ".active_low", k["active_low"], 0, 1)
+        if port == "circuitpython":
+            fail(c + key, "the kit's button runs beside a timer IRQ; CircuitPython's paced "
+                     "loop has none (leave %r out)" % key)
+        named = isinstance(pin, str)
+        if port == "rp2" and named and pin != ("bootsel" if key == "button" else "LED"):
+            fail(c + p, "%r: a GPIO number, or %r" % (pin, "bootsel" if key == "button" else "LED"))
+        if port == "stm32" and not named:
+            fail(c + p, "%r: a pin name such as \"B3\"" % (pin,))
+        if port in ("rp2", "virtual") and not named:
+            _range(c, p, pin, 0, 29 if port == "rp2" else 255)
+        if pin in used:
+            fail(c + p, "%r is a carrier or sensor pin" % (pin,))
 
 
 def _carrier(c, b, port):

@@ -47,8 +47,10 @@ def add_scene(p: argparse.ArgumentParser) -> None:
                                    "deploy leaves it alone). The file is written beside its "
                                    "old copy and renamed over it: a bad scene or a failed "
                                    "write leaves the old one.")
-    s.add_argument("file", metavar="FILE", nargs="?",
-                   help="a scene file, - for stdin, or a shipped scene's name (texelpad scenes)")
+    s.add_argument("file", metavar="FILE", nargs="*",
+                   help="a scene file, - for stdin, or a shipped scene's name (texelpad "
+                        "scenes); several: a playlist the board's button steps through "
+                        "(the classroom kit, docs/kit.md), the first plays at power-up")
     s.add_argument("--current", action="store_true", help="the scene the board plays now")
     s.add_argument("--clear", action="store_true",
                    help="remove /texelpad.json: the board plays its default at power-up")
@@ -107,14 +109,17 @@ def cmd_scene_pull(args: argparse.Namespace) -> int:
 
 def cmd_scene_boot(args: argparse.Namespace) -> int:
     from ..link.board import BOOT_FILE, board_display, boot_config, clear_boot, write_boot
-    given = [n for n, on in (("FILE", args.file is not None), ("--current", args.current),
+    given = [n for n, on in (("FILE", bool(args.file)), ("--current", args.current),
                              ("--clear", args.clear)) if on]
     if len(given) != 1:
         raise CliError("", "give one of FILE, --current or --clear%s"
                        % (", not %s" % " and ".join(given) if given else ""))
     if args.clear and args.board:
         raise CliError("--board", "--clear removes the power-up file; there is no board to name")
-    scene = read_scene_file(args.file, "FILE") if args.file is not None else None
+    if args.file.count("-") > 1:
+        raise CliError("FILE", "stdin (-) can be read once")
+    scenes = [read_scene_file(f, "FILE") for f in args.file]     # all read before the board
+    scene = scenes[0] if scenes else None
 
     def refused(e: ValueError) -> CliError:
         if isinstance(e, DeviceError):          # only the named board file is the board's
@@ -142,20 +147,27 @@ def cmd_scene_boot(args: argparse.Namespace) -> int:
             if not running:
                 raise not_running(b.port)
             scene = b.scene_source()
-        config = boot_config(name, scene, display)
+        config = boot_config(name, scene, display, scenes[1:], _playlist_refused)
         size = write_boot(b, config)
     desc = config["scene"]
     print("power-up scene of %s: board %s, %s (%d region%s); %s bytes in %s"
           % (b.port, name, repr(desc["name"]) if desc.get("name") else _source(args),
              len(desc["regions"]), "" if len(desc["regions"]) == 1 else "s",
              format(size, ","), BOOT_FILE))
+    if "playlist" in config:
+        print("playlist of %d scenes (%s): the board's button steps it, its LED blinks the "
+              "scene's number (docs/kit.md)" % (len(config["playlist"]), ", ".join(args.file)))
     return EXIT_OK
+
+
+def _playlist_refused(i: int, e: ValueError) -> CliError:
+    return CliError("FILE", "scene %d of the playlist: %s" % (i + 1, e))
 
 
 def _source(args: argparse.Namespace) -> str:
     if args.current:
         return "the scene playing now"
-    return "stdin" if args.file == "-" else args.file
+    return "stdin" if args.file[0] == "-" else args.file[0]
 
 
 # --- pin ------------------------------------------------------------------------------

@@ -630,14 +630,27 @@ def board_display(board: Board, name: str) -> dict[str, Any]:
     return d
 
 
-def boot_config(board_name: str, scene: Any, display: dict[str, Any]) -> dict[str, Any]:
+def boot_config(board_name: str, scene: Any, display: dict[str, Any], more: Any = (),
+                refused: Any = None) -> dict[str, Any]:
     """{"board": NAME, "scene": canonical} for the power-up file, the scene
     checked here first (host_check) and kept in its canonical form: every
     default filled in, so it plays the same after the board's texel is
-    updated; ValueError (the board's own words) when it would not start."""
+    updated; ValueError (the board's own words) when it would not start.
+    more: scenes after it, a playlist the board's button steps (texel/kit.py):
+    then "playlist" holds all of them, each checked; refused(i, error) makes
+    the error of scene i (0-based)."""
     if not isinstance(board_name, str) or not board_name:
         raise ValueError("board name: expected a board file's name, got %r" % (board_name,))
-    return {"board": board_name, "scene": protocol.plain(check_scene(scene, display).canonical)}
+    config = {"board": board_name, "scene": protocol.plain(check_scene(scene, display).canonical)}
+    if more:
+        playlist = [config["scene"]]
+        for i, sc in enumerate(more, 1):
+            try:
+                playlist.append(protocol.plain(check_scene(sc, display).canonical))
+            except ValueError as e:
+                raise (refused(i, e) if refused else e) from None
+        config["playlist"] = playlist
+    return config
 
 
 def write_boot(board: Board, config: dict[str, Any]) -> int:
