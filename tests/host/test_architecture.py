@@ -90,6 +90,7 @@ def test_numpy_only_in_the_numpy_engine_and_compat():
 
 def test_pure_host_logic_never_imports_the_link_or_a_command():
     pure = modules(HOST, "analysis") + [HOST / "bench" / "opcount.py", HOST / "plate" / "tank.py",
+                                        HOST / "plate" / "spice.py",
                                         HOST / "image.py", HOST / "toolchain.py"]
     assert _bad(pure, ("texelpad.link", "texelpad.cli", "texelpad.deploy.install",
                        "serial", "mpremote")) == {}

@@ -25,7 +25,9 @@ def add_tank(p: argparse.ArgumentParser) -> None:
     p.add_argument("--bus-volts", type=arg_quantity("V"), metavar="V",
                    help="with --q: estimate the piezo voltage and tank current at full amplitude")
     p.add_argument("--q", type=arg_quantity(""), metavar="Q",
-                   help="the loaded tank's quality factor (measure: f0 / -3 dB bandwidth)")
+                   help="the loaded tank's quality factor (measure: f0 / -3 dB bandwidth); "
+                        "also gives how fast the amplitude follows the duty (tau = Q/(pi f0)) "
+                        "and the finest texture period the plate renders")
     p.add_argument("--drive", choices=("single", "bridge"), default="single",
                    help="for the estimate: single-ended or full bridge (default single)")
     p.add_argument("--json", action="store_true", help="print the figures as JSON (SI units)")

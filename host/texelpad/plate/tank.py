@@ -15,6 +15,10 @@ tank is tuned to it (hardware/README.md).
     series_inductor(C_p, f)             the inductor that tunes the bare piezo
     tuning_capacitor(L, C_p, f)         what to add to C_p so that L resonates at f
     piezo_voltage(bus_v, q, ...)        estimated voltage amplitude at resonance
+    envelope_time_constant(f, q)        how fast the amplitude follows the duty, Q/(pi f)
+    envelope_bandwidth(f, q)            that as a -3 dB bandwidth, f/(2Q)
+    finest_period(speed, bandwidth)     the shortest texture period rendered at a swipe speed
+    plate_plays(amplitudes, dx, ...)    a map as the plate plays it along a swipe
     nearest_e12(x)                      the nearest standard (E12) value
 
 All values in SI units (H, F, Hz, V, A, ohm). Non-positive or non-finite
@@ -26,7 +30,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import Any, Sequence
 
 TWO_PI = 2.0 * math.pi
 # Standard component values per decade (IEC 60063 E12): inductors and film
@@ -203,6 +207,54 @@ def piezo_voltage(bus_volts: float, q: float, duty: float = 0.5, drive: str = "s
     return _result("piezo_volts", _positive("q", q) * fundamental_amplitude(bus_volts, duty, drive))
 
 
+def envelope_time_constant(frequency_hz: float, q: float) -> float:
+    """The time constant (s) with which the tank's amplitude follows a change
+    of the drive: tau = 2 L / R = 2 Q / omega0 = Q / (pi * f0) for a series
+    resonant tank driven at resonance (the envelope of a step is
+    1 - exp(-t / tau)). texelpad/plate/spice.py measures it in ngspice."""
+    f = _positive("frequency_hz", frequency_hz)
+    return _result("tau_s", _positive("q", q) / (math.pi * f))
+
+
+def envelope_bandwidth(frequency_hz: float, q: float) -> float:
+    """The -3 dB bandwidth (Hz) of the amplitude envelope, f0 / (2 Q): the
+    envelope is a first-order low-pass with envelope_time_constant's tau, and
+    1 / (2 pi tau) = f0 / (2 Q) (half the tank's -3 dB bandwidth f0 / Q: the
+    envelope sees one side of the resonance)."""
+    f = _positive("frequency_hz", frequency_hz)
+    return _result("bandwidth_hz", f / (2.0 * _positive("q", q)))
+
+
+def finest_period(speed_m_s: float, bandwidth_hz: float) -> float:
+    """The shortest texture period (m) the plate renders at a swipe speed:
+    a spatial period lam under a finger moving at v is a temporal frequency
+    v / lam, passed at -3 dB up to the envelope bandwidth, so lam = v / B
+    (100 mm/s through 850 Hz: 0.118 mm)."""
+    return _result("period_m", _positive("speed_m_s", speed_m_s)
+                   / _positive("bandwidth_hz", bandwidth_hz))
+
+
+# swipe speeds (m/s) `texelpad tank` reports the finest texture period at:
+# a slow exploration, a typical one and a quick swipe
+SWIPE_SPEEDS_M_S = (0.05, 0.1, 0.2)
+
+
+def plate_plays(amplitudes: Sequence[float], dx_m: float, speed_m_s: float,
+                frequency_hz: float, q: float) -> list[float]:
+    """What the plate plays: the amplitude map sampled every dx_m along a
+    swipe at speed_m_s, each sample held for dx/speed (as the refresh holds
+    its duty), through the envelope's first-order low-pass (tau = Q/(pi f0)):
+    the amplitude the plate reaches, starting from rest. Exact for a held
+    input: y += (1 - exp(-dt/tau)) * (x - y) per sample."""
+    dt = _positive("dx_m", dx_m) / _positive("speed_m_s", speed_m_s)
+    k = -math.expm1(-dt / envelope_time_constant(frequency_hz, q))
+    y, out = 0.0, []
+    for x in amplitudes:
+        y += k * (float(x) - y)
+        out.append(y)
+    return out
+
+
 def nearest_e12(value: float, direction: int = 0) -> float:
     """The E12 standard value nearest to value in log scale (direction 0),
     or the largest one <= value (-1), or the smallest one >= value (+1)."""
@@ -365,7 +417,9 @@ def report(inductance_h: float | None = None, capacitance_f: float | None = None
     Without piezo_f: exactly two of L, C, f give the third. With piezo_f (the
     piezo's clamped capacitance): + f -> the series inductor; + L + f -> the
     tuning capacitor; + L -> the bare piezo's frequency. bus_volts and q
-    together add the ESTIMATED voltage across the piezo at full amplitude.
+    together add the ESTIMATED voltage across the piezo at full amplitude
+    and the envelope: how fast the amplitude follows the duty (tau, -3 dB
+    bandwidth) and the finest texture period rendered at SWIPE_SPEEDS_M_S.
     Inputs whose results leave the floating point range raise
     TankInputError (no flag to blame: it is the combination)."""
     try:
@@ -384,6 +438,9 @@ def _finite(v: Any, where: str) -> None:
     if isinstance(v, dict):
         for k, x in v.items():
             _finite(x, "%s.%s" % (where, k) if where else k)
+    elif isinstance(v, list):
+        for i, x in enumerate(v):
+            _finite(x, "%s[%d]" % (where, i))
     elif isinstance(v, float) and not math.isfinite(v):
         raise ValueError("%s: the result is beyond floating point range (%r): the inputs are "
                          "too extreme (check their units: 390u for 390 uH)" % (where, v))
@@ -459,6 +516,8 @@ def _report(inductance_h: float | None, capacitance_f: float | None,
             lines.append("  " + _tuning_line(tu))
     data["tank"] = t.as_dict()
     _impedance_and_estimate(t, bus_volts, q, drive, share, lines, data)
+    if q is not None:
+        _envelope(t, q, lines, data)
     return "\n".join(lines), data
 
 
@@ -483,3 +542,18 @@ def _impedance_and_estimate(t: Tank, bus_volts: float | None, q: float | None, d
                      "bandwidth); rate the inductor, capacitors and wiring above this."
                      % (drive, bus_volts, q, _v(vf), _v(vc * share),
                         _v(_result("piezo_volts", 2 * vc * share)), i_amp))
+
+
+def _envelope(t: Tank, q: float, lines: list[str], data: dict[str, Any]) -> None:
+    """_report's envelope line: how fast the plate's amplitude follows the
+    duty, and the finest texture period it renders at a few swipe speeds."""
+    tau = envelope_time_constant(t.frequency_hz, q)
+    bw = envelope_bandwidth(t.frequency_hz, q)
+    finest = [(v, finest_period(v, bw)) for v in SWIPE_SPEEDS_M_S]
+    data["envelope"] = {"q": q, "time_constant_s": tau, "bandwidth_hz": bw,
+                        "finest_period_m": [{"speed_m_s": v, "period_m": p} for v, p in finest]}
+    lines.append("  ENVELOPE (Q = %g): the amplitude follows a change of duty with tau = "
+                 "Q/(pi f0) = %s, a low-pass of -3 dB bandwidth f0/(2Q) = %s; the finest "
+                 "texture period the plate renders is %s (speed / bandwidth)"
+                 % (q, format_quantity(tau, "s"), _f(bw),
+                    ", ".join("%.3g mm at %g mm/s" % (1e3 * p, 1e3 * v) for v, p in finest)))
