@@ -13,8 +13,8 @@ from .compat import ticks_add, ticks_diff, ticks_us
 
 POLL_MS = 10            # button read every 10 ms
 DEBOUNCE_MS = 30        # a level must hold this long to count (contact bounce: ~1-10 ms)
-BLINK_MS = 200          # the LED shows scene k as k blinks of 200 ms on, 200 ms off,
-PAUSE_MS = 1000         # then 1 s off, then on while it plays
+BLINK_MS = 200          # the LED shows scene k as: off, then k blinks of 200 ms on,
+PAUSE_MS = 1000         # 200 ms off, then 1 s off, then on while it plays
 # where a board file names no button or LED: the port's (rp2: the Pico's own)
 DEFAULTS = {"rp2": ({"pin": "bootsel", "active_low": 0}, {"pin": "LED", "active_low": 0})}
 
@@ -44,7 +44,9 @@ class Debounce:
 
 
 class Blinker:
-    """The LED's pattern for scene k (0-based): k+1 blinks, a pause, then on."""
+    """The LED's pattern for scene k (0-based): off (so that the first blink
+    shows after the steady light of the scene before), k+1 blinks, a pause,
+    then on."""
 
     def __init__(self, write):
         self.write = write
@@ -53,7 +55,7 @@ class Blinker:
         self.until = 0
 
     def show(self, k, now):
-        self.steps = [1, 0] * (k + 1)
+        self.steps = [0] + [1, 0] * (k + 1)
         self.i = 0
         self.until = now
         self.update(now)
@@ -117,6 +119,7 @@ def run(playlist, polls=None, button=None, led=None, log=print):
             now = ticks_us()
             if deb.feed(button(), now):
                 k = _step(playlist, k, log)
+                now = ticks_us()            # the push took its time: the pattern starts now
                 blink.show(k, now)
             blink.update(now)
             _sleep(POLL_MS)
@@ -139,4 +142,10 @@ def _step(playlist, k, log):
             return i
         except ValueError as e:
             log("texelpad: scene %d of %d not played: %s" % (i + 1, n, e))
+        except KeyboardInterrupt:
+            # a laptop's Ctrl-C mid-push: one that made room (app._make_room) may
+            # have left nothing playing; the scene before plays again
+            if app._rt is not None and app._rt.refresh.scene is None:
+                app.push(playlist[k])
+            raise
     return k

@@ -20,11 +20,14 @@ def _config():
         with open(CONFIG) as f:
             cfg = json.loads(f.read())      # (json.load reads a byte at a time)
         return cfg if isinstance(cfg, dict) else {}
-    except (OSError, ValueError):
+    except (OSError, ValueError, MemoryError):    # MemoryError: the default plays
         return {}
 
 
 def main():
+    """Start the display; returns the playlist the button steps (the scene
+    playing first), or None. main's frame, and the config with it, is gone
+    while the kit runs: only the playlist stays on the heap."""
     try:
         from texel import compat
     except Exception as e:          # no image, or a broken one: the REPL stays free
@@ -40,6 +43,7 @@ def main():
         import texel.app
         cfg = _config()
         board = cfg.get("board") or texel.app.default_board(config=False)
+        then = cfg.get("then")                  # the playlist after the first scene
         texel.app.start(board, cfg.get("scene"), report=False)
         st = texel.app.status(False)    # no full collection: the REPL answers sooner
         print("texelpad: playing on %s (%s refreshes/s)" % (st.get("board"), st.get("refresh_hz")))
@@ -49,14 +53,16 @@ def main():
     except Exception as e:          # never brick the REPL: report and stay off
         print("texelpad: not started:", repr(e))
         return
-    _kit(cfg.get("playlist"))
+    if isinstance(then, list) and then:
+        return [cfg["scene"]] + then
+    return None
 
 
 def _kit(playlist):
     """The classroom kit (texel/kit.py): a playlist the button steps, until
     a Ctrl-C (a laptop's texelpad or mpremote) hands the board to the REPL
     with the scene playing."""
-    if not isinstance(playlist, list) or len(playlist) < 2:
+    if playlist is None:
         return
     try:
         import texel.kit
@@ -67,4 +73,4 @@ def _kit(playlist):
         print("texelpad: the playlist does not step:", repr(e))
 
 
-main()
+_kit(main())

@@ -73,7 +73,7 @@ def test_a_playlist_steps_by_bootsel_and_shows_on_the_led(pico, capsys):
     assert "a playlist of 3 scenes" in r.stdout, r.stdout
     assert "texelpad: scene 2 of 3" in r.stdout and "texelpad: scene 3 of 3" in r.stdout, r.stdout
     led = ast.literal_eval(r.stdout.split("LED ", 1)[1].splitlines()[0])
-    assert led[0] == 1 and led.count(0) >= 2, led      # lit, then blinking
+    assert len(led) >= 5 and 1 in led, led                # blinking (distinct levels in turn)
     code, out, err = run_cli(capsys, "status", "--port", pico.port)
     assert code == 0 and "constant 0.5" in out, out + err
 

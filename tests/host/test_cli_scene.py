@@ -564,9 +564,8 @@ def test_boot_with_several_files_is_a_playlist_the_button_steps(capsys, flash_bo
     assert code == 0, err
     assert "playlist of 3 scenes (texel-sweep, gradient, constant-half)" in out, out
     cfg = json.loads((flash / "texelpad.json").read_text())
-    assert [s.get("name") for s in cfg["playlist"]] == [
+    assert [s.get("name") for s in [cfg["scene"]] + cfg["then"]] == [
         read_scene_file(n).get("name") for n in ("texel-sweep", "gradient", "constant-half")]
-    assert cfg["scene"] == cfg["playlist"][0]
     levels = [0] * 4 + [1] * 6 + [0] * 6 + [1, 0, 1] + [1] * 6 + [0] * 4
     exe = Path(sys.executable).parent / "mpremote"
     r = subprocess.run([str(exe) if exe.exists() else "mpremote", "connect", port, "exec",

@@ -58,7 +58,7 @@ def test_the_led_blinks_the_scene_number_then_stays_on():
     while t < 5000 * MS:
         t += 10 * MS
         b.update(t)
-    assert writes == [1, 0, 1, 0, 1, 0, 1]
+    assert writes == [0, 1, 0, 1, 0, 1, 0, 1]
 
 
 def _pico():
@@ -66,12 +66,13 @@ def _pico():
 
 
 @pytest.mark.parametrize("patch, where", [
-    ({"button": {"pin": 16}}, "button.pin: 16 is a carrier or sensor pin"),
+    ({"button": {"pin": 16}}, "button.pin: 16 is a carrier, sensor or button pin"),
     ({"button": {"pin": "GP15"}}, "button.pin: 'GP15': a GPIO number, or 'bootsel'"),
     ({"button": {"pin": 40}}, "button.pin: 40 is out of range"),
     ({"led": {"pin": "LED", "active_low": 2}}, "led.active_low: 2 is out of range"),
     ({"led": {"pin": 25, "colour": "red"}}, "led.colour: unknown key"),
     ({"button": {"pin": True}}, "button.pin: expected a pin"),
+    ({"button": {"pin": 15}, "led": {"pin": 15}}, "led.pin: 15 is a carrier, sensor or button pin"),
 ])
 def test_bad_button_and_led_keys_are_named(patch, where):
     d = _pico()
@@ -97,7 +98,7 @@ app.start('virtual', P[0])
 hw = app._rt.hw
 hw.button_levels = [0] * 4 + [1, 0, 1] + [1] * 5 + [0] * 6 + [1] * 5 + [0] * 5
 lines = []
-k = kit.run(P, polls=40, log=lines.append)
+k = kit.run(P, polls=80, log=lines.append)
 st = app.status()
 print(json.dumps({"k": k, "name": st["scene"]["name"], "lines": lines,
                   "led": [lv for t, lv in hw.led_log], "faults": st["faults"]}))
@@ -121,5 +122,6 @@ def test_the_kit_steps_the_playlist_on_the_virtual_board():
     assert got["lines"][0] == "texelpad: scene 2 of 4", got
     assert got["lines"][1].startswith("texelpad: scene 3 of 4 not played: regions[0]"), got
     assert got["lines"][2] == "texelpad: scene 4 of 4", got
-    # on at each show (the power-up's and two steps'): each pattern starts lit
-    assert got["led"][0] == 1 and got["led"].count(1) >= 3 and got["faults"] == 0, got
+    # each pattern starts dark (the power-up's and two steps'), then blinks
+    assert got["led"][0] == 0 and got["led"].count(0) >= 3 and 1 in got["led"], got
+    assert got["faults"] == 0, got

@@ -483,7 +483,9 @@ def _kit(c, b, port, used):
         if port in ("rp2", "virtual") and not named:
             _range(c, p, pin, 0, 29 if port == "rp2" else 255)
         if pin in used:
-            fail(c + p, "%r is a carrier or sensor pin" % (pin,))
+            fail(c + p, "%r is a carrier, sensor or button pin (pins are compared as "
+                     "written: \"Y1\" and \"C6\" are not known to be one)" % (pin,))
+        used = used + [pin]             # the LED may not be the button's pin either
 
 
 def _carrier(c, b, port):

@@ -143,6 +143,11 @@ def cmd_scene_boot(args: argparse.Namespace) -> int:
             display = st["display"]
         else:                                   # the named board file, as the board reads it
             display = board_display(b, name)
+        if len(scenes) > 1 and b.firmware["implementation"] == "circuitpython":
+            # its display is texel.app.serve()'s paced loop: no main loop for a button
+            raise CliError("FILE", "a playlist needs a board with a timer interrupt; "
+                                   "CircuitPython's display is a paced loop, so its button "
+                                   "would never be read: give one FILE (docs/kit.md)")
         if args.current:                        # the scene playing (after --board's check)
             if not running:
                 raise not_running(b.port)
@@ -154,9 +159,9 @@ def cmd_scene_boot(args: argparse.Namespace) -> int:
           % (b.port, name, repr(desc["name"]) if desc.get("name") else _source(args),
              len(desc["regions"]), "" if len(desc["regions"]) == 1 else "s",
              format(size, ","), BOOT_FILE))
-    if "playlist" in config:
+    if "then" in config:
         print("playlist of %d scenes (%s): the board's button steps it, its LED blinks the "
-              "scene's number (docs/kit.md)" % (len(config["playlist"]), ", ".join(args.file)))
+              "scene's number (docs/kit.md)" % (1 + len(config["then"]), ", ".join(args.file)))
     return EXIT_OK
 
 

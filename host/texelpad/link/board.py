@@ -637,19 +637,20 @@ def boot_config(board_name: str, scene: Any, display: dict[str, Any], more: Any 
     default filled in, so it plays the same after the board's texel is
     updated; ValueError (the board's own words) when it would not start.
     more: scenes after it, a playlist the board's button steps (texel/kit.py):
-    then "playlist" holds all of them, each checked; refused(i, error) makes
-    the error of scene i (0-based)."""
+    "then" holds them (canonical, each checked; the board's main.py plays
+    "scene", then these); refused(i, error) makes the error of scene i
+    (0-based, the first is "scene")."""
     if not isinstance(board_name, str) or not board_name:
         raise ValueError("board name: expected a board file's name, got %r" % (board_name,))
     config = {"board": board_name, "scene": protocol.plain(check_scene(scene, display).canonical)}
     if more:
-        playlist = [config["scene"]]
+        then = []
         for i, sc in enumerate(more, 1):
             try:
-                playlist.append(protocol.plain(check_scene(sc, display).canonical))
+                then.append(protocol.plain(check_scene(sc, display).canonical))
             except ValueError as e:
                 raise (refused(i, e) if refused else e) from None
-        config["playlist"] = playlist
+        config["then"] = then
     return config
 
 
