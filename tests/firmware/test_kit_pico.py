@@ -1,7 +1,7 @@
 """The classroom kit on the emulated Pico (the texelpad firmware, texel frozen in):
 `texelpad scene boot A B C` writes a playlist, the board's power-up (its main.py)
-plays A and steps it at each press of BOOTSEL, the LED (GPIO 25, read back as a
-pin) blinks the scene's number, and a laptop's Ctrl-C ends the stepping with the
+plays A and steps it at each press of BOOTSEL, the LED (GPIO 25, read back from
+the chip's SIO output register: the emulator has no pin output) blinks the scene's number, and a laptop's Ctrl-C ends the stepping with the
 scene playing. The emulator reads BOOTSEL as held for ever (rp2040js: the QSPI
 chip select reads low), so the press pattern is faked at the backend
 (texel.hw.pins.bootsel, which the kit's real button code calls); everything else
@@ -35,11 +35,10 @@ def _bootsel():
     t = time.ticks_diff(time.ticks_ms(), _t0)
     return (300 <= t < 304 or 308 <= t < 500 or 900 <= t < 1100)
 _p.bootsel = _bootsel
-_led = machine.Pin(25)
 _seen = []
 _n = [0]
 def _sleep(ms, _s=_k._sleep):
-    v = _led.value()
+    v = (machine.mem32[0xD0000010] >> 25) & 1     # SIO GPIO_OUT: what GPIO 25 drives
     if not _seen or _seen[-1] != v:
         _seen.append(v)
     _n[0] += 1

@@ -241,3 +241,26 @@ def test_malformed_truth_raises(tmp_path):
     with pytest.raises(ValueError, match=r"regions\[0\]\.texture\.kind"):
         demo_figure(tmp_path / "x.png", {"regions": [{"start_mm": 0, "end_mm": 1,
                                                       "texture": {"kind": "x"}}]}, [])
+
+
+def test_the_zoom_draws_what_the_plate_plays(tmp_path, monkeypatch):
+    """plate={...}: the zoom also draws the map through the tank's envelope
+    (texelpad.plate.tank.plate_plays), the line the figure shows, with the
+    swipe speed and Q in its label."""
+    from texelpad.analysis import figures
+    from texelpad.plate import tank
+    drawn = []
+    real = figures._plate_line
+
+    def spy(ax, d, a, b, plate):
+        real(ax, d, a, b, plate)
+        line = ax.get_lines()[-1]
+        drawn.append((line.get_label(), line.get_ydata(), d.fmap[max(0, a - 200):b], a, b))
+    monkeypatch.setattr(figures, "_plate_line", spy)
+    plate = {"f0_hz": 34000.0, "q": 20.0, "speed_mm_s": 100.0}
+    demo_figure(tmp_path / "demo.png", SPLIT, _sweep(_u16(SPLIT)).tolist(), plate=plate)
+    (label, y, fmap, a, b), = drawn
+    assert "100 mm/s (Q 20: tau 187" in label
+    want = tank.plate_plays(fmap, 5.3e-6, 0.1, 34000.0, 20.0)[min(a, 200):]
+    assert len(y) == b - a and max(abs(p - q) for p, q in zip(y, want)) < 1e-12
+    assert max(abs(p - q) for p, q in zip(y, fmap[min(a, 200):])) > 0.01   # it does filter

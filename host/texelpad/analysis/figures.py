@@ -196,7 +196,7 @@ def finger_words(pos_err_max: int | None, dx_um: float) -> str | None:
 
 
 def demo_figure(path: str | Path, scene: Any, telemetry: Any, *, display: dict | None = None,
-                title: str = "", truth: Any = None) -> dict:
+                title: str = "", truth: Any = None, plate: dict | None = None) -> dict:
     """One PNG for `texelpad demo`: what the scene should play against what the
     board's refresh played (telemetry rows (t_us, position, amplitude u16);
     position -1 = lifted), spectra, texel pitch histograms, and amplitude and
@@ -208,7 +208,10 @@ def demo_figure(path: str | Path, scene: Any, telemetry: Any, *, display: dict |
     without any), "amp_mismatches" (samples with a nonzero error)} and with
     truth also "pos_err_max" (max |sensed - true| in positions, nearest t_us,
     both down; None without any pair) and "lift_mismatches" (sensed and true
-    finger disagree on lifted). Raises ValueError on malformed inputs."""
+    finger disagree on lifted). plate: {"f0_hz", "q", "speed_mm_s"}: the zoom
+    also draws what the plate plays, the map through the tank's envelope at
+    that swipe speed (texelpad.plate.tank.plate_plays; hardware/README.md,
+    "The envelope"). Raises ValueError on malformed inputs."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -229,7 +232,7 @@ def demo_figure(path: str | Path, scene: Any, telemetry: Any, *, display: dict |
     ax_time = fig.add_subplot(gs[3, :])
     _demo_title(fig, title, out, d.sc.dx_um)
     _demo_map(ax_map, d)
-    _demo_zoom(ax_zoom, d)
+    _demo_zoom(ax_zoom, d, plate)
     _demo_spectra(ax_spec, d)
     _demo_histograms(ax_hist, d)
     _demo_time(ax_time, d)
@@ -382,8 +385,9 @@ def _demo_map(ax_map: Any, d: _Demo) -> None:
                     rotation=0 if not d.short else 90)
 
 
-def _demo_zoom(ax_zoom: Any, d: _Demo) -> None:
-    """2. zoom: a few mm around the first border touching a textured region."""
+def _demo_zoom(ax_zoom: Any, d: _Demo, plate: dict | None = None) -> None:
+    """2. zoom: a few mm around the first border touching a textured region;
+    with plate, what the plate plays there (_plate_line)."""
     dx, npos, spans, textured, x = d.dx, d.npos, d.spans, d.textured, d.x
     half = int(round(1.5 / dx))                   # positions in 1.5 mm
     centre, what = None, ""
@@ -399,6 +403,8 @@ def _demo_zoom(ax_zoom: Any, d: _Demo) -> None:
     a = max(0, min(centre - half, npos - 2 * half))
     b = min(npos, a + 2 * half)
     ax_zoom.plot(x[a:b], d.fmap[a:b], lw=0.9, color="C0", label="map")
+    if plate is not None:
+        _plate_line(ax_zoom, d, a, b, plate)
     for e in d.edges:
         if a <= e <= b:
             ax_zoom.axvline(e * dx, color="0.5", lw=0.8, ls="--")
@@ -412,6 +418,21 @@ def _demo_zoom(ax_zoom: Any, d: _Demo) -> None:
     ax_zoom.set_title("zoom %.2f \u2013 %.2f mm, %s (%d played samples here)"
                       % (x[a], x[b - 1], what, inz.sum()), fontsize="medium")
     ax_zoom.legend(loc="upper right", fontsize="small", framealpha=0.9)
+
+
+def _plate_line(ax: Any, d: _Demo, a: int, b: int, plate: dict) -> None:
+    """The map from a to b as the plate plays it at a swipe speed: the tank's
+    envelope, a first-order low-pass of tau = Q/(pi f0), run from 200
+    positions before a (its transient settles in ~tau*speed, 4 positions at
+    100 mm/s and Q 20)."""
+    from ..plate.tank import envelope_time_constant, plate_plays
+    a0 = max(0, a - 200)
+    y = plate_plays(d.fmap[a0:b], d.dx / 1000.0, plate["speed_mm_s"] / 1000.0,
+                    plate["f0_hz"], plate["q"])
+    tau = envelope_time_constant(plate["f0_hz"], plate["q"])
+    ax.plot(d.x[a:b], y[a - a0:], lw=0.9, color="C3", ls=":",
+            label="what the plate plays, swiping right at %g mm/s (Q %g: tau %.0f \u00b5s = %.1f \u00b5m)"
+                  % (plate["speed_mm_s"], plate["q"], tau * 1e6, tau * plate["speed_mm_s"] * 1e3))
 
 
 def _demo_spectra(ax_spec: Any, d: _Demo) -> None:

@@ -29,6 +29,11 @@ DEFAULT_SCENE = texel.app.DEFAULT_SCENE
 SWEEP: list[tuple[float, float | None]] = [(0, None), (100, 2.0), (2100, 99.76), (2200, 99.76),
                                            (2210, None), (2400, None)]
 RATE_HZ = 2083          # telemetry every 4th refresh at 8,333 Hz: the 256-slot ring holds 123 ms
+# The zoom's "what the plate plays" (hardware/README.md, "The envelope"): a plate's Q is
+# measured per build (hardware/sweep.py); 20 is the README's example, and 100 mm/s a
+# typical exploring swipe. Both are in the demo's --json report ("plate").
+PLATE_Q = 20.0
+SWIPE_MM_S = 100.0
 POLL_S = 0.03           # drain the ring well inside that
 
 
@@ -143,7 +148,9 @@ def run(port: str | None = None, out: str = "texelpad-demo.png", scene: dict | N
             canonical = b.scene_source()
             assert canonical is not None        # the scene pushed above plays
         progress("drawing %s" % out)
-        figs = demo_figure(out, canonical, tel, display=display, truth=truth,
+        plate = {"f0_hz": float(st["carrier_hz"]), "q": PLATE_Q, "speed_mm_s": SWIPE_MM_S}
+        report["plate"] = plate
+        figs = demo_figure(out, canonical, tel, display=display, truth=truth, plate=plate,
                            title="texelpad demo on %s (%s, %s refresh): %s"
                                  % (st["board"], st["firmware"], st["refresh"],
                                     _scene_title(canonical)))
