@@ -427,7 +427,7 @@ def _plate_line(ax: Any, d: _Demo, a: int, b: int, plate: dict) -> None:
     100 mm/s and Q 20)."""
     from ..plate.tank import envelope_time_constant, plate_plays
     a0 = max(0, a - 200)
-    y = plate_plays(d.fmap[a0:b], d.dx / 1000.0, plate["speed_mm_s"] / 1000.0,
+    y = plate_plays(d.fmap[a0:b].tolist(), d.dx / 1000.0, plate["speed_mm_s"] / 1000.0,
                     plate["f0_hz"], plate["q"])
     tau = envelope_time_constant(plate["f0_hz"], plate["q"])
     ax.plot(d.x[a:b], y[a - a0:], lw=0.9, color="C3", ls=":",
