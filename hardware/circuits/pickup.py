@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from . import kicad
 from .parts import BAT54, C_10N, J_PICKUP, R_10K, R_100K, make
+from .stages import in_series
 
 ENVELOPE = "PICKUP_ENV"
 
@@ -19,11 +20,7 @@ def envelope(agnd):
     j = make(J_PICKUP)
     j[1] += raw
     j[2] += agnd
-    top, bottom = make(R_100K), make(R_10K)
-    top[1] += raw
-    top[2] += tap
-    bottom[1] += tap
-    bottom[2] += agnd
+    in_series(make(R_100K), make(R_10K), raw, tap, agnd)      # 100k:10k: 1/11 of the pickup
     d = make(BAT54)
     d["A"] += tap
     d["K"] += env

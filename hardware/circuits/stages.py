@@ -45,6 +45,15 @@ def pull_down(net, gnd, choice=R_10K) -> None:
     r[2] += gnd
 
 
+def in_series(top, bottom, a, mid, b) -> None:
+    """Two two-pin parts in series from net a to net b through mid (a divider,
+    or the bleed's two resistors that share its voltage)."""
+    top[1] += a
+    top[2] += mid
+    bottom[1] += mid
+    bottom[2] += b
+
+
 def decouple(net, gnd, choice=C_1U) -> None:
     c = make(choice)
     c[1] += net
@@ -88,11 +97,7 @@ def piezo(hot, ret) -> None:
     ctune[1] += hot
     ctune[2] += ret
     mid = sk.Net("BLEED_MID")
-    r1, r2 = make(R_BLEED), make(R_BLEED)
-    r1[1] += hot
-    r1[2] += mid
-    r2[1] += mid
-    r2[2] += ret
+    in_series(make(R_BLEED), make(R_BLEED), hot, mid, ret)
     j = make(J_PIEZO)
     j[1] += hot
     j[2] += ret
