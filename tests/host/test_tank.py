@@ -266,8 +266,7 @@ def test_cli_voltage_estimate():
     (["-L", "1m", "-C", "1n", "-f", "5k"], "(got --inductance, --capacitance, --frequency)"),
     (["--piezo", "40n", "-C", "5n", "-f", "34k"], "--capacitance: give --capacitance or --piezo"),
     (["--piezo", "40n"], "--piezo: needs --frequency"),
-    (["-L", "1m", "-C", "1n", "--q", "3"], "--bus-volts: give --bus-volts and --q together"),
-    (["-L", "1m", "-C", "1n", "--bus-volts", "3"], "--q: give --bus-volts and --q together"),
+    (["-L", "1m", "-C", "1n", "--bus-volts", "3"], "--q: --bus-volts needs --q"),
 ])
 def test_cli_usage_errors(argv, flag_msg):
     rc, out, err = _cli(*argv)

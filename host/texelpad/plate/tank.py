@@ -450,9 +450,10 @@ def _report(inductance_h: float | None, capacitance_f: float | None,
             frequency_hz: float | None, piezo_f: float | None, bus_volts: float | None,
             q: float | None, drive: str) -> tuple[str, dict[str, Any]]:
     L, C, f, Cp = inductance_h, capacitance_f, frequency_hz, piezo_f
-    if (bus_volts is None) != (q is None):
-        raise TankInputError("--q" if q is None else "--bus-volts",
-                             "give --bus-volts and --q together (the voltage estimate needs both)")
+    if bus_volts is not None and q is None:
+        # --q alone is fine: the envelope needs no bus voltage
+        raise TankInputError("--q", "--bus-volts needs --q (the voltage estimate is Q times "
+                                    "the drive's fundamental)")
     lines: list[str] = []
     data: dict[str, Any] = {}
     share = 1.0
