@@ -576,6 +576,11 @@ class World:
                     (texel.app, "gc", quick_gc), (texel.wire, "gc", quick_gc),
                     (texel.compat, "heap_free", lambda: None)]:     # (status(): a gc too)
                 stack.enter_context(mock.patch.object(target, name, value))
+            # texel.wire.reply prints its answer with the module's print, not the
+            # request's: on this board both go to the device's output (the board's
+            # console), or a staged call answered nothing ("unexpected answer ''")
+            stack.enter_context(mock.patch.object(
+                texel.wire, "print", world.device.globals["__builtins__"]["print"], create=True))
             yield
 
 
