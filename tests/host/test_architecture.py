@@ -193,7 +193,8 @@ MAY_IMPORT: dict[str, set[str]] = {
     "texelpad.plate": set(),
     "texelpad.scenes": set(),                   # package data: the shipped example scenes
     "texelpad.space": set(),
-    "texelpad.analysis": set(),
+    # (the demo figure draws what the plate plays: plate.tank's envelope, pure arithmetic)
+    "texelpad.analysis": {"texelpad.plate"},
     "texelpad.image": {"texelpad.toolchain"},
     "texelpad.link": {"texelpad.toolchain"},
     "texelpad.search": {"texelpad.space", "texelpad.analysis"},

@@ -51,6 +51,8 @@ NATIVE = {"texel/gen/engine_int_viper.py", "texel/gen/plan_int_viper.py",
 # each target's port: its image carries that hardware backend and those boards only
 PORT = {"rp2": "rp2", "pyboard": "stm32", "unix": "virtual", "circuitpython": "circuitpython"}
 BACKEND = {"rp2": "rp2", "stm32": "stm32", "virtual": "virtual", "circuitpython": "cpy"}
+# hardware modules several ports share (image.HW_SHARED): the classroom kit's pins
+SHARED = {"pins": ("rp2", "stm32")}
 
 
 def rel(p: Path) -> str:
@@ -61,7 +63,7 @@ def rel(p: Path) -> str:
 def modules_for(port: str | None) -> list[Path]:
     return [p for p in MODULES if port is None or p.parent.name != "hw"
             or p.name == "__init__.py" or p.stem == BACKEND[port]
-            or p.stem.startswith(BACKEND[port] + "_")]
+            or p.stem.startswith(BACKEND[port] + "_") or port in SHARED.get(p.stem, ())]
 
 
 def boards_for(port: str | None) -> list[Path]:
@@ -182,7 +184,11 @@ def test_layout_agrees_with_the_device():
     assert set(image.PORT_BACKEND) == set(boards.PORTS)
     # (and a backend's own helpers, named after it: hw/stm32_irq.py goes with hw/stm32.py)
     assert {p.stem for p in (PKG / "hw").glob("*.py")} == set(image.PORT_BACKEND.values()) | {
-        "__init__", "stm32_irq"}
+        "__init__", "stm32_irq"} | set(SHARED)
+    assert image.HW_SHARED == SHARED
+    assert "texel/hw/pins.py" in {"texel/" + p.relative_to(PKG).as_posix()
+                                  for p in image.package_modules("rp2")}
+    assert not any(p.name == "pins.py" for p in image.package_modules("circuitpython"))
     assert "texel/hw/stm32_irq.py" in {"texel/" + p.relative_to(PKG).as_posix()
                                        for p in image.package_modules("stm32")}
     assert not any(p.name == "stm32_irq.py" for p in image.package_modules("rp2"))
