@@ -1,6 +1,6 @@
 # The classroom kit: a playlist of scenes stepped by a button, shown on the
 # board's LED, with no laptop (docs/kit.md). main.py runs it at power-up
-# when /texelpad.json holds a "playlist" (`texelpad scene boot A.json B.json`).
+# when /texelpad.json holds scenes "then" the first (`texelpad scene boot A.json B.json`).
 # The button is polled and debounced here, in the main loop, never in the
 # refresh interrupt; a push builds the next scene as the host's push does
 # (app.push: the old one plays until the swap). A Ctrl-C (a laptop's
@@ -22,7 +22,7 @@ DEFAULTS = {"rp2": ({"pin": "bootsel", "active_low": 0}, {"pin": "LED", "active_
 class Debounce:
     """feed(level, now) -> True once per press: when the level has been 1
     for DEBOUNCE_MS after being 0 as long (a release, then a press). now:
-    compat.ticks_us(). Pure: no pins, no clock of its own (tests/kit/)."""
+    compat.ticks_us(). Pure: no pins, no clock of its own (tests/runtime/test_kit.py)."""
 
     def __init__(self, hold_ms=DEBOUNCE_MS, level=0):
         self.hold = hold_ms

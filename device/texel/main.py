@@ -53,7 +53,7 @@ def main():
     except Exception as e:          # never brick the REPL: report and stay off
         print("texelpad: not started:", repr(e))
         return
-    if isinstance(then, list) and then:
+    if isinstance(then, list) and then and "scene" in cfg:
         return [cfg["scene"]] + then
     return None
 

@@ -260,8 +260,7 @@ class _Transport(SerialTransport):
             while n > 0:                          # flush (bounded by the deadline)
                 self.serial.read(n)
                 n = self.serial.in_waiting
-            self.banners_owed += 1
-            self.serial.write(b"\r\x01")         # Ctrl-A: the raw REPL
+            self._ctrl_a(b"\r\x01")              # Ctrl-A: the raw REPL
             self._read_banner(retry=True)
 
     def _read_banner(self, retry: bool) -> bool:
@@ -285,8 +284,7 @@ class _Transport(SerialTransport):
                 data = (data + new)[-tail:]
                 again = time.monotonic() + RETRY_CTRL_A_S
             elif retry and time.monotonic() > again:
-                self.banners_owed += 1
-                self.serial.write(b"\r\x01")
+                self._ctrl_a(b"\r\x01")
                 again = time.monotonic() + RETRY_CTRL_A_S
         # one banner read (two read together count once: owed is an upper bound,
         # as CircuitPython may drop a Ctrl-A); _answer reads past at most that many
@@ -298,6 +296,12 @@ class _Transport(SerialTransport):
         return self.serve_banner
 
     serve_banner = False        # the last banner came from texel.app.serve() (SERVE_MARK)
+    banners_owed = 0            # Ctrl-As sent whose raw-REPL banners may come yet (_answer)
+
+    def _ctrl_a(self, data: bytes) -> None:
+        """Send `data`, which ends in a Ctrl-A, and count the banner it is owed."""
+        self.banners_owed += 1
+        self.serial.write(data)
 
     def knock(self, seconds: float) -> str | None:
         """Ctrl-A alone, no Ctrl-C: a board at its REPL (either) answers with
@@ -310,8 +314,7 @@ class _Transport(SerialTransport):
             with self.deadline(seconds):
                 # Ctrl-A alone: a friendly REPL acts on it only at an empty line, so a
                 # half-typed line is neither run nor lost (then no banner: the Ctrl-C path)
-                self.banners_owed += 1
-                self.serial.write(b"\x01")
+                self._ctrl_a(b"\x01")
                 return "serve" if self._read_banner(retry=False) else "raw"
         except TransportError:
             return None
@@ -345,8 +348,6 @@ class _Transport(SerialTransport):
         if err:
             self.late_error = err.decode("utf-8", "replace")
 
-    banners_owed = 0        # Ctrl-As sent whose raw-REPL banners may come yet
-
     def _answer(self) -> bytes:
         """The board's 2-byte answer (b"OK", b"R\\x01", ...), waited for until
         the operation's deadline, past the banners still owed: a board slow
@@ -366,8 +367,8 @@ class _Transport(SerialTransport):
 
     def raw_paste_write(self, command_bytes: bytes) -> None:
         """mpremote's, but its 2-byte window size read until the operation's
-        deadline (one pyserial read returns short on a loaded emulator: the
-        struct.error exec_raw reports as "cut off")."""
+        deadline (mpremote's one pyserial read returns short on a loaded
+        emulator, and it unpacks what came unchecked)."""
         window_size = struct.unpack("<H", self._read_exact(2))[0]
         window_remain = window_size
         i = 0
@@ -432,10 +433,7 @@ class _Transport(SerialTransport):
         command that ends before printing a line returns as exec_raw does."""
         t = self.op_timeout if timeout is None else timeout
         with self.deadline(t + len(command) / MIN_BYTES_PER_S, t), redirect_stdout(io.StringIO()):
-            try:
-                self.exec_raw_no_follow(command)
-            except struct.error:
-                raise TransportError("the board's raw-paste answer was cut off") from None
+            self.exec_raw_no_follow(command)
             # byte by byte, as mpremote's read_until: nothing past the line (or past
             # the end markers: the next prompt's ">" stays for the next command)
             buf = bytearray()
@@ -464,11 +462,7 @@ class _Transport(SerialTransport):
         # mpremote print()s what it read when a board falls out of the raw
         # REPL; that would land in the host's own output (--json): dropped
         with self.deadline(t + len(command) / MIN_BYTES_PER_S, t), redirect_stdout(io.StringIO()):
-            try:
-                return super().exec_raw(command, timeout=t, data_consumer=data_consumer)
-            except struct.error:
-                # raw paste's 2-byte window size cut off (mpremote unpacks it unchecked)
-                raise TransportError("the board's raw-paste answer was cut off") from None
+            return super().exec_raw(command, timeout=t, data_consumer=data_consumer)
 
 
 # --- the link -----------------------------------------------------------------
