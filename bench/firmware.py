@@ -12,10 +12,12 @@ open_emulated's way) and its figures go beside the firmware's.
 
 A push is timed as the host sends it (texel's own request,
 protocol.staged_call: the scene as JSON text parsed by the board's json
-module, then texel.app.push, then the reply printed), wrapped on the board:
-_tpf_req(code) takes the request's code as text, notes ticks_us, compiles and
-runs it exactly as the raw REPL would, and notes ticks_us again after the
-reply is printed. texel.app.push is wrapped to note when it is entered, and
+module, then texel.app.pushed - push answered with what it changed, which
+Board.push merges into the status it read before - then the reply printed),
+wrapped on the board: _tpf_req(code) takes the request's code as text, notes
+ticks_us, compiles and runs it exactly as the raw REPL would, and notes ticks_us
+again after the reply is printed. texel.app._push (push's and pushed's work) is
+wrapped to note when it is entered, and
 its own last_push (validate_us, build_us, swap_us: contiguous from its entry)
 ends at the swap. So:
 
@@ -93,11 +95,11 @@ import time, gc, sys
 import texel.app as _tpf_app
 import texel.wire as _tpf_wire
 _tpf_t = [None]
-_tpf_orig = _tpf_app.push
+_tpf_orig = _tpf_app._push
 def _tpf_push(scene):
     _tpf_t[0] = time.ticks_us()
     return _tpf_orig(scene)
-_tpf_app.push = _tpf_push
+_tpf_app._push = _tpf_push
 def _tpf_req(code):
     rt = _tpf_app._rt
     ov0 = rt.refresh.overruns
@@ -236,7 +238,7 @@ def _request(b: Any, scene: dict[str, Any]) -> dict[str, Any]:
             b._upload([u for _, u in uploads], None)
         except (LinkError, ValueError) as e:
             return {"refused": "upload: %s" % (str(e)[:300],)}
-    code = protocol.staged_call(protocol.WIRE, "push", [plain], 0,
+    code = protocol.staged_call(protocol.WIRE, "pushed", [plain], 0,      # as Board.push sends it
                                 {i: k for k, (i, _) in enumerate(uploads)})
     try:
         out = b.link.exec("_tpf_req(%r)" % code, timeout=600).strip().splitlines()

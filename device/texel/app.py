@@ -437,6 +437,13 @@ def push(scene):
     """Validate completely, build (render only what the regions use), then
     swap in between two refreshes. Any error raises ValueError and the
     current scene keeps playing untouched."""
+    _push(scene)
+    # no collection before the answer (tidy()); and no heap figure in it: gc.mem_free()
+    # walks the whole allocation table, 9 ms on an RP2040 (status() measures it)
+    return status(collect=False)
+
+
+def _push(scene):
     rt = _running()
     clock = getattr(rt.hw, "cost_ticks", rt.ticks)
     t0 = clock()
@@ -447,9 +454,16 @@ def push(scene):
         gc.collect()
         raise ValueError("scene does not fit in memory (%s); the current scene keeps playing"
                          % (compat.memory_words() or "the heap is full"))
-    # no collection before the answer (tidy()); and no heap figure in it: gc.mem_free()
-    # walks the whole allocation table, 9 ms on an RP2040 (status() measures it)
-    return status(collect=False)
+
+
+def pushed(scene):
+    """push() for the host's link (texel.wire.reply("pushed", ...)): the same work,
+    answered with changes() only. The host merges that into the status it read
+    before the push (texelpad.link.board: Board._send). The keys that do not
+    change while texelpad runs are left out of the answer. Building and
+    repr()-ing them took ~3 ms of every answer on an RP2040 (bench/firmware.py)."""
+    _push(scene)
+    return changes()
 
 
 def tidy():
@@ -493,9 +507,6 @@ def status(collect=True):
           "running": rt is not None, "mem_free": free}
     if rt is None:
         return st
-    r = rt.refresh
-    elapsed = rt.diff(rt.ticks(), rt.started_us)
-    sc = r.scene
     st.update({
         "board": rt.board["name"], "port": rt.board["port"], "refresh": rt.mode,
         "display": {"positions": rt.board["display"]["positions"],
@@ -506,6 +517,20 @@ def status(collect=True):
         "refresh_code": getattr(rt.refresh, "irq_code", None),
         "carrier_hz": rt.hw.freq_hz if hasattr(rt.hw, "freq_hz") else rt.board["carrier"]["freq_hz"],
         "pwm_top": rt.hw.top, "refresh_hz": rt.hz,
+        "timed_every": getattr(rt.refresh, "cost_every", 1)})
+    st.update(changes(free))
+    return st
+
+
+def changes(free=None):
+    """The part of status() that a push or time changes (the rest stays as
+    start() made it): what pushed() answers. free: its mem_free."""
+    rt = _running()
+    r = rt.refresh
+    elapsed = rt.diff(rt.ticks(), rt.started_us)
+    sc = r.scene
+    return {
+        "running": True, "mem_free": free,
         "refreshes": r.count, "rate_hz": (r.count * 1000000 // elapsed) if elapsed > 0 else 0,
         "worst_us": r.worst_us, "overruns": r.overruns, "faults": r.faults,
         "position": r.pos, "amplitude": r.amp, "duty": r.duty,
@@ -518,9 +543,7 @@ def status(collect=True):
         # entered); the refresh's body is timed once in timed_every refreshes
         # (worst_us, overruns)
         "late": rt.pacer.late if rt.pacer is not None else None,
-        "timed_every": getattr(r, "cost_every", 1),
-        "loop": getattr(rt, "loop", None)})
-    return st
+        "loop": getattr(rt, "loop", None)}
 
 
 def stream(rate_hz=125):

@@ -95,7 +95,7 @@ def samples_b64(region, offset, count):
 _uploads = []
 
 
-STAGED = ("push", "start")     # what staged() calls
+STAGED = ("push", "start", "pushed")     # what staged() calls (app's functions)
 
 
 def staged(func, text, fill=(), args=(), scene_at=0, kwargs=None):
@@ -117,7 +117,7 @@ def staged(func, text, fill=(), args=(), scene_at=0, kwargs=None):
                 g[i]["texture"]["u16"] = take_upload(k)
         a = list(args)
         a.insert(scene_at, s)
-        f = app.push if func == "push" else app.start
+        f = getattr(app, func)
         return ("ok", f(*a, **(kwargs or {})))
     except ValueError as e:
         return ("err", str(e))

@@ -209,7 +209,7 @@ def test_ctrl_c_during_the_push_call_says_what_plays(board, delay):
     exec0 = board.link.exec
 
     def exec_(code, timeout=None, reply_first=False):
-        if "_m.reply(" in code:
+        if ".wire.reply(" in code:
             trip.at = time.monotonic() + delay
         return exec0(code, timeout, reply_first)
     board.link.exec = exec_
@@ -388,9 +388,53 @@ def test_a_scene_crosses_as_json_data_and_comes_back_exactly(board):
         st = board.push(sc)
     finally:
         board.link.exec = exec0
-    push = [c for c in codes if "_m.reply('push'" in c]
+    push = [c for c in codes if "reply('pushed'" in c]
     # the scene is a str (JSON text, parsed by the board's json module), not a dict literal
     assert len(push) == 1 and "'{\"regions\"" in push[0] and "{'regions'" not in push[0]
     assert st["scene"]["name"] == name
     tex = board.scene_source()["regions"][0]["texture"]
     assert tex["pitch_db"] == 12.346 and tex["v"] == 2 and tex["band_limit_cpmm"] is None
+
+
+def test_a_push_is_answered_with_what_it_changed_and_returns_the_whole_status(board):
+    """Issue 32, the request path: Board.push asks texel.app.pushed, whose answer
+    leaves out what does not change while texelpad runs (board, display, carrier,
+    versions: ~40 % of status()'s text, ~3 ms of every answer on an RP2040), and
+    merges it into the status read before the push - so a caller still gets
+    every key of status(), with the values status() gives right after."""
+    answers = []
+    eval0 = board.link.eval
+
+    def eval_(code, timeout=None, reply_first=False):
+        v = eval0(code, timeout, reply_first)
+        if "reply('pushed'" in code:
+            answers.append(v)
+        return v
+    board.link.eval = eval_
+    try:
+        st = board.push(_scene({"kind": "reference", "name": "4sin"}))
+    finally:
+        board.link.eval = eval0
+    assert len(answers) == 1 and answers[0][0] == "ok"
+    lean = answers[0][1]
+    fixed = {"board", "display", "carrier_hz", "protocol", "texel", "firmware", "pwm_top",
+             "refresh_hz", "refresh_mode", "port", "ulab", "viper", "refresh", "refresh_code",
+             "timed_every"}
+    assert not fixed & set(lean)
+    assert lean["scene"]["regions"][0]["name"] == "4sin" and lean["mem_free"] is None
+    now = board.status()
+    assert set(st) == set(now)
+    assert all(st[k] == now[k] for k in fixed)
+    assert st["scene"] == now["scene"] and st["pushes"] == now["pushes"]
+    assert st["mem_free"] is None
+
+
+def test_a_refused_push_through_pushed_changes_nothing(board):
+    """The lean answer's refusal is push's own: a DeviceError in the board's
+    words, and the scene before it plays on."""
+    before = board.status()["scene"]
+    bad = {"regions": [{"start_mm": 0, "end_mm": 10, "texture": {"kind": "constant",
+                                                                 "level": 7}}]}
+    ans = board.link.eval_reply(protocol.staged_call(protocol.WIRE, "pushed", [bad], 0))
+    assert ans == ("err", "regions[0].texture.level: 7 is out of range [0.0, 1.0]")
+    assert board.status()["scene"] == before
