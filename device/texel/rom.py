@@ -4,6 +4,7 @@
 # out of compat.py so that images without flash data import nothing more; every function
 # falls back to what other runtimes do (None, the path as it is, an array).
 from .compat import ROM             # the texelpad firmware's port: data in ROMFS (compat.PORT_TABLE)
+from array import array
 
 
 def rom_view(path, typecode, n):
@@ -88,5 +89,4 @@ def const_table(module_file, name, raw, typecode):
         # of the module's own literal where it is aligned, as without ROM (compat.const_view)
         from .compat import const_view
         return const_view(raw, typecode)
-    from array import array
     return array(typecode, raw)

@@ -6,6 +6,12 @@
 # board's stepped time and scripted finger (advance, finger) are here too:
 # the host drives them. Nothing here plays without texel.app.
 import gc
+# json and binascii at the top: MicroPython never caches an extensible built-in in
+# sys.modules, so an import inside a function walks sys.path each time (the
+# filesystems' stats: 1.65 ms a call on the emulated RP2040 firmware, most of
+# a push's "parse"; tests/runtime/test_imports.py)
+import binascii
+import json
 from . import app, compat
 from .protocol import UPLOAD_PIECE_MAX      # values per piece (the contract's)
 from .runtime import scene as _scene
@@ -57,7 +63,6 @@ def samples_b64(region, offset, count):
     """Values offset .. offset+count of the playing scene's samples region
     `region` (its index in the canonical order), as base64 of little-endian
     uint16: the read side of upload_write."""
-    import binascii
     rt = app._running()
     sc = rt.refresh.scene
     regs = sc.source["regions"] if sc is not None else ()
@@ -109,7 +114,6 @@ def staged(func, text, fill=(), args=(), scene_at=0, kwargs=None):
     if func not in STAGED:
         return ("err", "staged: %r is not one of %s" % (func, STAGED))
     try:
-        import json
         s = json.loads(text)
         if fill:
             g = s["regions"]
@@ -165,7 +169,6 @@ def upload_begin(sizes):
 def upload_write(slot, offset, b64):
     """The next piece of upload `slot`: base64 text of little-endian uint16
     values starting at value `offset`. Returns the values arrived so far."""
-    import binascii
     if not (isinstance(slot, int) and 0 <= slot < len(_uploads)):
         raise ValueError("upload_write: no upload %r (upload_begin first)" % (slot,))
     if not isinstance(b64, str) or len(b64) > 4 * UPLOAD_PIECE_MAX // 3 * 2 + 8:
@@ -208,7 +211,6 @@ def telemetry_b64():
     count's int32 times (us), int32 positions and uint16 amplitudes one
     after the other, little-endian - copied at C speed and ~half the bytes
     of the repr of the same samples (runtime/refresh.py telemetry_packed_since)."""
-    import binascii
     rt = app._running()
     t, p, m, n, rt.tel_tail, lost = rt.refresh.telemetry_packed_since(rt.tel_tail)
     return n, binascii.b2a_base64(t + p + m).decode().strip(), lost

@@ -27,6 +27,8 @@
 # Python loops (any port), numpy (CPython: the host) and viper (brush_viper.py)
 # - give the same integers (tests/brush/test_paint.py).
 import math
+from array import array      # at the top: an extensible built-in imported inside a function
+#                              walks sys.path each time (1.65 ms on the emulated RP2040)
 
 from .check import is_int, is_num, finite, fail
 from .plan_int import exp2_m
@@ -307,7 +309,6 @@ def windows(n):
 # --- the painting's setup: floats, once per painting -----------------------------------
 
 def array_i(n):
-    from array import array
     return array("i", bytes(4 * n))
 
 
@@ -483,7 +484,6 @@ _LEAKC = None
 def _leak_c():
     global _LEAKC
     if _LEAKC is None:
-        from array import array
         _LEAKC = array("i", LEAK_Q14[1:])
     return _LEAKC
 
@@ -749,7 +749,6 @@ def _tables():
             _T = (None,) + tuple(const_table(__file__, f, t, c) for (f, c), t in
                                  zip(TABLE_FILES, (PHASE, TW, HANN, LOG2, POS)))
         else:
-            from array import array
             _T = (None, array("h", PHASE), array("h", TW), array("i", HANN), array("i", LOG2),
                   array("i", POS))
     return _T
@@ -812,7 +811,6 @@ def paint(brush, seed, n, out=None, how=None):
     "viper" (brush_viper.py: the port's native emitter), "numpy" (CPython:
     every pair's FFT at once) or "python" (the loops here); None takes the
     first the runtime has. All give the same integers."""
-    from array import array
     from .rng import Rng
     if out is None:
         out = array("H", bytes(2 * n))
@@ -915,7 +913,6 @@ def _paint_numpy(np, rng, comp, tab, n, out):
         acc[part:part + nw] += q[:, part]
     val = acc[3:3 + (n + HOP - 1) // HOP].ravel()[:n] >> 1
     u = np.where(val <= 0, 0, np.where(val >= Q13, 65535, (val * 65535 + 4096) >> 13))
-    from array import array
     if isinstance(out, array):
         out[:n] = array("H", u.astype(np.uint16).tobytes())
     else:
@@ -927,7 +924,6 @@ def _paint_numpy(np, rng, comp, tab, n, out):
 def state(rng):
     """The texture generator's state as the C and viper loops step it: its
     eight 16-bit halves (gen/rng.py), array('H'); they write it back."""
-    from array import array
     return array("H", (rng.a_hi, rng.a_lo, rng.b_hi, rng.b_lo, rng.c_hi, rng.c_lo,
                        rng.d_hi, rng.d_lo))
 
@@ -964,7 +960,6 @@ def _paint_viper(v, rng, comp, tab, n, out):
     draws of both windows, their frames (fill + ifft), and each window's
     overlap-add and emission straight into out's memory (an array, or a
     Chunks' arrays: a hop across two chunks goes through a 48-value array)."""
-    from array import array
     mod, ptab, tw, hann, log2t, pos = v
     invk, ll, sign, off = comp
     llo = array_i(K)
