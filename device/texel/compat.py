@@ -213,7 +213,7 @@ def native(module, name):
 # texelpad deploy puts in /lib on a stock board of its architecture. CORE_API
 # is what this package calls; another module (a board deployed by an older
 # texelpad) is not used: the viper and Python twins give the same integers.
-CORE_API = 6                # 6: the refresh core reads an STM32 ADC (S_ADC_CS bit 4)
+CORE_API = 7                # 7: the refresh keeps its last row in W[14] (W_ROW); 6: the STM32 ADC
 _core = None
 
 

@@ -369,6 +369,25 @@ def put(v):
 random.seed(7)
 raws = []
 x = 30000
+if %(edges)r:
+    # the finger at every region's edges: a slow sweep (a raw step of 2, under a
+    # position) across each start and end, both ways, so that p meets each one
+    # exactly; between them a jump to the next edge or a random one (across many
+    # rows, both ways); now and then a dropout (the position dead-reckoned, the lift)
+    def raw_at(pos):                    # the raw reading that rests at position pos
+        d = (pos * 256) * 16384 // (S[16] * 16384 + S[17])
+        return max(0, min(65535, S[14] - d if S[13] else S[14] + d))
+    edges = []
+    for i in range(r.scene.count):
+        edges += [r.scene._t[4 * i], r.scene._t[4 * i + 1]]
+    order = edges + [random.choice(edges) for _ in range(24)]
+    for e in order:
+        at = raw_at(e)
+        raws += [max(0, at - 24)] * 30      # settle there after the jump
+        for dx in list(range(-24, 25, 2)) + list(range(24, -25, -2)):
+            raws.append(max(0, min(65535, at + dx)))
+        if random.randrange(8) == 0:
+            raws += [random.randrange(0, 300)] * random.choice((1, 2, 6))
 for k in range(%(n)d):
     m = k %% 400
     if m < 150:
@@ -385,6 +404,7 @@ for k in range(%(n)d):
 same = 0
 first = None
 cr2s = {}
+seen = {}
 for k in range(len(raws)):
     r._clk[0] = (k * 120 + 5) & 0x3FFFFFFF
     r._adc[1] = raws[k]
@@ -399,12 +419,15 @@ for k in range(len(raws)):
     c.refresh(RV._W)
     cr2s[adc[2]] = 1
     b = snap()
+    seen[S[20] - 1] = 1
     if a == b:
         same += 1
     elif first is None:
         first = (k, raws[k], [i for i in range(len(a[0])) if a[0][i] != b[0][i]])
+t = r.scene._t
+rows = [(t[4 * i], t[4 * i + 1]) for i in range(r.scene.count)]
 print(json.dumps({"same": same, "n": len(raws), "first": first, "code": c.BUILD,
-                  "cr2": sorted(cr2s),
+                  "cr2": sorted(cr2s), "rows": rows, "seen": sorted(seen),
                   "kinds": sorted(set(r.scene._t[4 * i + 2] for i in range(r.scene.count)))}))
 """
 
@@ -425,7 +448,7 @@ def test_the_c_refresh_is_the_viper_refresh_word_for_word(x64_module):
     for stm in (False, True):
         # stm: the STM32 path (S_ADC_CS bit 4: DR read, CR2 |= ADON | SWSTART) on a stand-in
         # register block (hw/stm32_irq.py; the real one runs on the emulated F405)
-        code = REFRESH_SCRIPT % {"scene": scene, "n": 6000, "stm": stm}
+        code = REFRESH_SCRIPT % {"scene": scene, "n": 6000, "stm": stm, "edges": False}
         info = mpy.run_json(code, exe=toolchain.require_micropython(), heapsize="8M",
                             timeout=300, extra_path=str(x64_module))
         # every way a region plays: K_CONST, K_BUF, K_PLAN, K_CHUNK (runtime/kinds/__init__.py)
@@ -436,10 +459,43 @@ def test_the_c_refresh_is_the_viper_refresh_word_for_word(x64_module):
     # 16 texel regions: the table walk past many rows
     info = mpy.run_json(REFRESH_SCRIPT % {"scene": regions16({"positions": 19200,
                                                                "dx_um": 5.3}, 2, 3), "n": 3000,
-                                          "stm": False},
+                                          "stm": False, "edges": False},
                         exe=toolchain.require_micropython(), heapsize="8M", timeout=300,
                         extra_path=str(x64_module))
     assert info["same"] == info["n"], info
+
+
+def test_the_c_refresh_finds_the_region_the_table_walk_finds(x64_module):
+    """The C refresh starts its region lookup from the row the finger was in
+    (W_ROW) instead of walking the table: the same region as the walk (and
+    refresh_viper.core) wherever the finger goes - 16 regions of every kind
+    with gaps between them, p exactly at each start and end, just below and
+    past them, both ways, jumps across many rows, dropouts and lifts."""
+    total = 19200 * 5.3 / 1000.0
+    w = total / 16
+    kinds = [{"kind": "constant", "level": 0.7},
+             {"kind": "texel", "pitch_db": 3.1, "irregularity_db": -12.9, "seed": 5, "v": 2},
+             {"kind": "samples", "fit": "stretch", "u16": [0, 65535, 100, 40000]},
+             {"kind": "reference", "name": "4sin"}]
+    regions = []
+    for k in range(16):
+        # a gap of ~1 mm before every region but the first (row 0 starts at 0) and
+        # after the last (the sentinel row follows a gap)
+        s0 = 0 if k == 0 else round(k * w + 1.0, 3)
+        regions.append({"start_mm": s0, "end_mm": round((k + 1) * w - (1.0 if k == 15 else 0.5), 3),
+                        "texture": kinds[k % 4]})
+    info = mpy.run_json(REFRESH_SCRIPT % {"scene": {"regions": regions, "idle_amplitude": 13107},
+                                          "n": 400, "stm": False, "edges": True},
+                        exe=toolchain.require_micropython(), heapsize="8M", timeout=300,
+                        extra_path=str(x64_module))
+    assert info["same"] == info["n"], info["first"]
+    assert len(info["rows"]) == 16 and info["kinds"] == [0, 1, 2, 3], info["rows"]
+    seen = set(info["seen"])
+    # every region's first position, last position and the one past it, met exactly
+    for st, en in info["rows"]:
+        near = [p for p in sorted(seen) if st - 9 <= p <= st + 9 or en - 9 <= p <= en + 9]
+        assert {st, en - 1, en} <= seen, (st, en, near)
+    assert -1 in seen                   # lifted
 
 
 def test_c_grid_is_grid_py_where_it_decides():

@@ -1,5 +1,21 @@
-// See refresh_core.h. Indices are refresh_viper.py's W_* and S_* (checked there
-// against this file's copies at import: _C_LAYOUT).
+// See refresh_core.h. Indices are refresh_viper.py's W_* and S_* (refresh_viper.py
+// checks its copies against refresh_fast.py's at import; tests/gen/test_texel_core.py
+// runs this file and refresh_viper.core on the same W and compares every word).
+//
+// Speed (issue 32 item 3: <= 3 us per refresh, interrupt included, on the
+// emulated Pico at 125 MHz, whatever the scene). Thumb-1 on a Cortex-M0+: a
+// load or store 2 cycles (an APB register 4-5 on rp2040js), a taken branch 2,
+// an untaken one 1, push/pop 1 + one per register, and each of r8-r11 gcc
+// keeps costs a mov in and a mov out. So the body: finds the finger's region
+// from the row it held the refresh before (W_ROW) instead of walking the table
+// (16 regions: up to 16 rows, ~7 cycles each); adds no BASE on a 32-bit board
+// (tc_base); keeps few values live (the position stored as soon as it is
+// known, the cold paths out of line: tc_adc_slow, tc_track_cold, tc_row,
+// tc_tel); lays the RP2040's path out straight (LIKELY/UNLIKELY: touching,
+// START_MANY, a 12-bit RESULT, no clamp); rounds without building 2^13 or 2^15
+// (RSHR). Measured with bench/firmware.py's method (the busy loop with the
+// refresh interrupt on and off, the finger sweeping): a texel plan 3.42 ->
+// 2.87 us, 16 texel regions 3.71 (max 3.79) -> 2.87, a constant 2.86 -> 2.46.
 #include "refresh_core.h"
 
 // W: word array indices
@@ -16,6 +32,7 @@
 #define W_CC 11
 #define W_MUL 12
 #define W_SINE 13
+#define W_ROW 14
 // S: state indices
 #define S_TOUCH 0
 #define S_LOW 1
@@ -56,66 +73,62 @@
 #define SLOTS 256
 #define FAST_O 32768
 
-TC_RAMFUNC void tc_refresh(const uint32_t *w) {
-    uintptr_t base = (uintptr_t)w[W_BASE];
-#if UINTPTR_MAX > 0xFFFFFFFFu
-    base |= ((uintptr_t)w[W_BASE + 1]) << 32;
-#endif
+#define LIKELY(x) __builtin_expect(!!(x), 1)
+#define UNLIKELY(x) __builtin_expect(!!(x), 0)
 #define AT(k) (base + (uintptr_t)w[k])
-    int32_t *s = (int32_t *)AT(W_S);
-    volatile uint32_t *adc = (volatile uint32_t *)AT(W_ADC);
-    int32_t cs = s[S_ADC_CS];
-    if (!(cs & 24)) {
-        adc[0] = (uint32_t)cs;                  // start one conversion
-    }
-    volatile uint32_t *clock = (volatile uint32_t *)AT(W_TIMER);
-    uint32_t t0 = clock[0];
-    int32_t touch = s[S_TOUCH];
-    int32_t raw;
-    if (cs & 16) {
+// (a + 2^(n-1)) >> n, rounded as refresh_viper.py writes it: floor((a + 2^(n-1)) / 2^n)
+// = floor((floor(a / 2^(n-1)) + 1) / 2) for every int a - 3 Thumb-1 instructions
+// with no 2^(n-1) to build (movs + lsls when n > 8)
+#define RSHR(a, n) ((((a) >> ((n) - 1)) + 1) >> 1)
+
+// BASE: what W's offsets are from. A 32-bit board's addresses all fit a word, and
+// refresh_fast._resolve then makes BASE 0 - W's words are the addresses - so this
+// build adds nothing: an RP2040 refresh keeps one register more and ~10 adds fewer
+// (~20 cycles of its ~300 on the emulated Pico). A 64-bit port's is two halves.
+static inline uintptr_t tc_base(const uint32_t *w) {
+#if UINTPTR_MAX > 0xFFFFFFFFu
+    return (uintptr_t)w[W_BASE] | (((uintptr_t)w[W_BASE + 1]) << 32);
+#else
+    (void)w;
+    return 0;
+#endif
+}
+
+// The cold paths, out of line (each in RAM too): kept out of tc_refresh they
+// neither push its common path's branches out of a Thumb-1 conditional
+// branch's reach (+-256 bytes: each costs a taken branch then) nor add to
+// the registers gcc keeps live there.
+
+// The ADC's reading where it is not START_MANY's last conversion as expected:
+// START_MANY with CS changed (convert once, then run again), one conversion
+// started by tc_refresh (wait for READY), or an STM32's DR.
+TC_COLD static int32_t tc_adc_slow(volatile uint32_t *adc, int32_t cs) {
+    int32_t mode = cs & 24, raw;
+    if (mode & 16) {
         // STM32 (texel/hw/stm32_irq.py): W_ADC is ADC1's base; DR (word 19) holds the
         // conversion the refresh before started, then CR2 (word 2) |= ADON | SWSTART
         // starts the next one - no wait (a conversion takes ~1.5 us, a period 120)
         raw = (int32_t)(adc[19] & 0xFFF);
         adc[2] = adc[2] | 0x40000001u;
-    } else if (cs & 8) {                        // START_MANY: its last conversion
-        raw = (int32_t)adc[1];
-        if ((int32_t)(adc[0] & 0x1F700F) != cs) {
-            adc[0] = (uint32_t)((cs ^ 8) | 4);
-            while ((adc[0] & 0x100) == 0) {
-            }
-            raw = (int32_t)adc[1];
-            adc[0] = (uint32_t)cs;
+    } else if (mode) {                          // START_MANY, CS changed by other code
+        adc[0] = (uint32_t)((cs ^ 8) | 4);
+        while ((adc[0] & 0x100) == 0) {
         }
+        raw = (int32_t)adc[1];
+        adc[0] = (uint32_t)cs;
     } else {
         while ((adc[0] & 0x100) == 0) {         // READY after ~2 us
         }
         raw = (int32_t)adc[1];
     }
-    if (s[S_ADC12]) {
-        raw = (raw << 4) | (raw >> 8);
-    }
-    // --- sensor: AdcLinearSensor.read + _Tracker._track
-    int32_t p = -1, nf = 0, v = 0;
-    if (raw < s[S_LIFT]) {
-        if (touch) {
-            int32_t n = s[S_LOW] + 1;
-            if (n >= s[S_DEB]) {
-                touch = 0;
-                s[S_TOUCH] = 0;
-                s[S_LOW] = 0;
-            } else {                            // a dropout: dead-reckon
-                s[S_LOW] = n;
-                v = s[S_V] - V_BIAS;
-                nf = s[S_F] + v;
-                if ((uint32_t)nf > (uint32_t)s[S_QMAX]) {
-                    nf = nf < 0 ? 0 : s[S_QMAX];
-                }
-                s[S_F] = nf;
-                p = nf + ((v * s[S_LQ8] + 128) >> 8);
-            }
-        }
-    } else {
+    return raw;
+}
+
+// _Tracker._track but for a touching finger read above the lift level: the
+// touch-down (re-seed) and a reading below the lift level (a dropout, dead-
+// reckoned, or the lift). Returns the position (-1: not touching; S_TOUCH says).
+TC_COLD static int32_t tc_track_cold(int32_t *s, int32_t raw) {
+    if (raw >= s[S_LIFT]) {                     // touch-down: re-seed
         s[S_LOW] = 0;
         int32_t d = raw - s[S_R0];
         if (s[S_REV]) {
@@ -128,55 +141,150 @@ TC_RAMFUNC void tc_refresh(const uint32_t *w) {
         if (x > s[S_QMAX]) {
             x = s[S_QMAX];
         }
-        if (touch) {
-            int32_t f = s[S_F];
-            int32_t e = s[S_FR] + x - f;
-            nf = f + (e >> s[S_K]);
-            s[S_FR] = e & s[S_KM];
-            v = s[S_V] - V_BIAS;
-            e = s[S_VR] + (nf - f) - v;
-            v += e >> s[S_KV];
-            if ((uint32_t)(v + s[S_VMAX]) > (uint32_t)(s[S_VMAX] << 1)) {
-                v = v > 0 ? s[S_VMAX] : -s[S_VMAX];
-                e = 0;
-            }
-            s[S_VR] = e & s[S_KVM];
-            s[S_F] = nf;
-            s[S_V] = v + V_BIAS;
-        } else {                                // touch-down: re-seed
-            touch = 1;
-            s[S_TOUCH] = 1;
-            s[S_F] = x;
-            s[S_FR] = 0;
-            s[S_V] = V_BIAS;
-            s[S_VR] = 0;
-            nf = x;
-            v = 0;
+        s[S_TOUCH] = 1;
+        s[S_F] = x;
+        s[S_FR] = 0;
+        s[S_V] = V_BIAS;
+        s[S_VR] = 0;
+        return x;                               // v = 0: no lead
+    }
+    if (!s[S_TOUCH]) {
+        return -1;
+    }
+    int32_t n = s[S_LOW] + 1;
+    if (n >= s[S_DEB]) {
+        s[S_TOUCH] = 0;
+        s[S_LOW] = 0;
+        return -1;
+    }
+    s[S_LOW] = n;                               // a dropout: dead-reckon
+    int32_t v = s[S_V] - V_BIAS;
+    int32_t nf = s[S_F] + v;
+    if ((uint32_t)nf > (uint32_t)s[S_QMAX]) {
+        nf = nf < 0 ? 0 : s[S_QMAX];
+    }
+    s[S_F] = nf;
+    return nf + ((v * s[S_LQ8] + 128) >> 8);
+}
+
+// The first row of the table whose end is above p (Scene.amp's walk), from a
+// row that does not hold p: forward past every row ending at or below p, or
+// back while the row before also ends above p (the rows are sorted and
+// disjoint, so their ends rise). The sentinel's end (2^30 - 1) stops the walk.
+TC_COLD static const int32_t *tc_row(const int32_t *tab, const int32_t *row, int32_t p) {
+    if (p >= row[1]) {
+        do {
+            row += 4;
+        } while (p >= row[1]);
+    } else {
+        while (row != tab && p < row[-3]) {
+            row -= 4;
         }
+    }
+    return row;
+}
+
+// One telemetry sample into the ring (every S_TEL_EVERY refreshes).
+TC_COLD static void tc_tel(const uint32_t *w, int32_t *s, uint32_t t0, int32_t p, int32_t amp) {
+    uintptr_t base = tc_base(w);
+    int32_t h = s[S_TEL_HEAD];
+    int32_t k = h & (SLOTS - 1);
+    ((int32_t *)AT(W_TEL_T))[k] = (int32_t)(t0 & 0x3FFFFFFF);
+    ((int32_t *)AT(W_TEL_P))[k] = p;
+    ((uint16_t *)AT(W_TEL_A))[k] = (uint16_t)amp;
+    s[S_TEL_HEAD] = (h + 1) & 0x3FFFFFFF;
+}
+
+TC_RAMFUNC void tc_refresh(const uint32_t *w) {
+    uintptr_t base = tc_base(w);
+    int32_t *s = (int32_t *)AT(W_S);
+    volatile uint32_t *adc = (volatile uint32_t *)AT(W_ADC);
+    int32_t cs = s[S_ADC_CS];
+    if (!(cs & 24)) {
+        adc[0] = (uint32_t)cs;                  // start one conversion
+    }
+    uint32_t t0 = *(volatile uint32_t *)AT(W_TIMER);
+    int32_t raw;
+    if (LIKELY((cs & 24) == 8)) {               // START_MANY: its last conversion
+        raw = (int32_t)adc[1];
+        if (UNLIKELY((int32_t)(adc[0] & 0x1F700F) != cs)) {
+            raw = tc_adc_slow(adc, cs);
+        }
+    } else {
+        raw = tc_adc_slow(adc, cs);
+    }
+    if (LIKELY(s[S_ADC12])) {
+        raw = (raw << 4) | (raw >> 8);
+    }
+    // --- sensor: AdcLinearSensor.read + _Tracker._track
+    int32_t p, touch = s[S_TOUCH];
+    if (LIKELY(touch && raw >= s[S_LIFT])) {
+        s[S_LOW] = 0;
+        int32_t d = raw - s[S_R0];
+        if (s[S_REV]) {
+            d = -d;
+        }
+        int32_t span = s[S_SPAN];
+        if (UNLIKELY((uint32_t)d > (uint32_t)span)) {
+            d = d < 0 ? 0 : span;
+        }
+        int32_t x = d * s[S_SHI] + RSHR(d * s[S_SLO], 14);
+        int32_t qmax = s[S_QMAX];
+        if (UNLIKELY(x > qmax)) {
+            x = qmax;
+        }
+        int32_t f = s[S_F];
+        int32_t e = s[S_FR] + x - f;
+        int32_t nf = f + (e >> s[S_K]);
+        s[S_FR] = e & s[S_KM];
+        s[S_F] = nf;
+        int32_t v = s[S_V] - V_BIAS;
+        e = s[S_VR] + (nf - f) - v;
+        v += e >> s[S_KV];
+        int32_t vmax = s[S_VMAX];
+        if (UNLIKELY((uint32_t)(v + vmax) > (uint32_t)(vmax << 1))) {
+            v = v > 0 ? vmax : -vmax;
+            e = 0;
+        }
+        s[S_VR] = e & s[S_KVM];
+        s[S_V] = v + V_BIAS;
         p = nf + ((v * s[S_LQ8] + 128) >> 8);
+    } else {
+        p = tc_track_cold(s, raw);
+        touch = s[S_TOUCH];
     }
     // --- scene: Scene.amp
     int32_t amp;
-    if (touch) {
-        if ((uint32_t)p > (uint32_t)s[S_QMAX]) {
-            p = p < 0 ? 0 : s[S_QMAX];
+    if (LIKELY(touch)) {
+        int32_t qmax = s[S_QMAX];
+        if (UNLIKELY((uint32_t)p > (uint32_t)qmax)) {
+            p = p < 0 ? 0 : qmax;
         }
         p = (p + 128) >> 8;
+        s[S_POS1] = p + 1;                      // (stored now: one register fewer below)
+        // W_ROW (bytes from the table's start; 0 in a fresh W: row 0) is the row the
+        // refresh before found: the finger moves a fraction of a position per refresh,
+        // so it nearly always holds p again - 2 loads to check instead of a walk of up
+        // to 16 rows (~7 cycles each). Each W is one scene's: a swap starts at row 0.
         const int32_t *tab = (const int32_t *)AT(W_TAB);
-        int32_t i = 1;
-        while (p >= tab[i]) {
-            i += 4;
+        uint32_t *wrow = (uint32_t *)(uintptr_t)&w[W_ROW];
+        const int32_t *row = (const int32_t *)((uintptr_t)tab + *wrow);
+        int32_t st = row[0];
+        if (UNLIKELY(p >= row[1] || p < st)) {
+            row = tc_row(tab, row, p);
+            *wrow = (uint32_t)((uintptr_t)row - (uintptr_t)tab);
+            st = row[0];
         }
-        int32_t st = tab[i - 1], kind = tab[i + 1];
-        if (p < st) {
+        int32_t kind = row[2];
+        if (UNLIKELY(p < st)) {                 // a gap (or before the first region)
             amp = (int32_t)w[W_IDLE];
         } else if (kind == 2) {                 // scene.K_PLAN: engine_int's sample
-            int32_t b = tab[i + 2];
+            const uint32_t *pl = w + row[3];    // t28, d28, L, gain Q14, R
             int32_t o = p - st;
-            int32_t ln = (int32_t)w[b + 2];
+            int32_t ln = (int32_t)pl[2];
             int32_t j, k;
-            if (o < FAST_O) {
-                j = (o * (int32_t)w[b + 4]) >> 16;
+            if (LIKELY(o < FAST_O)) {
+                j = (o * (int32_t)pl[4]) >> 16;
                 k = o - j * ln;
                 if (k < 0) {
                     j -= 1;
@@ -186,59 +294,53 @@ TC_RAMFUNC void tc_refresh(const uint32_t *w) {
                 j = o / ln;
                 k = o - j * ln;
             }
-            const int32_t *t28 = (const int32_t *)AT(b);
-            const int32_t *d28 = (const int32_t *)AT(b + 1);
+            const int32_t *t28 = (const int32_t *)(base + (uintptr_t)pl[0]);
+            const int32_t *d28 = (const int32_t *)(base + (uintptr_t)pl[1]);
             uint32_t ph = ((uint32_t)t28[j] + (uint32_t)(k + 1) * (uint32_t)d28[j]) & 0x0FFFFFFF;
-            const uint16_t *sine = (const uint16_t *)AT(W_SINE);
-            int32_t ii = (int32_t)(ph >> 18);
-            int32_t y0 = sine[ii];
-            int32_t sv = y0 + (((sine[ii + 1] - y0) * (int32_t)((ph >> 2) & 0xFFFF) + 32768) >> 16);
-            amp = (sv * (int32_t)w[b + 3] + 8192) >> 14;
+            const uint16_t *sine = (const uint16_t *)AT(W_SINE) + (ph >> 18);
+            int32_t y0 = sine[0];
+            int32_t sv = y0 + RSHR((sine[1] - y0) * (int32_t)((ph >> 2) & 0xFFFF), 16);
+            amp = RSHR(sv * (int32_t)pl[3], 14);
         } else if (kind == 1) {
-            amp = ((const uint16_t *)(base + (uintptr_t)(uint32_t)tab[i + 2]))[p - st];
+            amp = ((const uint16_t *)(base + (uintptr_t)(uint32_t)row[3]))[p - st];
         } else if (kind == 0) {
-            amp = tab[i + 2];
+            amp = row[3];
         } else {                                // scene.K_CHUNK: the chunks' offsets
             int32_t o = p - st;
-            const uint32_t *ct = (const uint32_t *)(base + (uintptr_t)(uint32_t)tab[i + 2]);
+            const uint32_t *ct = (const uint32_t *)(base + (uintptr_t)(uint32_t)row[3]);
             amp = ((const uint16_t *)(base + (uintptr_t)ct[o >> 9]))[o & 511];
         }
     } else {
+        s[S_POS1] = 0;                          // p + 1, p = -1
         amp = (int32_t)w[W_IDLE];
     }
     // --- duty: DutyLaw.duty
-    const uint16_t *fine = (const uint16_t *)AT(W_FINE);
-    int32_t j = amp >> 6;
-    int32_t lo = fine[j];
-    int32_t dc = (lo + (((fine[j + 1] - lo) * (amp & 63)) >> 6) + s[S_HALF]) >> s[S_Q];
-    if (dc > s[S_MAXC]) {
-        dc = s[S_MAXC];
+    const uint16_t *fine = (const uint16_t *)AT(W_FINE) + (amp >> 6);
+    int32_t lo = fine[0];
+    int32_t dc = (lo + (((fine[1] - lo) * (amp & 63)) >> 6) + s[S_HALF]) >> s[S_Q];
+    int32_t maxc = s[S_MAXC];
+    if (UNLIKELY(dc > maxc)) {
+        dc = maxc;
     }
     *(volatile uint32_t *)AT(W_CC) = (uint32_t)dc * w[W_MUL];
     // --- bookkeeping and telemetry
-    s[S_POS1] = p + 1;
     s[S_AMP] = amp;
     s[S_DUTY] = dc;
     s[S_COUNT] = (s[S_COUNT] + 1) & 0x3FFFFFFF;
-    if (s[S_TEL_EVERY]) {
+    int32_t every = s[S_TEL_EVERY];
+    if (every) {
         int32_t n = s[S_TEL_DIV] + 1;
-        if (n >= s[S_TEL_EVERY]) {
+        if (n >= every) {
             n = 0;
-            int32_t h = s[S_TEL_HEAD];
-            int32_t k = h & (SLOTS - 1);
-            ((int32_t *)AT(W_TEL_T))[k] = (int32_t)(t0 & 0x3FFFFFFF);
-            ((int32_t *)AT(W_TEL_P))[k] = p;
-            ((uint16_t *)AT(W_TEL_A))[k] = (uint16_t)amp;
-            s[S_TEL_HEAD] = (h + 1) & 0x3FFFFFFF;
+            tc_tel(w, s, t0, s[S_POS1] - 1, amp);
         }
         s[S_TEL_DIV] = n;
     }
-    int32_t dt = (int32_t)(clock[0] - t0);
-    if (dt > s[S_WORST]) {
+    int32_t dt = (int32_t)(*(volatile uint32_t *)AT(W_TIMER) - t0);
+    if (UNLIKELY(dt > s[S_WORST])) {
         s[S_WORST] = dt;
     }
-    if (dt > s[S_PERIOD]) {
+    if (UNLIKELY(dt > s[S_PERIOD])) {
         s[S_OVR] = (s[S_OVR] + 1) & 0x3FFFFFFF;
     }
-#undef AT
 }

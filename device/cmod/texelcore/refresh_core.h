@@ -11,8 +11,10 @@
 
 #ifdef TC_IN_RAM
 #define TC_RAMFUNC __attribute__((section(".time_critical.texelcore"), noinline))
+#define TC_COLD __attribute__((section(".time_critical.texelcore"), noinline, cold))
 #else
 #define TC_RAMFUNC
+#define TC_COLD __attribute__((noinline, cold))
 #endif
 
 // One refresh on W (w: its first word): read the ADC, track the finger, look

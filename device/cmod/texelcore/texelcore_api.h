@@ -16,7 +16,7 @@
 
 // The functions and arguments below, as texel.compat.CORE_API expects them:
 // bump both with any change, so a board's older native module is not used.
-#define TC_API 6                // 6: the refresh reads an STM32 ADC (S_ADC_CS bit 4)
+#define TC_API 7                // 7: W_ROW (word 14, the refresh's last row) and W_BASE 0 on 32-bit boards; 6: the STM32 ADC
 #define MAX_CHUNKS 128          // 65,536 values of 512 (a full screen is 38 chunks)
 #define TC_U16_VALS 19200       // kinds/samples.py MAX_SAMPLES
 #define TC_TAB_I32 (512 + 32 * 32 + 1)     // plan_int_tables.table(): EXP_HI, EXP_MID, NORM
@@ -191,7 +191,7 @@ static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_samples_obj, 6, 6, tc_samples_fn);
 // array('I') whose words are addresses FastRefresh resolved: trusted, as
 // core() trusts them); what the tests compare with core()
 static mp_obj_t tc_refresh_fn(mp_obj_t w_in) {
-    tc_refresh((const uint32_t *)tc_buf(w_in, 4 * 14, MP_BUFFER_READ, "W"));
+    tc_refresh((const uint32_t *)tc_buf(w_in, 4 * 15, MP_BUFFER_READ, "W"));   // W_FIXED words
     return mp_const_none;
 }
 static MP_DEFINE_CONST_FUN_OBJ_1(tc_refresh_obj, tc_refresh_fn);

@@ -17,11 +17,12 @@ from .refresh import Refresh, TELEMETRY_SLOTS
 from ..gen import sine_table
 
 # W: word array indices, one 32-bit word each. Addresses are kept as offsets
-# from BASE (words 0 and 1: its low and high halves; high is 0 on 32-bit
-# boards), the lowest address the refresh uses, so every offset is one
-# non-negative word (RP2040: the registers at 0x4xxxxxxx lie above the SRAM
-# heap; the unix port: everything in its one heap) and an address costs core()
-# one load and one add instead of rebuilding 64 bits from two halves.
+# from BASE (words 0 and 1: its low and high halves), so every offset is one
+# non-negative word and an address costs core() one load and one add instead
+# of rebuilding 64 bits from two halves. On a 32-bit board BASE is 0 - every
+# address fits a word, and W holds the addresses themselves: the C core's
+# 32-bit build (refresh_core.c tc_base) relies on it and adds nothing; on a
+# 64-bit port it is the lowest address the refresh uses (_resolve).
 W_BASE = const(0)       # 2 words
 W_S = const(2)          # state S (array 'i')
 W_TAB = const(3)        # scene region table (array 'i', rows start,end,kind,value + sentinel)
@@ -35,10 +36,12 @@ W_ADC = const(10)       # rp2: ADC CS register (RESULT follows)
 W_CC = const(11)        # rp2: PWM slice CC register
 W_MUL = const(12)       # rp2: CC word = counts * MUL (leg A, and B for a bridge; a value)
 W_SINE = const(13)      # sine_table (array 'H') for plan-backed texel regions
-W_BUF0 = const(14)      # scene buffer k at W_BUF0 + k (scene.K_CHUNK: its chunk-offset
+W_ROW = const(14)       # the C core's own: the table row the finger was in, in bytes
+                        # from the table's start (0 at a swap: a new W); viper ignores it
+W_BUF0 = const(15)      # scene buffer k at W_BUF0 + k (scene.K_CHUNK: its chunk-offset
                         # table); then plan p at W_BUF0 + nbuf + W_PLAN*p: t28, d28,
                         # L, gain Q14, R = 65536 // L + 1 (see the texel branch)
-W_FIXED = const(14)
+W_FIXED = const(15)
 W_PLAN = const(5)
 
 # S: state indices (int32 words; every value non-negative and < 2^30 - the
@@ -193,6 +196,10 @@ def _start_many_is_reset():
 irq_rp2 = _Rp2Irq()     # what app.py gives the rp2 backend on an RP2040
 
 
+# bytes per pointer: 4 on a 32-bit board (then W_BASE is 0: _resolve)
+_PTR_BYTES = uctypes.sizeof({"p": (uctypes.PTR | 0, uctypes.UINT8)})
+
+
 def _offset(a, base):
     # an address as core() finds it: one word above BASE
     d = a - base
@@ -203,13 +210,18 @@ def _offset(a, base):
 
 def _resolve(words, tab, addr, chunked, nbuf):
     """Fill W (words) and core()'s table (tab) before a swap: every address
-    as its offset from the lowest one (W_BASE holds that base, split in two
-    words), chunk tables' entries likewise, and each table row's value as
-    core() looks it up - a K_PLAN row the index of its plan's first word in
-    W, a K_BUF or K_CHUNK row its buffer's offset."""
-    base = min(a for _, a in addr)
-    for ct, cs in chunked:
-        base = min(base, min(cs))
+    as its offset from BASE (W_BASE holds it, split in two words: 0 on a
+    32-bit board, else the lowest address), chunk tables' entries likewise,
+    and each table row's value as core() looks it up - a K_PLAN row the index
+    of its plan's first word in W, a K_BUF or K_CHUNK row its buffer's offset
+    (as an int32: a 32-bit board's address above 2^31 wraps, and core() adds
+    it modulo 2^32 there)."""
+    if _PTR_BYTES == 4:
+        base = 0
+    else:
+        base = min(a for _, a in addr)
+        for ct, cs in chunked:
+            base = min(base, min(cs))
     for k, a in addr:
         words[k] = _offset(a, base)
     for ct, cs in chunked:
@@ -220,7 +232,8 @@ def _resolve(words, tab, addr, chunked, nbuf):
         if kind == 2:                       # scene.K_PLAN
             tab[r + 3] = W_BUF0 + nbuf + W_PLAN * tab[r + 3]
         elif kind == 1 or kind == 3:        # scene.K_BUF, K_CHUNK
-            tab[r + 3] = words[W_BUF0 + tab[r + 3]]
+            v = words[W_BUF0 + tab[r + 3]]
+            tab[r + 3] = v - 0x100000000 if v > 0x7FFFFFFF else v
     words[W_BASE] = base & 0xFFFFFFFF
     words[W_BASE + 1] = (base >> 16) >> 16
 

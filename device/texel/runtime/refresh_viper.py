@@ -40,11 +40,11 @@ from micropython import const
 from . import refresh_fast as _f
 
 # W: word array indices, one 32-bit word each. Addresses are kept as offsets
-# from BASE (words 0 and 1: its low and high halves; high is 0 on 32-bit
-# boards), the lowest address the refresh uses, so every offset is one
-# non-negative word (RP2040: the registers at 0x4xxxxxxx lie above the SRAM
-# heap; the unix port: everything in its one heap) and an address costs core()
-# one load and one add instead of rebuilding 64 bits from two halves.
+# from BASE (words 0 and 1: its low and high halves), so every offset is one
+# non-negative word and an address costs core() one load and one add instead
+# of rebuilding 64 bits from two halves: BASE is 0 on a 32-bit board (W holds
+# the addresses) and the lowest address the refresh uses on a 64-bit port
+# (refresh_fast._resolve).
 W_BASE = const(0)       # 2 words
 W_S = const(2)          # state S (array 'i')
 W_TAB = const(3)        # scene region table (array 'i', rows start,end,kind,value + sentinel)
@@ -58,10 +58,11 @@ W_ADC = const(10)       # rp2: ADC CS register (RESULT follows)
 W_CC = const(11)        # rp2: PWM slice CC register
 W_MUL = const(12)       # rp2: CC word = counts * MUL (leg A, and B for a bridge; a value)
 W_SINE = const(13)      # sine_table (array 'H') for plan-backed texel regions
-W_BUF0 = const(14)      # scene buffer k at W_BUF0 + k (scene.K_CHUNK: its chunk-offset
+W_ROW = const(14)       # the C core's own (its last table row); core() ignores it
+W_BUF0 = const(15)      # scene buffer k at W_BUF0 + k (scene.K_CHUNK: its chunk-offset
                         # table); then plan p at W_BUF0 + nbuf + W_PLAN*p: t28, d28,
                         # L, gain Q14, R = 65536 // L + 1 (see the texel branch)
-W_FIXED = const(14)
+W_FIXED = const(15)
 W_PLAN = const(5)
 
 # S: state indices (int32 words; every value non-negative and < 2^30 - the
@@ -324,7 +325,7 @@ _resolve = _f._resolve
 
 # the layout, compiled into core() as literals, is refresh_fast's
 for _n in ("W_BASE", "W_S", "W_TAB", "W_FINE", "W_TEL_T", "W_TEL_P", "W_TEL_A", "W_IDLE",
-           "W_TIMER", "W_ADC", "W_CC", "W_MUL", "W_SINE", "W_BUF0", "W_FIXED", "W_PLAN",
+           "W_TIMER", "W_ADC", "W_CC", "W_MUL", "W_SINE", "W_ROW", "W_BUF0", "W_FIXED", "W_PLAN",
            "S_TOUCH", "S_LOW", "S_ADC12", "S_F", "S_V", "S_FR", "S_VR", "S_K", "S_KM", "S_KV",
            "S_KVM", "S_VMAX", "S_QMAX", "S_REV", "S_R0", "S_SPAN", "S_SHI", "S_SLO", "S_LQ8",
            "S_LIFT", "S_POS1", "S_AMP", "S_DUTY", "S_COUNT", "S_TEL_EVERY", "S_Q", "S_HALF",
