@@ -119,9 +119,11 @@ def staged(func, text, fill=(), args=(), scene_at=0, kwargs=None):
             g = s["regions"]
             for i, k in fill:
                 g[i]["texture"]["u16"] = take_upload(k)
+        f = getattr(app, func)
+        if not args and not kwargs:         # a push: no tuple, list or dict to build
+            return ("ok", f(s))
         a = list(args)
         a.insert(scene_at, s)
-        f = getattr(app, func)
         return ("ok", f(*a, **(kwargs or {})))
     except ValueError as e:
         return ("err", str(e))

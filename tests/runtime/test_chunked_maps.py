@@ -149,3 +149,84 @@ def test_chunks_on_the_real_interpreters(exe, x64_core):
         assert got["int_sines"] and got["fill"] == "viper"
     elif x64_core:
         assert got["c"] and got["fill"] == "c"
+
+
+# --- maps in blocks of SLAB chunks (kinds.SLAB: 8 on the texelpad firmware) -------------------
+
+SLAB_SCENE = ('{"regions": [{"start_mm": 0, "end_mm": 40, "texture": {"kind": "samples",'
+              ' "values": [0, 1], "fit": "stretch"}},'
+              ' {"start_mm": 40, "end_mm": 70, "texture": {"kind": "reference", "name": "pink"}},'
+              ' {"start_mm": 70, "end_mm": 101.76, "texture": {"kind": "texel", "pitch_db": 6.3,'
+              ' "irregularity_db": -12.9, "seed": 8, "texel_samples": 3}}]}')
+
+
+def test_a_map_in_slabs_plays_what_its_1_kb_chunks_play(monkeypatch):
+    """kinds.SLAB > 1 (the firmware: 5 allocations for a full screen, not 38):
+    the chunks are memoryviews of bigger blocks and every position plays the
+    same value; a block the heap has no room for turns the rest into 1 KB
+    chunks (one MemoryError)."""
+    scene = json.loads(SLAB_SCENE)
+    one = S.build(S.validate(scene, D), D)
+    monkeypatch.setattr(kinds, "SLAB", 8)
+    slab = S.build(S.validate(scene, D), D)
+    views = [c for b in slab.buffers() if type(b) is tuple for c in b]
+    assert views and all(type(c) is memoryview and len(c) <= 512 for c in views)
+    assert [slab.amp(p) for p in range(D["positions"])] == \
+        [one.amp(p) for p in range(D["positions"])]
+    from texel import compat
+    real = compat.u16_one_block
+    asked = []
+
+    def tight(n):
+        asked.append(n)
+        if n > 512:
+            raise MemoryError
+        return real(n)
+    monkeypatch.setattr(compat, "u16_one_block", tight)
+    ch = kinds.new_chunks(3000)
+    assert [len(c) for c in ch] == [512] * 5 + [440] and all(type(c) is array for c in ch)
+    assert asked[0] == 3000 and max(asked[1:]) == 512
+
+
+SLAB_SCRIPT = r"""
+from texel.runtime import kinds
+sc_txt = %(scene)s
+kinds.SLAB = 1
+one = S.build(S.validate(sc_txt, disp), disp)
+kinds.SLAB = 8
+slab = S.build(S.validate(sc_txt, disp), disp)
+views = [type(c).__name__ for b in slab.buffers() if type(b) is tuple for c in b]
+same = all(one.amp(p) == slab.amp(p) for p in range(19200))
+seq = raw_script(6000, 3)
+rp, dp, cp = make("py", seq)
+rv, dv, cv = make("viper", seq)
+rp.swap(one)
+rv.swap(slab)
+mism = 0
+for k in range(len(seq)):
+    cp[0] = cv[0] = k * 120
+    rp.step()
+    rv.step()
+    if (rp.pos, rp.amp, rp.duty) != (rv.pos, rv.amp, rv.duty) or dp[-1] != dv[-1]:
+        mism += 1
+from texel import compat
+print(json.dumps({"views": sorted(set(views)), "same": same, "mism": mism,
+                  "positions": len(set(dp)), "c": bool(compat.core())}))
+"""
+
+
+@pytest.mark.parametrize("with_c", [False, True], ids=["viper", "c-core"])
+def test_slabs_through_the_fast_refresh_on_the_unix_port(with_c, x64_core):
+    """The unix port: a scene built in slabs (memoryview chunks: their
+    addresses through uctypes.addressof, their values by the C core's fill)
+    plays through the fused refresh - viper, or the C core's x64 build - what
+    the Python refresh plays from 1 KB chunks, refresh by refresh."""
+    from test_refresh_viper import COMMON, SCENE_A, SCENE_B
+    if with_c and not x64_core:
+        pytest.skip("no x64 native module here")
+    code = (COMMON % {"cfg": "{}", "scene_a": SCENE_A, "scene_b": SCENE_B}
+            + SLAB_SCRIPT % {"scene": SLAB_SCENE})
+    got = mpy.run_json(code, timeout=600, **({"extra_path": str(x64_core)} if with_c else {}))
+    assert got["views"] == ["memoryview"] and got["same"] is True
+    assert got["mism"] == 0 and got["positions"] > 10
+    assert got["c"] is with_c

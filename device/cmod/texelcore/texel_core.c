@@ -286,12 +286,19 @@ void tc_render(uint16_t *out, int32_t n, int32_t L, int32_t count, const int32_t
 void tc_samples(uint16_t **chunks, int32_t bits, int32_t n, const uint16_t *vals, int32_t m,
                 int32_t stretch) {
     int32_t mask = (1 << bits) - 1;
+    // Chunk by chunk through a pointer (the inner loops index no chunk table): the
+    // same values as position by position. On the emulated RP2040 the stretch of a
+    // full screen (19,200 positions) took 9.5 ms indexing chunks[i >> bits][i & mask].
     if (!stretch || m == 1 || n == 1) {
         int32_t k = 0;
-        for (int32_t i = 0; i < n; i++) {
-            chunks[i >> bits][i & mask] = vals[k];
-            if (++k == m) {
-                k = 0;
+        for (int32_t c0 = 0; c0 < n; c0 += mask + 1) {
+            uint16_t *out = chunks[c0 >> bits];
+            uint16_t *stop = out + (n - c0 < mask + 1 ? n - c0 : mask + 1);
+            while (out < stop) {
+                *out++ = vals[k];
+                if (++k == m) {
+                    k = 0;
+                }
             }
         }
         return;
@@ -303,24 +310,28 @@ void tc_samples(uint16_t **chunks, int32_t bits, int32_t n, const uint16_t *vals
         // j << 15 off q exactly. No division per position (an RP2040's divider
         // is a call away): the same w as Python's (r << 15) // den.
         int32_t sq = (step << 15) / den, sr = (step << 15) % den, q = 0, qr = 0;
-        for (int32_t i = 0; i < n; i++) {
-            int32_t a = vals[k], v = a;
-            if (r != 0) {
-                v = a + (((vals[k + 1] - a) * ((q + 1) >> 1) + 8192) >> 14);
-            }
-            chunks[i >> bits][i & mask] = (uint16_t)v;
-            r += step;
-            q += sq;
-            qr += sr;
-            if (qr >= den) {
-                q++;
-                qr -= den;
-            }
-            if (r >= den) {
-                int32_t j = r / den;
-                k += j;
-                r -= j * den;
-                q -= j << 15;
+        int32_t a = vals[0], d = m > 1 ? vals[1] - a : 0;
+        for (int32_t c0 = 0; c0 < n; c0 += mask + 1) {
+            uint16_t *out = chunks[c0 >> bits];
+            uint16_t *stop = out + (n - c0 < mask + 1 ? n - c0 : mask + 1);
+            while (out < stop) {
+                // r == 0 gives w = (0 + 1) >> 1 = 0: a itself, as the branch did
+                *out++ = (uint16_t)(a + ((d * ((q + 1) >> 1) + 8192) >> 14));
+                r += step;
+                q += sq;
+                qr += sr;
+                if (qr >= den) {
+                    q++;
+                    qr -= den;
+                }
+                if (r >= den) {
+                    int32_t j = r / den;
+                    k += j;
+                    r -= j * den;
+                    q -= j << 15;
+                    a = vals[k];
+                    d = k + 1 < m ? vals[k + 1] - a : 0;
+                }
             }
         }
         return;

@@ -71,7 +71,7 @@ class Chunks:
 
     def __init__(self, n):
         self.n = n
-        self.chunks = new_chunks(n)
+        self.chunks = new_chunks(n, 1)     # 1 KB blocks: arriving while a scene plays
 
     def __len__(self):
         return self.n

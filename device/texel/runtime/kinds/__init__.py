@@ -24,6 +24,8 @@
 #   FIELDS (optional)             the editor's form: (key, "number"|"int"|"word",
 #                                 lo or words, hi, default, label) per key
 #
+from ...compat import ROM as _ROM       # (SLAB below)
+
 # The registry is this tuple: a board's frozen package cannot be listed, so
 # the names are written out; tests/runtime/test_kinds.py checks that it and the
 # modules in this folder agree. Order: messages list the kinds in it.
@@ -40,13 +42,42 @@ CHUNK_BITS = 9          # 512 values (1 KB) per chunk (upload.py and refresh_vip
 CHUNK_MASK = 511
 
 
-def new_chunks(n):
-    """n uint16 values as a tuple of array('H') of 2^CHUNK_BITS each (the
-    last shorter): a map with no block above 1 KB (upload.Chunks holds one;
-    samples and RAM references play from them)."""
+# Chunks per block where the heap has room (the texelpad firmware: compat.ROM),
+# each chunk a memoryview of its block: a full screen is 5 allocations instead of
+# 38. Every allocation above one 16-byte block scans MicroPython's allocation
+# table from its lowest free block past the heap's small holes: ~0.34 ms a chunk
+# on the emulated RP2040 playing a scene, 12.9 of the shipped gradient's 25.6 ms
+# build (docs/firmware.md). 1 elsewhere (stock boards, CircuitPython: a 1 KB chunk
+# is what their fragmented heaps have room for; an upload's chunks always).
+SLAB = 8 if _ROM else 1
+
+
+def new_chunks(n, slab=None):
+    """n uint16 values as a tuple of chunks of 2^CHUNK_BITS values each (the
+    last shorter): array('H') each, or memoryviews of SLAB-chunk blocks - a map
+    with no block above 1 KB where SLAB is 1 (upload.Chunks holds one; samples
+    and RAM references play from them). A block the heap has no room for (one
+    MemoryError, and MicroPython's collection inside it) turns the rest of the
+    map into 1 KB chunks."""
     from ...compat import u16_one_block
     size = 1 << CHUNK_BITS
-    return tuple(u16_one_block(min(size, n - o)) for o in range(0, n, size))
+    per = SLAB if slab is None else slab
+    out = []
+    o = 0
+    while o < n:
+        k = min(n - o, per * size)
+        if k > size:
+            try:
+                mv = memoryview(u16_one_block(k))
+            except MemoryError:
+                per = 1
+                continue
+            for a in range(0, k, size):
+                out.append(mv[a:a + size])
+        else:
+            out.append(u16_one_block(k))
+        o += k
+    return tuple(out)
 
 _mods = {}
 
