@@ -30,9 +30,10 @@ typedef struct {
 void tb_draws(uint16_t st[8], const int32_t *invk, const int32_t *ll, int32_t sign,
               int32_t off, const tb_tables *t, int32_t *mag, int32_t *ph);
 
-// Two windows' doubled frames into re and im (brush.fill, brush.ifft).
+// Two windows' doubled frames (brush.fill, brush.ifft) into z, 2 * TB_WINDOW
+// values: brush.ifft's re[i] at z[2 i], its im[i] at z[2 i + 1].
 void tb_frames(const int32_t *ma, const int32_t *pa, const int32_t *mb, const int32_t *pb,
-               const tb_tables *t, int32_t *re, int32_t *im);
+               const tb_tables *t, int32_t *z);
 
 // brush.paint's loop: n samples into chunks (chunk i holds samples
 // i << chunk_bits ..), from the generator's state after the setup; work:
