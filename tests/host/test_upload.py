@@ -438,3 +438,48 @@ def test_a_refused_push_through_pushed_changes_nothing(board):
     ans = board.link.eval_reply(protocol.staged_call(protocol.WIRE, "pushed", [bad], 0))
     assert ans == ("err", "regions[0].texture.level: 7 is out of range [0.0, 1.0]")
     assert board.status()["scene"] == before
+
+
+def test_pushes_in_a_row_ask_no_status_between_them(board):
+    """Board.push needs the display (and, for texels planned whole, the free
+    heap): it uses the status it read or its last push made while nothing else
+    ran on the board - a status() before every push took 28.5 ms of the
+    emulated Pico's clock (docs/firmware.md). Any other command forgets it."""
+    codes: list[str] = []
+    exec0 = board.link.exec
+
+    def exec_(code, timeout=None, reply_first=False):
+        codes.append(code)
+        return exec0(code, timeout, reply_first)
+    board.link.exec = exec_
+    try:
+        board.status()
+        st1 = board.push(_scene({"kind": "constant", "level": 0.25}))
+        st2 = board.push(_scene({"kind": "reference", "name": "2sin"}))
+        asked = [c for c in codes if ".status(" in c]
+        assert len(asked) == 1 and len(codes) == 3
+        assert st2["pushes"] == st1["pushes"] + 1 and st2["display"] == st1["display"]
+        board.telemetry()                       # read-only: still known
+        board.push(_scene({"kind": "constant", "level": 0.5}))
+        assert len([c for c in codes if ".status(" in c]) == 1
+        board.link.exec("print(1)")             # anything else: asked again
+        board.push(_scene({"kind": "constant", "level": 0.75}))
+        assert len([c for c in codes if ".status(" in c]) == 2
+        # texels planned whole need the heap figure a push's answer does not carry
+        n = len([c for c in codes if ".status(" in c])
+        board.push(_scene({"kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9,
+                           "seed": 7, "texel_samples": 3}))
+        assert len([c for c in codes if ".status(" in c]) == n + 1
+    finally:
+        board.link.exec = exec0
+    assert board.status()["scene"]["regions"][0]["kind"] == "texel"
+
+
+def test_a_stop_between_pushes_is_seen(board):
+    """The known status goes with any other command: after a stop the next
+    push says the display is not running, as before, and sends nothing."""
+    board.push(_scene({"kind": "constant", "level": 0.25}))
+    board.stop()
+    with pytest.raises(Exception, match="not running"):
+        board.push(_scene({"kind": "constant", "level": 0.5}))
+    board.start("virtual")

@@ -138,12 +138,41 @@ class Board:
     def _wire(self, func: str, *args: Any, timeout: float | None = None, **kwargs: Any) -> Any:
         """texel.wire.func(...): what only the link calls (uploads, base64 data, the
         virtual board's finger)."""
-        return self.link.call(protocol.WIRE, func, *args, timeout=timeout, **kwargs)
+        keep = func in self._KEEPS and self._known_at == self.link.commands
+        out = self.link.call(protocol.WIRE, func, *args, timeout=timeout, **kwargs)
+        if keep:
+            self._known_at = self.link.commands
+        return out
+
+    # --- the status this Board knows -------------------------------------------
+    # A push needs the board's display (and, for a scene whose texels are planned
+    # whole, its free heap) before it is sent. Asking status() for it before every
+    # push took 28.5 ms of the emulated Pico's clock each time (compile 2.0, then
+    # the collection, the heap walk and a 1 KB repr: docs/firmware.md), more than
+    # the push itself. So a Board remembers the status it read or a push made
+    # (texel.app.pushed's answer merged), for as long as nothing else ran on the
+    # board (Link.commands: any other command, a resync or a reset forgets it).
+    _known: dict[str, Any] | None = None
+    _known_at = -1
+    # texel.wire calls after which what status() says of the display still holds
+    _KEEPS = frozenset(("telemetry_b64", "samples_b64", "scene_source", "finger"))
+
+    def _remember(self, st: dict[str, Any]) -> dict[str, Any]:
+        self._known, self._known_at = st, self.link.commands
+        return st
+
+    def _known_status(self) -> dict[str, Any]:
+        """The running status this Board read or made last, if nothing else
+        ran on the board since; else a fresh one (_running_status)."""
+        st = self._known
+        if st is not None and self._known_at == self.link.commands and st.get("running"):
+            return st
+        return self._running_status()
 
     # --- the device entry points ---------------------------------------------
     def status(self) -> dict[str, Any]:
         """texel.app.status() on the board."""
-        return check_status(self.port, self._app("status"))
+        return self._remember(check_status(self.port, self._app("status")))
 
     def start(self, board_name: str, scene: dict[str, Any] | None = None,
               progress: Callable[[int, int], None] | None = None, **opts: Any) -> dict[str, Any]:
@@ -187,6 +216,9 @@ class Board:
               progress: Callable[[int, int], None] | None = None,
               ) -> tuple[dict[str, Any], "CheckedScene"]:
         checked = checked_for(scene, st["display"])
+        if st.get("mem_free") is None and planned_whole(checked):
+            st = self._running_status()         # the heap figure refuse_what_cannot_fit needs
+            checked = checked_for(scene, st["display"])
         refuse_what_cannot_fit(checked, st)
         return self._send("push", [checked.plain], 0, None, progress, st), checked
 
@@ -219,7 +251,7 @@ class Board:
             got = answer(self.port, ans, func + "()")
             if lean and type(got) is dict:
                 got = dict(before or {}, **got)
-            return check_status(self.port, got)
+            return self._remember(check_status(self.port, got))
         except KeyboardInterrupt:
             raise self._interrupted(func, before) from None
         except LinkTimeout:
@@ -286,7 +318,7 @@ class Board:
         board's status with the new scene. On any error the board keeps
         playing what it played. progress(done, total): bytes of large sample
         data sent so far (called during long uploads)."""
-        return self._push(scene, self._running_status(), progress)[0]
+        return self._push(scene, self._known_status(), progress)[0]
 
     def push_checked(self, scene: "dict[str, Any] | CheckedScene",
                      progress: Callable[[int, int], None] | None = None,
@@ -294,7 +326,7 @@ class Board:
         """push(), handing back the checked scene it sent with the status:
         (the board's status, the CheckedScene - its canonical form is what
         the board now plays, as the host's check made it)."""
-        return self._push(scene, self._running_status(), progress)
+        return self._push(scene, self._known_status(), progress)
 
     def push_texel(self, params: dict[str, Any]) -> dict[str, Any]:
         """Play one texel parameter set over the whole display. A set without
@@ -306,7 +338,7 @@ class Board:
             raise ValueError("texel parameters: expected a dict, got %s" % type(params).__name__)
         if "v" not in params:
             params = dict(params, v=FORMAT_NEW)
-        st = self._running_status()
+        st = self._known_status()
         return self._push(full_screen_texel(params, st["display"]), st)[0]
 
     def stop(self) -> None:
@@ -484,6 +516,19 @@ class CheckedScene:
 PLAN_BYTES = {2: 12, 1: 16}
 
 
+def planned_whole(checked: CheckedScene) -> list[tuple[int, dict[str, Any], int]]:
+    """(region index, texture, texels) of each texel region the board renders to
+    a map, planning all its texels at once first (texel.runtime.kinds.texel
+    .on_plan says which play from a plan instead)."""
+    out = []
+    regions = checked.canonical["regions"]
+    for k, (a, b) in enumerate(checked.spans):
+        tex = regions[k]["texture"]
+        if tex["kind"] == "texel" and not kind_texel.on_plan(tex, b - a, None):
+            out.append((k, tex, (b - a + tex["texel_samples"] - 1) // tex["texel_samples"]))
+    return out
+
+
 def refuse_what_cannot_fit(checked: CheckedScene, st: dict[str, Any]) -> None:
     """Refuse before sending (ValueError) a scene the board cannot build
     however its heap lies: a texel region of 1-4-sample texels (or one texel
@@ -498,13 +543,8 @@ def refuse_what_cannot_fit(checked: CheckedScene, st: dict[str, Any]) -> None:
     free = st.get("mem_free")
     if isinstance(free, bool) or not isinstance(free, int):
         return
-    regions = checked.canonical["regions"]
-    for k, (a, b) in enumerate(checked.spans):
-        tex = regions[k]["texture"]
-        if tex["kind"] != "texel" or kind_texel.on_plan(tex, b - a, None):
-            continue
+    for k, tex, count in planned_whole(checked):
         size = tex["texel_samples"]
-        count = (b - a + size - 1) // size
         each = PLAN_BYTES[tex["v"]]
         if count * each > free:
             raise ValueError(

@@ -565,6 +565,11 @@ class Link:
         self.serving = True
         return True
 
+    # every exchange with the board (exec, resync, soft_reset) counts one: a status a
+    # Board remembers (link/board.py Board._known_status) is its own only while this
+    # count is where it was left - nothing else has run on the board since
+    commands = 0
+
     def resync(self, timeout: float | None = None) -> None:
         """Interrupt what the board runs (Ctrl-C) and enter the raw REPL again,
         without a reset: a clean state after a request was cut off half-way
@@ -572,6 +577,7 @@ class Link:
         answer within the timeout."""
         if self.t is None:
             raise LinkError("the link to %s is closed" % self.port)
+        self.commands += 1
         self.serving = False        # Ctrl-C ends texel.app.serve(): its display stops
         try:
             self.t.enter_raw_repl(soft_reset=False,
@@ -588,6 +594,7 @@ class Link:
         reset). Back in the raw REPL afterwards."""
         if self.t is None:
             raise LinkError("the link to %s is closed" % self.port)
+        self.commands += 1
         t = self.timeout if timeout is None else timeout
         was_serving = self.serving
         if was_serving:
@@ -623,6 +630,7 @@ class Link:
         on working on the board: eval_reply)."""
         if self.t is None:
             raise LinkError("the link to %s is closed" % self.port)
+        self.commands += 1
         data = code.encode("utf-8")
         self.sent += len(data)
         run = self.t.exec_reply_first if reply_first else self.t.exec_raw
