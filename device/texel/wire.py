@@ -8,8 +8,8 @@
 import gc
 # json and binascii at the top: MicroPython never caches an extensible built-in in
 # sys.modules, so an import inside a function walks sys.path each time (the
-# filesystems' stats: 1.65 ms a call on the emulated RP2040 firmware, most of
-# a push's "parse"; tests/runtime/test_imports.py)
+# filesystems' stats: 1.64 ms a call on the emulated RP2040 firmware, most of
+# a push's "parse"; bench/request_parts.py, tests/runtime/test_imports.py)
 import binascii
 import json
 from . import app, compat

@@ -399,7 +399,7 @@ def test_a_scene_crosses_as_json_data_and_comes_back_exactly(board):
 def test_a_push_is_answered_with_what_it_changed_and_returns_the_whole_status(board):
     """Issue 32, the request path: Board.push asks texel.app.pushed, whose answer
     leaves out what does not change while texelpad runs (board, display, carrier,
-    versions: ~40 % of status()'s text, ~3 ms of every answer on an RP2040), and
+    versions: ~30 % of status()'s text, 2.5 ms of every answer on an RP2040), and
     merges it into the status read before the push - so a caller still gets
     every key of status(), with the values status() gives right after."""
     answers = []
@@ -443,7 +443,7 @@ def test_a_refused_push_through_pushed_changes_nothing(board):
 def test_pushes_in_a_row_ask_no_status_between_them(board):
     """Board.push needs the display (and, for texels planned whole, the free
     heap): it uses the status it read or its last push made while nothing else
-    ran on the board - a status() before every push took 28.5 ms of the
+    ran on the board - a status() before every push took 29.5 ms of the
     emulated Pico's clock (docs/firmware.md). Any other command forgets it."""
     codes: list[str] = []
     exec0 = board.link.exec

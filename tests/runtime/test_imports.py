@@ -3,9 +3,9 @@ function. MicroPython (py/builtinimport.c process_import_at_level) never puts
 a built-in module in sys.modules, and an *extensible* one (array, binascii,
 json, os, time, ... : MP_REGISTER_EXTENSIBLE_MODULE, so a same-named file may
 replace it) is looked for on every sys.path filesystem first, each time:
-`import json` inside a function took 1.65 ms a call on the emulated RP2040
+`import json` inside a function took 1.64 ms a call on the emulated RP2040
 firmware (sys.path '', '.frozen', '/rom', '/rom/lib', '/lib': littlefs and
-ROMFS stats), most of a push's "parse" (bench/firmware.py). At a module's top
+ROMFS stats), most of a push's "parse" (bench/request_parts.py). At a module's top
 it is paid once. A module-level import, or `import sys` / `math` / `uctypes`
 (not extensible) inside a function, is fine."""
 from __future__ import annotations

@@ -37,7 +37,7 @@
 # seed's second stream.
 import math
 from array import array      # at the top: an extensible built-in imported inside a function
-#                              walks sys.path each time (1.65 ms on the emulated RP2040)
+#                              walks sys.path each time (1.64 ms on the emulated RP2040)
 from . import params as _params
 from .rng import Rng, ppnd16, uniform_of
 from .grid import mdb

@@ -15,7 +15,7 @@
 # are float32: the only float work per texel is f_i and two fractions of it.
 import math
 from array import array      # at the top: an extensible built-in imported inside a function
-#                              walks sys.path each time (1.65 ms on the emulated RP2040)
+#                              walks sys.path each time (1.64 ms on the emulated RP2040)
 from . import params as _params
 from .rng import Rng, phase_fraction_u28, uniform_of
 from ..compat import float_buffer

@@ -31,7 +31,7 @@
 # at 11 c/mm) and the square wave's jumps land on the same samples as the CSV.
 import math
 from array import array      # at the top: an extensible built-in imported inside a function
-#                              walks sys.path each time (1.65 ms on the emulated RP2040)
+#                              walks sys.path each time (1.64 ms on the emulated RP2040)
 import sys
 from ..compat import float_buffer, u16_buffer
 from .params import DX_MM, LENGTH_MAX

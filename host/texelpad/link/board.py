@@ -147,8 +147,8 @@ class Board:
     # --- the status this Board knows -------------------------------------------
     # A push needs the board's display (and, for a scene whose texels are planned
     # whole, its free heap) before it is sent. Asking status() for it before every
-    # push took 28.5 ms of the emulated Pico's clock each time (compile 2.0, then
-    # the collection, the heap walk and a 1 KB repr: docs/firmware.md), more than
+    # push took 29.5 ms of the emulated Pico's clock each time (compile 2.1, then
+    # the collection, the heap walk and a 1 KB repr: bench/request_parts.py), more than
     # the push itself. So a Board remembers the status it read or a push made
     # (texel.app.pushed's answer merged), for as long as nothing else ran on the
     # board (Link.commands: any other command, a resync or a reset forgets it).
