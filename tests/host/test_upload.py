@@ -7,6 +7,7 @@ back what played. All on the real virtual board (the MicroPython unix port on
 a pty) and the device code under the real interpreters."""
 from __future__ import annotations
 
+import contextlib
 import random
 import time
 
@@ -53,6 +54,22 @@ def board(port):
 def _noise(n: int, seed: int = 1) -> list[int]:
     rnd = random.Random(seed)
     return [rnd.randrange(65536) for _ in range(n)]
+
+
+@contextlib.contextmanager
+def _codes_sent(board):
+    """Every piece of code the link sends meanwhile, in a list."""
+    codes: list[str] = []
+    exec0 = board.link.exec
+
+    def exec_(code, timeout=None, reply_first=False):
+        codes.append(code)
+        return exec0(code, timeout, reply_first)
+    board.link.exec = exec_
+    try:
+        yield codes
+    finally:
+        board.link.exec = exec0
 
 
 def _scene(tex: dict, name: str | None = None) -> dict:
@@ -377,17 +394,8 @@ def test_a_scene_crosses_as_json_data_and_comes_back_exactly(board):
     name = "Kl\u00e4nge \U0001F3B9 \"quoted\" 'x' \\ end"
     sc = _scene({"kind": "texel", "pitch_db": 12.3456, "irregularity_db": -7.0, "seed": 5,
                  "v": 2, "band_limit_cpmm": None}, name=name)
-    codes = []
-    exec0 = board.link.exec
-
-    def exec_(code, timeout=None, reply_first=False):
-        codes.append(code)
-        return exec0(code, timeout, reply_first)
-    board.link.exec = exec_
-    try:
+    with _codes_sent(board) as codes:
         st = board.push(sc)
-    finally:
-        board.link.exec = exec0
     push = [c for c in codes if "reply('pushed'" in c]
     # the scene is a str (JSON text, parsed by the board's json module), not a dict literal
     assert len(push) == 1 and "'{\"regions\"" in push[0] and "{'regions'" not in push[0]
@@ -445,14 +453,7 @@ def test_pushes_in_a_row_ask_no_status_between_them(board):
     heap): it uses the status it read or its last push made while nothing else
     ran on the board - a status() before every push took 29.5 ms of the
     emulated Pico's clock (docs/firmware.md). Any other command forgets it."""
-    codes: list[str] = []
-    exec0 = board.link.exec
-
-    def exec_(code, timeout=None, reply_first=False):
-        codes.append(code)
-        return exec0(code, timeout, reply_first)
-    board.link.exec = exec_
-    try:
+    with _codes_sent(board) as codes:
         board.status()
         st1 = board.push(_scene({"kind": "constant", "level": 0.25}))
         st2 = board.push(_scene({"kind": "reference", "name": "2sin"}))
@@ -470,8 +471,6 @@ def test_pushes_in_a_row_ask_no_status_between_them(board):
         board.push(_scene({"kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9,
                            "seed": 7, "texel_samples": 3}))
         assert len([c for c in codes if ".status(" in c]) == n + 1
-    finally:
-        board.link.exec = exec0
     assert board.status()["scene"]["regions"][0]["kind"] == "texel"
 
 
