@@ -41,9 +41,6 @@ txt = %(scene)r
 now = "__import__('texel.wire').wire.reply('pushed', %%r)" %% txt
 before = "import texel.wire as _m\n_m.reply('push', %%r, (), (), 0, None)\n_m = None" %% txt
 trip = "import texel.app as _a\nprint(repr(_a.status()))\n_a = None"
-def med(xs):
-    xs = sorted(xs)
-    return xs[len(xs) // 2]
 def timed(f, n=%(reps)d):
     out = []
     for _ in range(n):
@@ -88,7 +85,7 @@ print(repr(res))
 '''
 
 
-def measure(uf2: str, say=print) -> dict[str, Any]:
+def measure(uf2: str) -> dict[str, Any]:
     from texelpad.link.transport import Link
     from texelpad.sim.emulated import EmulatedPico, why_not
     why = why_not()

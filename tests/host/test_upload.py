@@ -451,7 +451,7 @@ def test_a_refused_push_through_pushed_changes_nothing(board):
 def test_pushes_in_a_row_ask_no_status_between_them(board):
     """Board.push needs the display (and, for texels planned whole, the free
     heap): it uses the status it read or its last push made while nothing else
-    ran on the board - a status() before every push took 29.5 ms of the
+    ran on the board - a status() before every push took 29.3 ms of the
     emulated Pico's clock (docs/firmware.md). Any other command forgets it."""
     with _codes_sent(board) as codes:
         board.status()

@@ -280,7 +280,7 @@ def staged_call(module: str, func: str, args: Sequence[Any], scene_at: int,
     # reply(func, text, fill=(), args=(), scene_at=0, kwargs=None): the trailing
     # defaults left out, one statement. The board's parser is slow per token (on
     # the emulated RP2040 the three-line form with every argument compiled in
-    # 2.92 ms, `__import__(...).reply(func, text)` in 1.86: bench/request_parts.py)
+    # 2.91 ms, `__import__(...).reply(func, text)` in 1.86: bench/request_parts.py)
     parts = [literal(func), repr(scene_text(args[scene_at])), literal(fill),
              literal(tuple(rest)), "%d" % int(scene_at), literal(kwargs or None)]
     defaults = ["()", "()", "0", "None"]
