@@ -131,6 +131,17 @@ def test_a_v2_quant_session_replays_as_it_ran(name):
     assert differ > 0
 
 
+def _close(a, b) -> bool:
+    """a == b, floats to 1e-12 relative (the lists and dicts of a question's state)."""
+    if isinstance(a, float) and isinstance(b, float):
+        return a == pytest.approx(b, rel=1e-12, abs=0)
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(_close(a[k], b[k]) for k in a)
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(_close(x, y) for x, y in zip(a, b))
+    return type(a) is type(b) and a == b
+
+
 @pytest.mark.parametrize("name", V3_FILES)
 def test_a_v3_session_replays_as_it_ran(name):
     # format /3, made by texelpad at 8c349e6 (make_v3.py) before issue 31 made the lab's apps'
@@ -153,7 +164,11 @@ def test_a_v3_session_replays_as_it_ran(name):
         q = questions.ask(proto, state, h, DISPLAY)
         assert q.options == rec["scenes"], (name, k)
         detail = json.loads(json.dumps(q.detail))
-        assert {key: detail.get(key) for key in rec["state"]} == rec["state"], (name, k)
+        # the search's state to 1e-12 relative: CMA-ES's step size is numpy's arithmetic,
+        # whose SIMD paths sum in another order on another CPU (an AVX-512 CI machine
+        # gave sigma 0.16893968797910042 for the recorded ...044, the scenes the same)
+        assert _close({key: detail.get(key) for key in rec["state"]}, rec["state"]), \
+            (name, k, detail, rec["state"])
         protocols.apply(proto, state, rec["answer"])
     assert state.done and len(rows(s)) == len(records)
     # today's defaults play it otherwise: the app's order one texture at a time, or the
