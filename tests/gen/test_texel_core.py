@@ -217,6 +217,31 @@ def test_c_options_are_the_python_post_pass_bit_for_bit(hopeless, monkeypatch):
     assert min(seen) >= 2, seen
 
 
+def test_c_plan_with_options_is_planint_bit_for_bit():
+    """The C plan's options (texelcore_api.h plan -> tc_plan_options: the redraw
+    stream, d_min, the hopeless test and the tries set up in C, where the
+    Python sets them up in gen/options.py _apply_c) against PlanInt with its
+    Python post-pass: the same t28, d28 and counts; the phase reset alone
+    too. MIN_TRIES is the header's: a texel out of tries plays at the bound
+    on both sides only if both try as often."""
+    from texel.gen import options
+    assert "#define TC_MIN_TRIES %d " % options.MIN_TRIES in (
+        core_c.CORE / "texel_core.h").read_text()
+    seen = [0, 0, 0]
+    for p in _options_cases() + [{"pitch_db": 3.0, "irregularity_db": -8.0, "texel_samples": 50,
+                                  "seed": 9, "length_samples": 5000, "phase": "reset"},
+                                 {"pitch_db": 3.0, "irregularity_db": -8.0, "texel_samples": 50,
+                                  "seed": 9, "length_samples": 5000, "min_cpmm": None,
+                                  "phase": "continuous"}]:
+        c = texel.validate(dict(p, v=2))
+        want = P.PlanInt(c, engine="py")
+        t28, d28, got = core_c.plan_with_options(c)
+        assert (t28, d28) == (list(want.t28), list(want.d28)), p
+        assert got == (want.redrawn, want.at_min, want.above_nyquist), p
+        seen = [a + (b > 0) for a, b in zip(seen, got)]
+    assert min(seen) >= 2, seen
+
+
 # --- the native module on the unix port -------------------------------------------------
 
 @pytest.fixture(scope="module")
@@ -558,6 +583,7 @@ def test_native_texel_check_is_the_python_check(x64_module, tmp_path):
     assert info["build"] == "native" and info["bad"] == [], info["bad"][:3]
     assert info["fast"] > 500 and info["fallback_ok"] <= 0.01 * info["n"], info
     assert info["plans"] > 200 and info["c_plans"] > 150, info     # plan_of's C plan: PlanInt's
+    assert info["c_option_plans"] > 20, info     # ... seed 001's options too (tc_plan_options)
 
 
 def test_native_region_check_is_the_python_scene_check(x64_module, tmp_path):

@@ -146,6 +146,32 @@ def options(plan, ys: array, dmin: int, flags: int, tries: int) -> tuple[int, in
     return out[0], out[1], out[2]
 
 
+def plan_with_options(p: dict) -> tuple[list[int], list[int], tuple[int, int, int]]:
+    """What texelcore_api.h plan computes for a validated format-2 set p with
+    options: tc_plan_consts, tc_seeded, tc_texels keeping the log pitches,
+    then tc_plan_options (its redraw stream, d_min, hopeless test and
+    MIN_TRIES): (t28, d28, (redrawn, at_min, above))."""
+    from texel.gen.grid import mdb as grid_mdb
+    from texel.gen.params import texel_count
+    k = plan_consts(mdb(p["pitch_db"]), mdb(p["irregularity_db"]), mdb(p["quant_db"]),
+                    mdb(p["band_limit_cpmm"]) if p["band_limit_cpmm"] is not None else 0)
+    st = array("H", seeded(p["seed"]))
+    count, L = texel_count(p), p["texel_samples"]
+    tab = array("i", table())
+    t28, d28, ys = (array("i", bytes(4 * count)) for _ in range(3))
+    one = array("i", [0])
+    above = texels(st, count, L, k[0], k[1], k[2], k[3], tab, t28, d28, ys, one, 2)
+    lo = p.get("min_cpmm")
+    out = (ctypes.c_int32 * 3)()
+    kk = (ctypes.c_int32 * 4)(*k)
+    i32 = ctypes.c_int32
+    lib().tc_plan_options(ctypes.c_uint32(p["seed"]), i32(grid_mdb(lo) if lo is not None else -1),
+                          i32(1 if p.get("phase") == "reset" else 0), i32(count), i32(L), kk,
+                          ctypes.c_void_p(_ptr(tab)), ctypes.c_void_p(_ptr(ys)),
+                          ctypes.c_void_p(_ptr(t28)), ctypes.c_void_p(_ptr(d28)), i32(above), out)
+    return list(t28), list(d28), (out[0], out[1], out[2])
+
+
 def grid(value: float, tie: float, lo: float, hi: float) -> float | None:
     """check_core.h tc_grid (CPython's double): the grid point, or None where
     it leaves the value to gen/grid.py."""

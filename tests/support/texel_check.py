@@ -79,7 +79,8 @@ def _tc_run():
         finally:
             KT._fast = f
     c = compat.core()
-    info = {"build": c and c.BUILD, "n": 0, "fast": 0, "fallback_ok": 0, "plans": 0, "c_plans": 0, "bad": []}
+    info = {"build": c and c.BUILD, "n": 0, "fast": 0, "fallback_ok": 0, "plans": 0, "c_plans": 0,
+            "c_option_plans": 0, "bad": []}
     for t in %(cases)s:
         tex = real(t)
         f = KT.fast_check(tex)
@@ -98,7 +99,9 @@ def _tc_run():
         n = 700 if f["texel_samples"] < 3 else 5000
         a = KT.plan_of(f, n)
         if KT._plan_c and KT._plan_c(f, n, KT._table()) is not None:
-            info["c_plans"] += 1        # (format 2 without options: the C plan ran)
+            info["c_plans"] += 1        # (format 2: the C plan ran)
+            if f.get("min_cpmm") is not None or f.get("phase", "continuous") != "continuous":
+                info["c_option_plans"] += 1     # (with seed 001's options: tc_plan_options)
         p, KT._plan_c = KT._plan_c, False
         try:
             b = KT.plan_of(f, n)

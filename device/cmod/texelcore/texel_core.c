@@ -393,4 +393,37 @@ void tc_seeded(uint32_t seed, uint16_t st[10]) {
     st[8] = 0;
     st[9] = 0;
 }
+
+void tc_plan_options(uint32_t seed, int32_t min_mc, int32_t reset, int32_t count, int32_t L,
+                     const int32_t k[4], const int32_t *tab, int32_t *ys, int32_t *t28,
+                     int32_t *d28, int32_t above, int32_t out[3]) {
+    // Rng(seed, consts=options.REDRAW_CONSTS), then its 16 warm-up draws (rng.WARMUP)
+    int32_t s[8] = {(int32_t)(seed >> 16), (int32_t)(seed & 0xFFFF), 0x6A09, 0xE667, 0xBB67,
+                    0xAE85, 0x3C6E, 0xF372};
+    for (int w = 0; w < 16; w++) {
+        int32_t x_hi, x_lo;
+        rng_next(s, &x_hi, &x_lo);
+    }
+    uint16_t st[8];
+    for (int i = 0; i < 8; i++) {
+        st[i] = (uint16_t)s[i];
+    }
+    int32_t flags = reset ? TC_OPT_RESET : 0, dmin = 0;
+    if (min_mc >= 0) {
+        // options.d_min: (min_mc * 53 * 2^28 + 5000000) // 10^7
+        dmin = (int32_t)(((int64_t)min_mc * 53 * (1 << 28) + 5000000) / 10000000);
+        flags |= TC_OPT_BOUND;
+        // options.redraw_int's hopeless: the largest draw (x = 2^32 - 1) still below
+        int32_t sgn;
+        int32_t za = norm_abs(0xFFFF, 0xFFFF, tab, &sgn);
+        if (below(log_pitch(za, sgn, k[0], k[1] >> 14, k[1] & 0x3FFF, k[2]), dmin, tab)) {
+            flags |= TC_OPT_HOPELESS;
+        }
+    }
+    out[0] = 0;
+    out[1] = 0;
+    out[2] = above;
+    tc_options(st, count, L, k[0], k[1], k[2], k[3], dmin, flags, TC_MIN_TRIES, tab, ys, t28,
+               d28, out);
+}
 #endif  // TC_NO_FLOAT

@@ -41,6 +41,19 @@ void tc_options(uint16_t st[8], int32_t count, int32_t L, int32_t mu, int32_t si
                 int32_t dcap, int32_t dmin, int32_t flags, int32_t tries, const int32_t *tab,
                 int32_t *ys, int32_t *t28, int32_t *d28, int32_t out[3]);
 
+// gen/options.py apply_int on a plan the loop made, set up as _apply_c sets it
+// up: the redraw stream (gen/rng.py Rng(seed, consts=REDRAW_CONSTS) after its
+// WARMUP draws), d_min(min_mc), the hopeless test (SKIP_HOPELESS) and
+// MIN_TRIES tries, then tc_options. min_mc: grid.mdb(min_cpmm), < 0 for no
+// bound; reset: phase "reset". k: tc_plan_consts' mu, sigma, q, dcap; above:
+// the loop's count above Nyquist; out as tc_options'. The C plan
+// (texelcore_api.h plan) runs it, so a board plays seed 001's options
+// without importing gen/options.py (10.8 ms at a Pico's first such push).
+#define TC_MIN_TRIES 64         // gen/options.py MIN_TRIES (tests/gen/test_texel_core.py)
+void tc_plan_options(uint32_t seed, int32_t min_mc, int32_t reset, int32_t count, int32_t L,
+                     const int32_t k[4], const int32_t *tab, int32_t *ys, int32_t *t28,
+                     int32_t *d28, int32_t above, int32_t out[3]);
+
 // engine_int._fill_py: samples a..b-1 of out from phase t (2^-28 turns) and
 // step d; tab = sine_table.table() (1,025 Q16 values); g = gain in Q14.
 // Returns the phase after the last sample.

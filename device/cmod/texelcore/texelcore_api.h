@@ -539,14 +539,17 @@ static mp_obj_t tc_region_check_fn(size_t n_args, const mp_obj_t *args) {
 static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_region_check_obj, 4, 4, tc_region_check_fn);
 
 // plan(tex, n, tab) -> (both, count, L, gain_q14), or None: kinds/texel.py
-// plan_of for a canonical format-2 texture without options (texel_check's
-// or the Python check's dict), n positions long, in one call: the grid
-// integers (gen/grid.py mdb in the runtime's float), PlanInt.__init__'s
-// integers (tc_plan_consts), the seed's state (tc_seeded), the per-texel loop
-// (tc_texels, nothing kept) into both = array('i') of t28 then d28 (count
-// each, one block as PlanInt allocates them), and engine_int.gain_q14
-// (int(gain * 16384 + 0.5)). None where the texture has options or is not
-// format 2 (PlanInt and gen/options.py do those); tab: plan_int_tables.table().
+// plan_of for a canonical format-2 texture (texel_check's or the Python
+// check's dict), n positions long, in one call: the grid integers
+// (gen/grid.py mdb in the runtime's float), PlanInt.__init__'s integers
+// (tc_plan_consts), the seed's state (tc_seeded), the per-texel loop
+// (tc_texels) into both = array('i') of t28 then d28 (count each, one block
+// as PlanInt allocates them), seed 001's options where the texture sets them
+// (min_cpmm, phase "reset": tc_plan_options, with the log pitches in a work
+// buffer freed before it returns), and engine_int.gain_q14
+// (int(gain * 16384 + 0.5)). None where the dict holds a key this does not
+// know or is not format 2 (PlanInt and gen/options.py decide those); tab:
+// plan_int_tables.table().
 static mp_float_t tc_pl_float(mp_obj_t d, qstr k) {
     return mp_obj_get_float(mp_obj_subscr(d, MP_OBJ_NEW_QSTR(k), MP_OBJ_SENTINEL));
 }
@@ -556,8 +559,37 @@ static mp_obj_t tc_plan_fn(mp_obj_t tex, mp_obj_t n_in, mp_obj_t tab_in) {
         return mp_const_none;
     }
     mp_map_t *map = &((mp_obj_dict_t *)MP_OBJ_TO_PTR(tex))->map;
-    if (map->used != 9) {
-        return mp_const_none;           // the options (min_cpmm, phase): PlanInt
+    // the options: min_cpmm (None: no bound) and phase ("continuous" or "reset");
+    // the nine other keys are texel_check's (their subscripts below raise if missing)
+    int32_t min_mc = -1, reset = 0;
+    size_t keys = 9;
+    for (size_t j = 0; j < map->alloc; j++) {
+        if (!mp_map_slot_is_filled(map, j)) {
+            continue;
+        }
+        int i = tc_ck_key(map->table[j].key);
+        mp_obj_t val = map->table[j].value;
+        if (i < 0) {
+            return mp_const_none;
+        } else if (i == TC_CK_MIN) {
+            keys++;
+            if (val != mp_const_none) {
+                min_mc = tc_mdb(mp_obj_get_float(val));
+                if (min_mc < 0) {
+                    return mp_const_none;
+                }
+            }
+        } else if (i == TC_CK_PHASE) {
+            keys++;
+            if (tc_ck_word(val, "reset")) {
+                reset = 1;
+            } else if (!tc_ck_word(val, "continuous")) {
+                return mp_const_none;
+            }
+        }
+    }
+    if (map->used != keys) {
+        return mp_const_none;
     }
     mp_obj_t v = mp_obj_subscr(tex, MP_OBJ_NEW_QSTR(MP_QSTR_v), MP_OBJ_SENTINEL);
     if (!mp_obj_is_small_int(v) || MP_OBJ_SMALL_INT_VALUE(v) != 2) {
@@ -588,7 +620,19 @@ static mp_obj_t tc_plan_fn(mp_obj_t tex, mp_obj_t n_in, mp_obj_t tab_in) {
     o->items = m_malloc(8 * (size_t)count);
     int32_t *t28 = (int32_t *)o->items;
     int32_t none;
-    tc_texels(st, count, L, k[0], k[1], k[2], k[3], tab, t28, t28 + count, &none, &none, 0);
+    if (min_mc < 0 && !reset) {
+        tc_texels(st, count, L, k[0], k[1], k[2], k[3], tab, t28, t28 + count, &none, &none, 0);
+    } else {
+        // the bound redraws from the log pitches: kept for the options, then freed
+        int32_t *ys = (int32_t *)m_malloc(4 * (size_t)count);
+        int32_t above = tc_texels(st, count, L, k[0], k[1], k[2], k[3], tab, t28, t28 + count,
+                                  ys, &none, 2);
+        int32_t out3[3];
+        tc_plan_options((uint32_t)mp_obj_get_int_truncated(
+                            mp_obj_subscr(tex, MP_OBJ_NEW_QSTR(MP_QSTR_seed), MP_OBJ_SENTINEL)),
+                        min_mc, reset, count, L, k, tab, ys, t28, t28 + count, above, out3);
+        TC_FREE(ys, 4 * (size_t)count);
+    }
     mp_float_t g = tc_pl_float(tex, MP_QSTR_gain) * (mp_float_t)16384 + (mp_float_t)0.5;
     mp_obj_t out[4] = {MP_OBJ_FROM_PTR(o), mp_obj_new_int(count), mp_obj_new_int(L),
                        mp_obj_new_int((mp_int_t)g)};

@@ -3,8 +3,10 @@
 # the per-texel loop made - so neither loop (plan.Plan's, plan_int.texels_py
 # and its viper twin plan_int_viper.texels) changes, and without a texel below
 # the bound and with the phase running on, the plan is the loop's, bit for
-# bit. Imported only by a plan that sets an option: a board playing any other
-# texture never holds this code (every KB of bytecode counts on a Pico heap:
+# bit. Imported only by a plan that sets an option, and not even then where
+# the C core plans (device/cmod/texelcore tc_plan_options: the texelpad
+# firmware, a deployed native module): a board playing any other texture
+# never holds this code (every KB of bytecode counts on a Pico heap:
 # tests/runtime/test_scene.py, test_real_memory_error_under_micropython).
 #
 #   min_cpmm  seed 001: "distribution frequencies are constrained to exceed
