@@ -242,6 +242,86 @@ def test_the_firmware_texel_and_region_checks_are_the_python_checks_in_float32(p
     assert info["fast_region"] and info["ok"] >= 5 and info["fast_regions"] > 50, info
 
 
+# On the board: W and the region table the C core's install builds for a swap
+# against FastRefresh._install's Python (refresh_fast._INSTALL False) for the same
+# scene, every address compared - a chunked buffer's chunk table read through
+# machine.mem32 (install puts every chunk table in one array) - then the scene
+# playing before is swapped back in.
+_INSTALL_SAME = r"""
+import gc, machine, texel.app as A
+from texel.runtime import refresh_fast as F, scene as S
+rf = A._rt.refresh
+disp = A._rt.board["display"]
+def words():
+    w, sc, tab, _ = rf._keep
+    bufs = sc.buffers() if sc is not None else ()
+    out = list(w)
+    out[F.W_TAB] = None                     # a copy of the table each time
+    out[F.W_ROW] = None                     # the refresh's own (the finger's row)
+    t = list(tab)
+    for k in range(len(bufs)):
+        if isinstance(bufs[k], tuple):      # its chunk table, read through
+            ct = w[F.W_BUF0 + k]
+            ch = [machine.mem32[ct + 4 * c] & 0xFFFFFFFF for c in range(len(bufs[k]))]
+            out[F.W_BUF0 + k] = ch
+            for r in range(0, len(t) - 4, 4):
+                if t[r + 2] == 3 and t[r + 3] == ct:
+                    t[r + 3] = ch
+    return out, t, F._INSTALL is not False
+def churn():
+    # what the C made must be referenced from the refresh's generation (rf._keep):
+    # a collection and new allocations here would reuse anything that is not
+    gc.collect()
+    return [bytearray(64) for _ in range(64)]
+before = rf.scene
+got = []
+try:
+    for sc, engine in %s:
+        built = S.build(sc, disp, engine=engine) if sc is not None else None
+        F._INSTALL = None
+        rf.swap(built)
+        junk = churn()
+        a = words()
+        F._INSTALL = False
+        rf.swap(built)
+        junk = churn()
+        b = words()
+        got.append((a[2], b[2], a[:2] == b[:2], len(a[0])))
+        built = junk = None
+finally:
+    F._INSTALL = None
+    rf.swap(before)
+print(repr(got))
+"""
+
+
+def test_the_c_core_installs_the_words_the_python_does(pico):
+    """A swap's word array W and region table built by the firmware's C core
+    (texelcore_api.h install) against the Python's (refresh_fast._install):
+    the same words and rows - every kind of region (a constant, a reference
+    map in flash, a texel plan, tiled samples and a 3-sample texel in chunks,
+    the int engine's one-block buffer), 16 texel regions, no scene at all."""
+    import ast
+    from texelpad.bench.link import regions16
+    with _connect(pico.port) as b:
+        d = b.status()["display"]
+        end = round(d["positions"] * d["dx_um"] / 1000.0, 6)
+        mixed = {"regions": [
+            {"start_mm": 0, "end_mm": 10, "texture": {"kind": "constant", "level": 0.3}},
+            {"start_mm": 10, "end_mm": 40, "texture": {"kind": "reference", "name": "2sin"}},
+            {"start_mm": 40, "end_mm": 60, "texture": {"kind": "texel", "pitch_db": 5.0,
+                                                        "irregularity_db": -9.0, "seed": 2}},
+            {"start_mm": 60, "end_mm": 70, "texture": {"kind": "samples", "u16": [1, 2, 3]}},
+            {"start_mm": 71, "end_mm": end, "texture": {
+                "kind": "texel", "pitch_db": 12.0, "irregularity_db": -9.0, "seed": 2,
+                "texel_samples": 3}}]}
+        cases = [(mixed, None), (mixed, "int"), (regions16(d, 2, 5), None), (None, None)]
+        out = b.link.exec(_INSTALL_SAME % (cases,), timeout=300)
+    got = ast.literal_eval(out.strip().splitlines()[-1])
+    assert [g[:3] for g in got] == [(True, False, True)] * len(cases), got
+    assert got[0][3] == 15 + 3 + 5 and got[2][3] > 15 + 5 * 16 - 1, got
+
+
 def test_a_bad_push_is_refused_and_the_scene_kept(pico):
     from texelpad.link.transport import LinkError
     good = {"regions": [{"start_mm": 0, "end_mm": 50.88,

@@ -4,8 +4,9 @@
 // installs it on stock boards). The includer defines TC_RAISE_BUF(what, have,
 // need) and TC_FREE(ptr, bytes), the two things the two APIs spell apart.
 // Arguments are the arrays the Python callers already hold; every size is
-// checked before the C core touches it, and nothing here allocates on the
-// MicroPython heap except paint's 3.9 KB work buffer (freed before it returns).
+// checked before the C core touches it. What allocates on the MicroPython heap:
+// paint's 3.9 KB work buffer and plan's log pitches (both freed before they
+// return), and the arrays u16, plan and install return.
 #include <string.h>
 #include "py/objarray.h"
 #include "brush_core.h"
@@ -15,7 +16,11 @@
 #include "check_core.h"
 
 // The functions and arguments below, as texel.compat.CORE_API expects them:
-// bump both with any change, so a board's older native module is not used.
+// bump both with any change to an existing function's arguments or results, so
+// a board's older native module is not used. A function added (install) needs
+// no bump: its callers look it up (getattr) and use the Python where an older
+// module lacks it; a function that now takes more (plan: the options) neither,
+// where the older one answered None and the Python decided.
 #define TC_API 7                // 7: W_ROW (word 14, the refresh's last row) and W_BASE 0 on 32-bit boards; 6: the STM32 ADC
 #define MAX_CHUNKS 128          // 65,536 values of 512 (a full screen is 38 chunks)
 #define TC_U16_VALS 19200       // kinds/samples.py MAX_SAMPLES
@@ -195,6 +200,120 @@ static mp_obj_t tc_refresh_fn(mp_obj_t w_in) {
     return mp_const_none;
 }
 static MP_DEFINE_CONST_FUN_OBJ_1(tc_refresh_obj, tc_refresh_fn);
+
+// install(fixed, tab, bufs, plans) -> (W, chunk_tables): texel.runtime.refresh_fast
+// FastRefresh._install's word array on a 32-bit board (W_BASE 0: W holds the
+// addresses themselves), in one call - 1.5 ms of Python a swap on the emulated
+// RP2040 (two regions; more with more). fixed: W_FIXED words, the refresh's own
+// addresses (state, duty table, telemetry, registers, sine table; W_TAB, W_IDLE
+// and W_ROW are written here or by the caller). tab: the scene's region table
+// copy, whose K_BUF/K_CHUNK rows get their buffer's address and K_PLAN rows
+// the index of their plan's first word in W (refresh_fast._resolve). bufs:
+// the scene's buffers, each a buffer or a tuple of chunks (K_CHUNK: its chunks'
+// addresses go into chunk_tables, one array('I') for every such buffer, None
+// without any); plans: (t28, d28, L, gain_q14) each, into W_PLAN words.
+#define TC_W_FIXED 15           // refresh_fast.W_FIXED = W_BUF0
+#define TC_W_TAB 3
+#define TC_W_PLAN 5
+static mp_obj_array_t *tc_new_u32(size_t n) {
+    mp_obj_array_t *o = (mp_obj_array_t *)m_malloc(sizeof(mp_obj_array_t));
+    o->base.type = TC_ARRAY_TYPE;
+    o->typecode = 'I';
+    o->free = 0;
+    o->len = n;
+    o->items = m_malloc(n ? 4 * n : 4);
+    memset(o->items, 0, n ? 4 * n : 4);
+    return o;
+}
+
+static uint32_t tc_addr(mp_obj_t o) {
+    mp_buffer_info_t b;
+    mp_get_buffer_raise(o, &b, MP_BUFFER_READ);
+    return (uint32_t)(uintptr_t)b.buf;
+}
+
+static mp_obj_t tc_install_fn(size_t n_args, const mp_obj_t *args) {
+    (void)n_args;
+    if (sizeof(void *) != 4) {
+        mp_raise_ValueError(MP_ERROR_TEXT("install: a 32-bit board's"));
+    }
+    const uint32_t *fixed = tc_buf(args[0], 4 * TC_W_FIXED, MP_BUFFER_READ, "fixed");
+    mp_buffer_info_t tb;
+    mp_get_buffer_raise(args[1], &tb, MP_BUFFER_RW);
+    int32_t *tab = (int32_t *)tb.buf;
+    size_t nt = tb.len / 4;
+    size_t nbuf, nplan;
+    mp_obj_t *bufs, *plans;
+    mp_obj_get_array(args[2], &nbuf, &bufs);
+    mp_obj_get_array(args[3], &nplan, &plans);
+    // the chunk tables: one array for every chunked buffer
+    size_t nch = 0;
+    for (size_t k = 0; k < nbuf; k++) {
+        mp_buffer_info_t b;
+        if (!mp_get_buffer(bufs[k], &b, MP_BUFFER_READ)) {
+            size_t n;
+            mp_obj_t *cs;
+            if (mp_obj_get_type(bufs[k]) != &mp_type_tuple) {
+                mp_raise_ValueError(MP_ERROR_TEXT("install: a buffer is an array or a tuple of chunks"));
+            }
+            mp_obj_get_array(bufs[k], &n, &cs);
+            nch += n;
+        }
+    }
+    size_t nw = TC_W_FIXED + nbuf + TC_W_PLAN * nplan;
+    mp_obj_array_t *wo = tc_new_u32(nw);
+    mp_obj_array_t *co = nch ? tc_new_u32(nch) : NULL;
+    uint32_t *w = (uint32_t *)wo->items;
+    uint32_t *ct = co ? (uint32_t *)co->items : NULL;
+    memcpy(w, fixed, 4 * TC_W_FIXED);
+    w[TC_W_TAB] = (uint32_t)(uintptr_t)tab;
+    for (size_t k = 0; k < nbuf; k++) {
+        mp_buffer_info_t b;
+        if (mp_get_buffer(bufs[k], &b, MP_BUFFER_READ)) {
+            w[TC_W_FIXED + k] = (uint32_t)(uintptr_t)b.buf;
+            continue;
+        }
+        size_t n;
+        mp_obj_t *cs;
+        mp_obj_get_array(bufs[k], &n, &cs);
+        w[TC_W_FIXED + k] = (uint32_t)(uintptr_t)ct;
+        for (size_t c = 0; c < n; c++) {
+            *ct++ = tc_addr(cs[c]);
+        }
+    }
+    for (size_t p = 0; p < nplan; p++) {
+        size_t n4;
+        mp_obj_t *pl;
+        mp_obj_get_array(plans[p], &n4, &pl);
+        mp_int_t L = n4 == 4 ? mp_obj_get_int(pl[2]) : 0;
+        if (L < 1) {
+            mp_raise_ValueError(MP_ERROR_TEXT("install: a plan is (t28, d28, L >= 1, gain)"));
+        }
+        uint32_t *q = w + TC_W_FIXED + nbuf + TC_W_PLAN * p;
+        q[0] = tc_addr(pl[0]);
+        q[1] = tc_addr(pl[1]);
+        q[2] = (uint32_t)L;
+        q[3] = (uint32_t)mp_obj_get_int(pl[3]);
+        q[4] = (uint32_t)(65536 / L + 1);      // core()'s reciprocal of L
+    }
+    for (size_t r = 0; r + 4 < nt; r += 4) {     // every row but the sentinel
+        int32_t kind = tab[r + 2], v = tab[r + 3];
+        if (kind == 2) {                         // scene.K_PLAN
+            if (v < 0 || (size_t)v >= nplan) {
+                mp_raise_ValueError(MP_ERROR_TEXT("install: a row names no plan"));
+            }
+            tab[r + 3] = (int32_t)(TC_W_FIXED + nbuf + TC_W_PLAN * (size_t)v);
+        } else if (kind == 1 || kind == 3) {     // scene.K_BUF, K_CHUNK
+            if (v < 0 || (size_t)v >= nbuf) {
+                mp_raise_ValueError(MP_ERROR_TEXT("install: a row names no buffer"));
+            }
+            tab[r + 3] = (int32_t)w[TC_W_FIXED + v];
+        }
+    }
+    mp_obj_t out[2] = {MP_OBJ_FROM_PTR(wo), co ? MP_OBJ_FROM_PTR(co) : mp_const_none};
+    return mp_obj_new_tuple(2, out);
+}
+static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_install_obj, 4, 4, tc_install_fn);
 
 // The RP2040 refresh interrupt's call: hw/rp2.py's trampoline calls it as
 // MicroPython's native code calls refresh_viper.core (r0 a function object,
@@ -560,7 +679,8 @@ static mp_obj_t tc_plan_fn(mp_obj_t tex, mp_obj_t n_in, mp_obj_t tab_in) {
     }
     mp_map_t *map = &((mp_obj_dict_t *)MP_OBJ_TO_PTR(tex))->map;
     // the options: min_cpmm (None: no bound) and phase ("continuous" or "reset");
-    // the nine other keys are texel_check's (their subscripts below raise if missing)
+    // the nine other keys are texel_check's: any other key, or one of them missing
+    // (the count below), and the Python plans it
     int32_t min_mc = -1, reset = 0;
     size_t keys = 9;
     for (size_t j = 0; j < map->alloc; j++) {

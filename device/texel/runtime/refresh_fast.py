@@ -181,6 +181,20 @@ def _c_core():
     return c if c is not None and hasattr(c, "refresh_entry") else None
 
 
+_INSTALL = None          # the C core's install, False where there is none: _c_install()
+
+
+def _c_install():
+    """The C core's install (texelcore_api.h) on a 32-bit board, else None:
+    FastRefresh._install's Python builds W there. tests/firmware compare the two."""
+    global _INSTALL
+    if _INSTALL is None:
+        from ..compat import core as _core
+        c = _core()
+        _INSTALL = (_PTR_BYTES == 4 and c is not None and getattr(c, "install", None)) or False
+    return _INSTALL or None
+
+
 def _start_many_is_reset():
     """True on the texelpad firmware (its board name says so), whose soft-reset
     hook in C turns the free-running ADC off (boards/pico/mpconfigboard.h).
@@ -262,6 +276,9 @@ class FastRefresh(Refresh):
         self._c, self._vcore = _engine()
         self._keep = None
         self._prev = None
+        self._fixed = None          # _fixed_words() for the C core's install
+        self._fixed_regs = None     # the _regs they were made with
+        self._fixed_fine = None     # and the duty law's table
         # True when the refresh may run in another thread (the unix port's
         # real-time virtual board): the previous scene is kept one swap longer
         self.threaded = False
@@ -320,10 +337,43 @@ class FastRefresh(Refresh):
         self._regs = (clock_addr, adc_addr, ccr_addr, 1)
         self._install(self.scene)
 
+    def _fixed_words(self):
+        """W's first W_FIXED words on a 32-bit board (W_BASE 0): the addresses
+        and values that stay from swap to swap, for the C core's install. W_TAB
+        (install writes it), W_IDLE (the caller) and W_ROW (0) stay 0 here."""
+        f = array("I", bytes(4 * W_FIXED))
+        f[W_S] = uctypes.addressof(self._S)
+        f[W_FINE] = uctypes.addressof(self.law._fine)
+        f[W_TEL_T] = uctypes.addressof(self.tel_t)
+        f[W_TEL_P] = uctypes.addressof(self.tel_pos)
+        f[W_TEL_A] = uctypes.addressof(self.tel_amp)
+        f[W_TIMER] = self._regs[0]
+        f[W_ADC] = self._regs[1]
+        f[W_CC] = self._regs[2]
+        f[W_MUL] = self._regs[3]
+        f[W_SINE] = uctypes.addressof(sine_table.table())
+        return f
+
     def _install(self, scene):
-        global _W, _WA, _S
         bufs = scene.buffers() if scene is not None else ()
         plans = scene.plans() if scene is not None else ()
+        ins = _c_install()
+        if ins is not None:
+            # the C core builds W and fixes the table in one call (texelcore_api.h
+            # install): the same words as below on a 32-bit board, 0.2 ms where
+            # this Python took 1.5 (two regions, emulated RP2040)
+            # (made again whenever an address in them could have changed: the
+            # registers, or the duty law's table)
+            if self._fixed is None or self._fixed_regs is not self._regs \
+                    or self._fixed_fine is not self.law._fine:
+                self._fixed = self._fixed_words()
+                self._fixed_regs = self._regs
+                self._fixed_fine = self.law._fine
+            tab = array("i", scene._t) if scene is not None else array("i", _EMPTY_TABLE)
+            words, chunked = ins(self._fixed, tab, bufs, plans)
+            words[W_IDLE] = scene.idle if scene is not None else self.idle_amp
+            self._publish((words, scene, tab, chunked))
+            return
         nbuf = len(bufs)
         words = array("I", [0] * (W_FIXED + nbuf + W_PLAN * len(plans)))
         # core()'s copy of the region table: the same rows, with each row's
@@ -365,7 +415,12 @@ class FastRefresh(Refresh):
             words[b + 4] = 65536 // ln + 1      # core()'s reciprocal of L
         _resolve(words, tab, addr, chunked, nbuf)
         chunked = [ct for ct, _ in chunked]
-        keep = (words, scene, tab, chunked)
+        self._publish((words, scene, tab, chunked))
+
+    def _publish(self, keep):
+        """Make keep's W (keep[0]) the one every refresh reads."""
+        global _W, _WA, _S
+        words = keep[0]
         # The previous generation stays referenced until the next swap: the
         # viper refresh holds raw addresses the GC cannot see, and on a port
         # with real threads (the unix port's realtime virtual board) a refresh
