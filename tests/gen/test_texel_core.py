@@ -586,6 +586,64 @@ def test_native_texel_check_is_the_python_check(x64_module, tmp_path):
     assert info["c_option_plans"] > 20, info     # ... seed 001's options too (tc_plan_options)
 
 
+BRUSH_CHECK_SCRIPT = r"""
+import json
+from texel.gen import brush as B
+def run(b):
+    try:
+        return ["ok", repr(B.validate(b))]
+    except ValueError as e:
+        return ["err", str(e)]
+out = {"same": [], "differ": [], "fast": 0}
+c = B._native_c()
+for b in %(cases)s:
+    for key in ("k", "lam"):
+        v = b.get(key)
+        if isinstance(v, list):
+            b[key] = [float(x) if x in ("nan", "inf", "-inf") else x for x in v]
+    fast = run(b)
+    out["fast"] += c.floats_in(b["k"], B.K_MIN, B.K_MAX) < 0 and \
+        c.floats_in(b["lam"], 0.0, B.LAM_MAX) < 0
+    B._C = False
+    try:
+        slow = run(b)
+    finally:
+        B._C = None
+    (out["same"] if fast == slow else out["differ"]).append([fast, slow])
+print(json.dumps({"same": len(out["same"]), "differ": out["differ"][:3], "fast": out["fast"],
+                  "errors": sum(1 for f, s in out["same"] if f[0] == "err")}))
+"""
+
+
+def test_native_brush_check_is_the_python_check(x64_module, tmp_path):
+    """texel/gen/brush.py validate with the x64 native module's floats_in (a
+    brush's lists checked in C) and without it: the same checked brush or the
+    same refusal word for word - over brushes whose lists hold ints, bools,
+    NaN, infinities, None, the bounds themselves and values just past them."""
+    from texel.gen import brush as B
+    r = random.Random(11)
+    base = [("k", B.K_MIN, B.K_MAX), ("lam", 0.0, B.LAM_MAX)]
+    cases = []
+    for i in range(120):
+        b = {"k": [round(r.uniform(0.05, 20.0), 3) for _ in range(B.K)],
+             "lam": [round(r.uniform(0.0, 2.0), 4) for _ in range(B.K)], "range": [0.0, 1.0]}
+        if i % 2:
+            key, lo, hi = base[i % 4 // 2]
+            j = r.randrange(B.K)
+            b[key][j] = r.choice([lo, hi, lo - 1e-9 if lo else -1e-300, hi * (1 + 1e-12), 3,
+                                  True, False, None, "nan", "inf", "-inf", 0, [1.0]])
+        if i % 7 == 0:
+            b["k"] = tuple(b["k"])
+        cases.append(b)
+    lit = tmp_path / "brushes.txt"
+    lit.write_text(repr(cases))
+    info = mpy.run_json(BRUSH_CHECK_SCRIPT % {"cases": "eval(open(%r).read())" % str(lit)},
+                        exe=toolchain.require_micropython(), heapsize="8M", timeout=300,
+                        extra_path=str(x64_module))
+    assert info["differ"] == [] and info["same"] == len(cases), info
+    assert info["fast"] >= 60 and info["errors"] >= 20, info
+
+
 def test_native_region_check_is_the_python_scene_check(x64_module, tmp_path):
     """scene.py's checks with the x64 native module's region_check and
     texel_check and without them (the unix port): the same canonical scene,

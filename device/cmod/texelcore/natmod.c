@@ -40,6 +40,7 @@ mp_obj_t mpy_init(mp_obj_fun_bc_t *self, size_t n_args, size_t n_kw, mp_obj_t *a
     mp_store_global(MP_QSTR_refresh, MP_OBJ_FROM_PTR(&tc_refresh_obj));
     mp_store_global(MP_QSTR_refresh_entry, MP_OBJ_FROM_PTR(&tc_refresh_entry_obj));
     mp_store_global(MP_QSTR_install, MP_OBJ_FROM_PTR(&tc_install_obj));
+    mp_store_global(MP_QSTR_floats_in, MP_OBJ_FROM_PTR(&tc_floats_in_obj));
 #ifndef TC_NO_FLOAT
     mp_store_global(MP_QSTR_texel_check, MP_OBJ_FROM_PTR(&tc_texel_check_obj));
     mp_store_global(MP_QSTR_region_check, MP_OBJ_FROM_PTR(&tc_region_check_obj));
