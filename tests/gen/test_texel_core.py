@@ -644,6 +644,68 @@ def test_native_brush_check_is_the_python_check(x64_module, tmp_path):
     assert info["fast"] >= 60 and info["errors"] >= 20, info
 
 
+BRUSH_COMP_SCRIPT = r"""
+import json
+from texel.gen import brush as B
+same = 0
+differ = []
+fast = 0
+for b in %(cases)s:
+    v = B.validate(b)
+    one = B._native_c().floats_in(v["k"][1:], v["k"][1], v["k"][1]) < 0
+    got = B.compensated(v)
+    B._C = False
+    try:
+        want = B.compensated(v)
+    finally:
+        B._C = None
+    g = [list(got[0]), list(got[1]), got[2], got[3]]
+    w = [list(want[0]), list(want[1]), want[2], want[3]]
+    if g == w:
+        same += 1
+        fast += one
+    else:
+        differ.append([b, g, w])
+print(json.dumps({"same": same, "differ": differ[:2], "one_shape": fast}))
+"""
+
+
+def test_native_brush_constants_are_the_python_ones(x64_module, tmp_path):
+    """texel/gen/brush.py compensated (a brush's integer constants) with the x64
+    native module's leak_start and wave_ll and without them: the same invk, ll,
+    sign and offset - designed brushes (one shape), fitted ones (a shape per
+    wavenumber), a lone line, ties for the largest scale, scales of 0, the
+    smallest and largest scales and shapes."""
+    from texel.gen import brush as B
+    r = random.Random(12)
+    cases = []
+    for i in range(150):
+        kind = i % 5
+        if kind == 0:       # designed: one shape
+            k = [round(r.uniform(0.05, 30), 3)] + [round(r.uniform(0.05, 30), 3)] * (B.K - 1)
+        else:               # fitted: a shape each
+            k = [round(r.uniform(0.05, 1000.0 if kind == 4 else 20.0), 4) for _ in range(B.K)]
+        lam = [round(r.uniform(0.0, 3.0), 5) for _ in range(B.K)]
+        if kind == 1:
+            lam = [0.0] * B.K
+            lam[r.randrange(1, B.K)] = r.choice([1e-3, 1.0, 1000.0])      # a lone line
+        elif kind == 2:
+            top = max(lam[1:])
+            lam[r.randrange(1, B.K)] = top          # a tie for the largest
+            lam[r.randrange(1, B.K)] = 0.0
+        elif kind == 3 and i % 10 == 3:
+            lam = [0.0] * B.K                       # no waves at all
+        rng = r.choice([[0.0, 1.0], [1.0, 0.0], [-0.5, 0.25], [0.2, 0.2001]])
+        cases.append({"k": k, "lam": lam, "range": rng})
+    lit = tmp_path / "brushes.txt"
+    lit.write_text(repr(cases))
+    info = mpy.run_json(BRUSH_COMP_SCRIPT % {"cases": "eval(open(%r).read())" % str(lit)},
+                        exe=toolchain.require_micropython(), heapsize="8M", timeout=300,
+                        extra_path=str(x64_module))
+    assert info["differ"] == [] and info["same"] == len(cases), info["differ"][:1]
+    assert info["one_shape"] >= 25, info
+
+
 def test_native_region_check_is_the_python_scene_check(x64_module, tmp_path):
     """scene.py's checks with the x64 native module's region_check and
     texel_check and without them (the unix port): the same canonical scene,

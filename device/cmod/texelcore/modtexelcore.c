@@ -26,6 +26,8 @@ static const mp_rom_map_elem_t texelcore_globals_table[] = {
     { MP_ROM_QSTR(MP_QSTR_refresh_entry), MP_ROM_PTR(&tc_refresh_entry_obj) },
     { MP_ROM_QSTR(MP_QSTR_install), MP_ROM_PTR(&tc_install_obj) },
     { MP_ROM_QSTR(MP_QSTR_floats_in), MP_ROM_PTR(&tc_floats_in_obj) },
+    { MP_ROM_QSTR(MP_QSTR_wave_ll), MP_ROM_PTR(&tc_wave_ll_obj) },
+    { MP_ROM_QSTR(MP_QSTR_leak_start), MP_ROM_PTR(&tc_leak_start_obj) },
     { MP_ROM_QSTR(MP_QSTR_texel_check), MP_ROM_PTR(&tc_texel_check_obj) },
     { MP_ROM_QSTR(MP_QSTR_region_check), MP_ROM_PTR(&tc_region_check_obj) },
     { MP_ROM_QSTR(MP_QSTR_plan), MP_ROM_PTR(&tc_plan_obj) },

@@ -229,6 +229,57 @@ static mp_obj_t tc_floats_in_fn(mp_obj_t seq_in, mp_obj_t lo_in, mp_obj_t hi_in)
 }
 static MP_DEFINE_CONST_FUN_OBJ_3(tc_floats_in_obj, tc_floats_in_fn);
 
+// wave_ll(a, invk, ll, base, q, f, cut, ll_none, ll_max, log2t): texel/gen/brush.py
+// compensated's loop over the waves k = 1 .. K-1 (K = len(invk)) for a brush of one
+// shape (_shape's (q, f, cut) for them all): invk[k] = q, and ll[k] from the power
+// a[k + 2] (Q28) - ll_none for none, else (log2_q24(p) >> 1) + base + f clamped
+// (below cut: ll_none; above ll_max: ll_max). Integers only, as the Python: 9 ms
+// of it on the emulated RP2040. log2t: the LOG2 table (257 Q24 values).
+static int32_t tc_log2_q24(int32_t v, const int32_t *t) {
+    // texel/gen/brush.py log2_q24: v's top bit n, then LOG2 between 256 points
+    int32_t n = 0, w = v;
+    if (w >= 65536) { w >>= 16; n += 16; }
+    if (w >= 256) { w >>= 8; n += 8; }
+    if (w >= 16) { w >>= 4; n += 4; }
+    if (w >= 4) { w >>= 2; n += 2; }
+    if (w >= 2) { n += 1; }
+    int32_t m = v << (29 - n);
+    int32_t i = (m >> 21) & 0xFF;
+    int32_t lo = t[i];
+    return (n << 24) + lo + (((t[i + 1] - lo) * ((m >> 9) & 0xFFF)) >> 12);
+}
+
+static mp_obj_t tc_wave_ll_fn(size_t n_args, const mp_obj_t *args) {
+    (void)n_args;
+    mp_buffer_info_t ib, lb;
+    mp_get_buffer_raise(args[1], &ib, MP_BUFFER_WRITE);
+    mp_get_buffer_raise(args[2], &lb, MP_BUFFER_WRITE);
+    size_t K = ib.len / 4;
+    if (K < 2 || lb.len / 4 != K) {
+        mp_raise_ValueError(MP_ERROR_TEXT("wave_ll: invk and ll disagree"));
+    }
+    const int32_t *a = tc_buf(args[0], 4 * (K - 1 + 6), MP_BUFFER_READ, "a");
+    const int32_t *t = tc_buf(args[9], 4 * 257, MP_BUFFER_READ, "log2t");
+    int32_t *invk = (int32_t *)ib.buf, *ll = (int32_t *)lb.buf;
+    int64_t base = mp_obj_get_int(args[3]);
+    int32_t q = mp_obj_get_int(args[4]);
+    int64_t f = mp_obj_get_int(args[5]);
+    int64_t cut = mp_obj_get_int(args[6]);
+    int32_t ll_none = mp_obj_get_int(args[7]), ll_max = mp_obj_get_int(args[8]);
+    for (size_t k = 1; k < K; k++) {
+        invk[k] = q;
+        int32_t p = a[k + 2];
+        if (p <= 0) {
+            ll[k] = ll_none;
+            continue;
+        }
+        int64_t l2 = (int64_t)(tc_log2_q24(p, t) >> 1) + base + f;
+        ll[k] = l2 < cut ? ll_none : (l2 > ll_max ? ll_max : (int32_t)l2);
+    }
+    return mp_const_none;
+}
+static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_wave_ll_obj, 10, 10, tc_wave_ll_fn);
+
 // install(fixed, tab, bufs, plans) -> (W, chunk_tables): texel.runtime.refresh_fast
 // FastRefresh._install's word array on a 32-bit board (W_BASE 0: W holds the
 // addresses themselves), in one call - 1.5 ms of Python a swap on the emulated
@@ -787,4 +838,48 @@ static mp_obj_t tc_plan_fn(mp_obj_t tex, mp_obj_t n_in, mp_obj_t tab_in) {
     return mp_obj_new_tuple(4, out);
 }
 static MP_DEFINE_CONST_FUN_OBJ_3(tc_plan_obj, tc_plan_fn);
+
+// leak_start(lams, a, q, inv0) -> lmax, or None: texel/gen/brush.py _leak_start's
+// loops for a brush's scales lams (K floats, wavenumber 0 the mean's): lmax the
+// largest of lams[1:] (the first of equals, the object itself; None when none is
+// above 0.0), then for each wave i a[i + 3] = int(x * x * 2^28 + 0.5) with
+// x = lams[i + 1] / lmax, and q[i + 3] = _mulq(inv0, a[i + 3]). The float steps
+// one by one in the runtime's float, each rounded as MicroPython rounds them
+// (volatile: no fused multiply-add where the FPU has one): 11.6 ms of Python
+// on the emulated RP2040.
+static mp_obj_t tc_leak_start_fn(size_t n_args, const mp_obj_t *args) {
+    (void)n_args;
+    size_t n;
+    mp_obj_t *lams;
+    mp_obj_get_array(args[0], &n, &lams);
+    if (n < 2) {
+        mp_raise_ValueError(MP_ERROR_TEXT("leak_start: lams too short"));
+    }
+    int32_t *a = tc_buf(args[1], 4 * (n - 1 + 6), MP_BUFFER_WRITE, "a");
+    int32_t *q = tc_buf(args[2], 4 * (n - 1 + 6), MP_BUFFER_WRITE, "q");
+    int32_t inv0 = mp_obj_get_int(args[3]);
+    mp_obj_t best = MP_OBJ_NULL;
+    mp_float_t lmax = 0;
+    for (size_t i = 1; i < n; i++) {
+        mp_float_t v = mp_obj_get_float(lams[i]);
+        if (v > lmax) {
+            lmax = v;
+            best = lams[i];
+        }
+    }
+    if (best == MP_OBJ_NULL) {
+        return mp_const_none;
+    }
+    for (size_t i = 0; i + 1 < n; i++) {
+        volatile mp_float_t x = mp_obj_get_float(lams[i + 1]) / lmax;
+        volatile mp_float_t xx = x * x;
+        volatile mp_float_t y = xx * (mp_float_t)268435456.0;
+        volatile mp_float_t z = y + (mp_float_t)0.5;
+        int32_t p = (int32_t)z;                  // int(): toward zero (z >= 0.5)
+        a[i + 3] = p;
+        q[i + 3] = (p >> 14) * inv0 + (((p & 16383) * inv0) >> 14);     // brush._mulq
+    }
+    return best;
+}
+static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_leak_start_obj, 4, 4, tc_leak_start_fn);
 #endif  // TC_NO_FLOAT

@@ -394,10 +394,30 @@ def compensated(brush):
     # the waves
     a, lmax = leakage(brush["lam"])
     base = _q24(math.log(lmax) / math.log(2.0) + l2amp) - (14 << 24) if lmax > 0.0 else 0
+    ks = brush["k"]
+    c = _native_c()
+    fast = getattr(c, "wave_ll", None) if c is not None else None
+    if fast is not None and c.floats_in(ks[1:], ks[1], ks[1]) < 0:
+        # a brush of one shape (a designed one): _waves_ll's loop in C (texelcore_api.h
+        # wave_ll, the same integers: 9 ms of Python on the emulated RP2040)
+        s = _shape(ks[1], False)
+        fast(a, invk, ll, base, s[0], s[1], s[2], LL_NONE, LL_MAX, _tables()[4])
+    else:
+        _waves_ll(ks, a, invk, ll, base)
+    off = -a0 * scale
+    off = int(off + 0.5) if off >= 0 else -int(-off + 0.5)
+    off = MEAN_CLIP * 4 if off > MEAN_CLIP * 4 else (-MEAN_CLIP * 4 if off < -MEAN_CLIP * 4
+                                                       else off)
+    return invk, ll, (1 if scale > 0 else -1), off
+
+
+def _waves_ll(ks, a, invk, ll, base):
+    """compensated()'s waves k = 1 .. K-1: invk[k] and ll[k] from the shape
+    ks[k] and the power a[k + 2] (leakage())."""
     s = kk = None
     for k in range(1, K):
-        if brush["k"][k] != kk:                 # a run of one shape: computed once (a
-            kk = brush["k"][k]                  # dict of them would want a block the
+        if ks[k] != kk:                         # a run of one shape: computed once (a
+            kk = ks[k]                          # dict of them would want a block the
             s = _shape(kk, False)               # region's chunks may have taken)
         invk[k] = s[0]
         p = a[k + 2]
@@ -407,11 +427,6 @@ def compensated(brush):
         # p is the power in Q28 of lmax^2: log2 lam' = log2(p) / 2 - 14 + log2(lmax) + ..
         l2 = (log2_q24(p) >> 1) + base + s[1]
         ll[k] = LL_NONE if l2 < s[2] else (LL_MAX if l2 > LL_MAX else l2)
-    off = -a0 * scale
-    off = int(off + 0.5) if off >= 0 else -int(-off + 0.5)
-    off = MEAN_CLIP * 4 if off > MEAN_CLIP * 4 else (-MEAN_CLIP * 4 if off < -MEAN_CLIP * 4
-                                                       else off)
-    return invk, ll, (1 if scale > 0 else -1), off
 
 
 def _mulq(g, x):
@@ -461,20 +476,30 @@ def _leak_start(lams):
     of lmax^2, padded: 3 values each side), q = a / LEAK[0] (Q14 product) -
     or (None, zeros, 0.0) for a brush without waves."""
     n = K - 1
-    lmax = 0.0
-    for i in range(1, K):
-        if lams[i] > lmax:
-            lmax = lams[i]
     a = array_i(n + 6)
-    if lmax <= 0.0:
-        return None, a, 0.0
-    q = array_i(n + 6)
-    inv0 = LEAK_Q14[0]
-    for i in range(n):
-        x = lams[i + 1] / lmax
-        p = int(x * x * 268435456.0 + 0.5)      # Q28
-        a[i + 3] = p
-        q[i + 3] = _mulq(inv0, p)
+    c = _native_c()
+    fast = getattr(c, "leak_start", None) if c is not None else None
+    if fast is not None:
+        # the loops below in C (texelcore_api.h leak_start: the same float steps,
+        # each rounded as here; 11.6 ms of Python on the emulated RP2040)
+        q = array_i(n + 6)
+        lmax = fast(lams, a, q, LEAK_Q14[0])
+        if lmax is None:
+            return None, a, 0.0
+    else:
+        lmax = 0.0
+        for i in range(1, K):
+            if lams[i] > lmax:
+                lmax = lams[i]
+        if lmax <= 0.0:
+            return None, a, 0.0
+        q = array_i(n + 6)
+        inv0 = LEAK_Q14[0]
+        for i in range(n):
+            x = lams[i + 1] / lmax
+            p = int(x * x * 268435456.0 + 0.5)      # Q28
+            a[i + 3] = p
+            q[i + 3] = _mulq(inv0, p)
     # beyond the band the brush goes on mirrored (fixed powers, not solved
     # for): the sweeps treat the edges as the middle - a flat brush is its own
     # solution everywhere, and no edge bin swings to make up for a neighbour
