@@ -650,9 +650,11 @@ from texel.gen import brush as B
 same = 0
 differ = []
 fast = 0
+c = B._native_c()
+has = [hasattr(c, "wave_ll"), hasattr(c, "leak_start")]
 for b in %(cases)s:
     v = B.validate(b)
-    one = B._native_c().floats_in(v["k"][1:], v["k"][1], v["k"][1]) < 0
+    one = v["k"].count(v["k"][1]) - (v["k"][0] == v["k"][1]) == B.K - 1
     got = B.compensated(v)
     B._C = False
     try:
@@ -666,7 +668,7 @@ for b in %(cases)s:
         fast += one
     else:
         differ.append([b, g, w])
-print(json.dumps({"same": same, "differ": differ[:2], "one_shape": fast}))
+print(json.dumps({"same": same, "differ": differ[:2], "one_shape": fast, "has": has}))
 """
 
 
@@ -697,11 +699,15 @@ def test_native_brush_constants_are_the_python_ones(x64_module, tmp_path):
             lam = [0.0] * B.K                       # no waves at all
         rng = r.choice([[0.0, 1.0], [1.0, 0.0], [-0.5, 0.25], [0.2, 0.2001]])
         cases.append({"k": k, "lam": lam, "range": rng})
+    # one shape, tiny scales over the widest range: compensated's base below -2^31
+    cases.append({"k": [2.0] * B.K, "lam": [1e-34] * B.K, "range": [0.0, 1e6]})
+    cases.append({"k": [2.0] * B.K, "lam": [1000.0] * B.K, "range": [0.2, 0.2001]})
     lit = tmp_path / "brushes.txt"
     lit.write_text(repr(cases))
     info = mpy.run_json(BRUSH_COMP_SCRIPT % {"cases": "eval(open(%r).read())" % str(lit)},
                         exe=toolchain.require_micropython(), heapsize="8M", timeout=300,
                         extra_path=str(x64_module))
+    assert info["has"] == [True, True], info     # (the C ran: not the Python twice)
     assert info["differ"] == [] and info["same"] == len(cases), info["differ"][:1]
     assert info["one_shape"] >= 25, info
 

@@ -40,13 +40,13 @@ mp_obj_t mpy_init(mp_obj_fun_bc_t *self, size_t n_args, size_t n_kw, mp_obj_t *a
     mp_store_global(MP_QSTR_refresh, MP_OBJ_FROM_PTR(&tc_refresh_obj));
     mp_store_global(MP_QSTR_refresh_entry, MP_OBJ_FROM_PTR(&tc_refresh_entry_obj));
     mp_store_global(MP_QSTR_install, MP_OBJ_FROM_PTR(&tc_install_obj));
-    mp_store_global(MP_QSTR_floats_in, MP_OBJ_FROM_PTR(&tc_floats_in_obj));
     mp_store_global(MP_QSTR_wave_ll, MP_OBJ_FROM_PTR(&tc_wave_ll_obj));
 #ifndef TC_NO_FLOAT
     mp_store_global(MP_QSTR_texel_check, MP_OBJ_FROM_PTR(&tc_texel_check_obj));
     mp_store_global(MP_QSTR_region_check, MP_OBJ_FROM_PTR(&tc_region_check_obj));
     mp_store_global(MP_QSTR_plan, MP_OBJ_FROM_PTR(&tc_plan_obj));
     mp_store_global(MP_QSTR_leak_start, MP_OBJ_FROM_PTR(&tc_leak_start_obj));
+    mp_store_global(MP_QSTR_floats_in, MP_OBJ_FROM_PTR(&tc_floats_in_obj));
 #endif
     mp_store_global(MP_QSTR_BUILD, MP_OBJ_NEW_QSTR(MP_QSTR_native));
     mp_store_global(MP_QSTR_API, MP_OBJ_NEW_SMALL_INT(TC_API));

@@ -201,40 +201,13 @@ static mp_obj_t tc_refresh_fn(mp_obj_t w_in) {
 }
 static MP_DEFINE_CONST_FUN_OBJ_1(tc_refresh_obj, tc_refresh_fn);
 
-// floats_in(seq, lo, hi) -> -1 when every item of the list or tuple seq is a
-// float in [lo, hi] (NaN is not), else the index of the first that is not:
-// texel/gen/brush.py validate's common case (a brush's 2 x 97 floats, 10.8 ms
-// of Python on the emulated RP2040), which words any other case in Python.
-// lo and hi: floats (their type is the float type asked for).
-static mp_obj_t tc_floats_in_fn(mp_obj_t seq_in, mp_obj_t lo_in, mp_obj_t hi_in) {
-    const mp_obj_type_t *float_type = mp_obj_get_type(lo_in);
-    if (mp_obj_get_type(hi_in) != float_type || mp_obj_is_small_int(lo_in)) {
-        mp_raise_ValueError(MP_ERROR_TEXT("floats_in: lo and hi are floats"));
-    }
-    mp_float_t lo = mp_obj_get_float(lo_in), hi = mp_obj_get_float(hi_in);
-    size_t n;
-    mp_obj_t *items;
-    mp_obj_get_array(seq_in, &n, &items);
-    for (size_t i = 0; i < n; i++) {
-        mp_obj_t x = items[i];
-        if (mp_obj_is_small_int(x) || mp_obj_get_type(x) != float_type) {
-            return MP_OBJ_NEW_SMALL_INT((mp_int_t)i);
-        }
-        mp_float_t v = mp_obj_get_float(x);
-        if (!(v >= lo && v <= hi)) {
-            return MP_OBJ_NEW_SMALL_INT((mp_int_t)i);
-        }
-    }
-    return MP_OBJ_NEW_SMALL_INT(-1);
-}
-static MP_DEFINE_CONST_FUN_OBJ_3(tc_floats_in_obj, tc_floats_in_fn);
-
 // wave_ll(a, invk, ll, base, q, f, cut, ll_none, ll_max, log2t): texel/gen/brush.py
 // compensated's loop over the waves k = 1 .. K-1 (K = len(invk)) for a brush of one
 // shape (_shape's (q, f, cut) for them all): invk[k] = q, and ll[k] from the power
 // a[k + 2] (Q28) - ll_none for none, else (log2_q24(p) >> 1) + base + f clamped
 // (below cut: ll_none; above ll_max: ll_max). Integers only, as the Python: 9 ms
-// of it on the emulated RP2040. log2t: the LOG2 table (257 Q24 values).
+// of it on the emulated RP2040. log2t: the LOG2 table (257 Q24 values). base,
+// f and cut: ints of 32 bits (brush.py passes base only then).
 static int32_t tc_log2_q24(int32_t v, const int32_t *t) {
     // texel/gen/brush.py log2_q24: v's top bit n, then LOG2 between 256 points
     int32_t n = 0, w = v;
@@ -838,6 +811,35 @@ static mp_obj_t tc_plan_fn(mp_obj_t tex, mp_obj_t n_in, mp_obj_t tab_in) {
     return mp_obj_new_tuple(4, out);
 }
 static MP_DEFINE_CONST_FUN_OBJ_3(tc_plan_obj, tc_plan_fn);
+
+// floats_in(seq, lo, hi) -> -1 when every item of the list or tuple seq is a
+// float in [lo, hi] (NaN is not), else the index of the first that is not:
+// texel/gen/brush.py validate's common case (a brush's 2 x 97 floats, 10.8 ms
+// of Python on the emulated RP2040), which words any other case in Python.
+// lo and hi: floats (their type is the float type asked for). With the float
+// code: a native module without it (armv6m) would carry libgcc's float compares.
+static mp_obj_t tc_floats_in_fn(mp_obj_t seq_in, mp_obj_t lo_in, mp_obj_t hi_in) {
+    const mp_obj_type_t *float_type = mp_obj_get_type(lo_in);
+    if (mp_obj_get_type(hi_in) != float_type || mp_obj_is_small_int(lo_in)) {
+        mp_raise_ValueError(MP_ERROR_TEXT("floats_in: lo and hi are floats"));
+    }
+    mp_float_t lo = mp_obj_get_float(lo_in), hi = mp_obj_get_float(hi_in);
+    size_t n;
+    mp_obj_t *items;
+    mp_obj_get_array(seq_in, &n, &items);
+    for (size_t i = 0; i < n; i++) {
+        mp_obj_t x = items[i];
+        if (mp_obj_is_small_int(x) || mp_obj_get_type(x) != float_type) {
+            return MP_OBJ_NEW_SMALL_INT((mp_int_t)i);
+        }
+        mp_float_t v = mp_obj_get_float(x);
+        if (!(v >= lo && v <= hi)) {
+            return MP_OBJ_NEW_SMALL_INT((mp_int_t)i);
+        }
+    }
+    return MP_OBJ_NEW_SMALL_INT(-1);
+}
+static MP_DEFINE_CONST_FUN_OBJ_3(tc_floats_in_obj, tc_floats_in_fn);
 
 // leak_start(lams, a, q, inv0) -> lmax, or None: texel/gen/brush.py _leak_start's
 // loops for a brush's scales lams (K floats, wavenumber 0 the mean's): lmax the

@@ -266,7 +266,7 @@ def validate(brush, path="brush"):
         if len(v) != K:
             raise ValueError("%s.%s: expected %d numbers (wavenumbers 0 .. %d), got %d"
                              % (path, key, K, K - 1, len(v)))
-        if fin is not None and fin(v, lo, hi) < 0:
+        if fin is not None and type(v) in (list, tuple) and fin(v, lo, hi) < 0:
             # every one a float in range, checked by the C core (texelcore_api.h
             # floats_in): 10.8 ms of the loop below on the emulated RP2040
             out[key] = list(v)
@@ -397,9 +397,12 @@ def compensated(brush):
     ks = brush["k"]
     c = _native_c()
     fast = getattr(c, "wave_ll", None) if c is not None else None
-    if fast is not None and c.floats_in(ks[1:], ks[1], ks[1]) < 0:
-        # a brush of one shape (a designed one): _waves_ll's loop in C (texelcore_api.h
-        # wave_ll, the same integers: 9 ms of Python on the emulated RP2040)
+    if fast is not None and -(1 << 31) <= base < (1 << 31) \
+            and ks.count(ks[1]) - (ks[0] == ks[1]) == K - 1:
+        # a brush of one shape (a designed one), its base a 32-bit int (a brush of
+        # tiny scales over a wide range has one below: the Python): _waves_ll's
+        # loop in C (texelcore_api.h wave_ll, the same integers: 9 ms of Python on
+        # the emulated RP2040)
         s = _shape(ks[1], False)
         fast(a, invk, ll, base, s[0], s[1], s[2], LL_NONE, LL_MAX, _tables()[4])
     else:
