@@ -644,6 +644,33 @@ def test_native_brush_check_is_the_python_check(x64_module, tmp_path):
     assert info["fast"] >= 60 and info["errors"] >= 20, info
 
 
+def test_c_brush_log2_and_wave_constants_are_the_python_ones():
+    """brush_core.c tb_log2_q24 and tb_wave_ll on CPython against brush.log2_q24 and
+    brush._waves_ll: every v below 5,000, the powers of two and their neighbours up
+    to 2^30, 20,000 random ones; the waves' constants of one-shape brushes, their
+    bases at the 32-bit ends too."""
+    from texel.gen import brush as B
+    t = array("i", B.LOG2)
+    r = random.Random(13)
+    vs = list(range(1, 5000)) + [x + d for e in range(1, 30) for x in (1 << e,)
+                                 for d in (-1, 0, 1)] + [r.randrange(1, 1 << 30)
+                                                         for _ in range(20000)]
+    assert [core_c.log2_q24(v, t) for v in vs] == [B.log2_q24(v) for v in vs]
+    for i in range(60):
+        lam = [round(r.uniform(0.0, 3.0), 5) for _ in range(B.K)]
+        if i % 6 == 0:
+            lam[1:] = [0.0] * (B.K - 1)
+        a, _ = B.leakage(lam)
+        kk = round(r.uniform(0.05, 30), 3)
+        s = B._shape(kk, False)
+        base = r.choice([r.randrange(-(1 << 31), 1 << 31), -(1 << 31), (1 << 31) - 1, 0])
+        want = (array("i", bytes(4 * B.K)), array("i", bytes(4 * B.K)))
+        B._waves_ll([kk] * B.K, a, want[0], want[1], base)
+        got = (array("i", bytes(4 * B.K)), array("i", bytes(4 * B.K)))
+        core_c.wave_ll(a, got[0], got[1], base, s, B.LL_NONE, B.LL_MAX, t)
+        assert got == want, (i, base)
+
+
 BRUSH_COMP_SCRIPT = r"""
 import json
 from texel.gen import brush as B

@@ -87,6 +87,23 @@ def leak(q: array, a: array, n: int, sweeps: int, c: array) -> None:
                   ctypes.c_int32(sweeps), ctypes.c_void_p(_ptr(c)))
 
 
+def log2_q24(v: int, log2t: array) -> int:
+    """brush_core.c tb_log2_q24: brush.log2_q24."""
+    f = lib().tb_log2_q24
+    f.restype = ctypes.c_int32
+    return f(ctypes.c_int32(v), ctypes.c_void_p(_ptr(log2t)))
+
+
+def wave_ll(a: array, invk: array, ll: array, base: int, s: tuple, ll_none: int, ll_max: int,
+            log2t: array) -> None:
+    """brush_core.c tb_wave_ll: brush._waves_ll for a brush of one shape s."""
+    i64 = ctypes.c_int64
+    lib().tb_wave_ll(ctypes.c_void_p(_ptr(a)), ctypes.c_int32(len(invk)),
+                     ctypes.c_void_p(_ptr(invk)), ctypes.c_void_p(_ptr(ll)), i64(base),
+                     ctypes.c_int32(s[0]), i64(s[1]), i64(s[2]), ctypes.c_int32(ll_none),
+                     ctypes.c_int32(ll_max), ctypes.c_void_p(_ptr(log2t)))
+
+
 def _p(a) -> ctypes.c_void_p:
     return ctypes.c_void_p(_ptr(a))
 

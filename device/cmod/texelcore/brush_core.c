@@ -321,17 +321,34 @@ void tb_paint(uint16_t st[8], const int32_t *invk, const int32_t *ll, int32_t si
     }
 }
 
-static inline int32_t mulq(int32_t g, int32_t x) {
-    // brush.leakage's Q14 product for x >= 0 (x < 2^31): below 2^31 throughout
-    return (x >> 14) * g + (((x & 16383) * g) >> 14);
-}
-
 void tb_leak(const int32_t *q, int32_t *a, int32_t n, int32_t sweeps, const int32_t *c) {
     for (int32_t s = 0; s < sweeps; s++) {
         for (int32_t i = 3; i < n + 3; i++) {
-            int32_t v = q[i] - mulq(c[0], a[i - 1] + a[i + 1]) - mulq(c[1], a[i - 2] + a[i + 2])
-                        - mulq(c[2], a[i - 3] + a[i + 3]);
+            int32_t v = q[i] - tb_mulq(c[0], a[i - 1] + a[i + 1])
+                        - tb_mulq(c[1], a[i - 2] + a[i + 2]) - tb_mulq(c[2], a[i - 3] + a[i + 3]);
             a[i] = v > 0 ? v : 0;
         }
+    }
+}
+
+int32_t tb_log2_q24(int32_t v, const int32_t *log2t) {
+    uint32_t M = (uint32_t)v;                   // v << 0: n = 31 before the shifts
+    int32_t n = 31;
+    TB_NORM(M, n);
+    return log2n(M, n, log2t);
+}
+
+void tb_wave_ll(const int32_t *a, int32_t K, int32_t *invk, int32_t *ll, int64_t base,
+                int32_t q, int64_t f, int64_t cut, int32_t ll_none, int32_t ll_max,
+                const int32_t *log2t) {
+    for (int32_t k = 1; k < K; k++) {
+        invk[k] = q;
+        int32_t p = a[k + 2];
+        if (p <= 0) {
+            ll[k] = ll_none;
+            continue;
+        }
+        int64_t l2 = (int64_t)(tb_log2_q24(p, log2t) >> 1) + base + f;
+        ll[k] = l2 < cut ? ll_none : (l2 > ll_max ? ll_max : (int32_t)l2);
     }
 }

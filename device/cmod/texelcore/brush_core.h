@@ -46,4 +46,21 @@ void tb_paint(uint16_t st[8], const int32_t *invk, const int32_t *ll, int32_t si
 // max(0, q[i] - C1 (a[i-1] + a[i+1]) - C2 (..) - C3 (..)), Q14 coefficients.
 void tb_leak(const int32_t *q, int32_t *a, int32_t n, int32_t sweeps, const int32_t *c);
 
+// brush._mulq: leakage's Q14 product g * x / 2^14 for x >= 0 (x < 2^31), every
+// partial product below 2^31
+static inline int32_t tb_mulq(int32_t g, int32_t x) {
+    return (x >> 14) * g + (((x & 16383) * g) >> 14);
+}
+
+// brush.log2_q24: round-ish(log2(v) * 2^24) for 1 <= v < 2^30 (log2t: brush.LOG2)
+int32_t tb_log2_q24(int32_t v, const int32_t *log2t);
+
+// brush._waves_ll for a brush of one shape (_shape's q, f, cut for every wave):
+// invk[k] = q and ll[k] from the power a[k + 2] (Q28), k = 1 .. K-1 - ll_none
+// for none, else (log2_q24(p) >> 1) + base + f, below cut ll_none, above
+// ll_max ll_max (in 64 bits: base may be any 32-bit int)
+void tb_wave_ll(const int32_t *a, int32_t K, int32_t *invk, int32_t *ll, int64_t base,
+                int32_t q, int64_t f, int64_t cut, int32_t ll_none, int32_t ll_max,
+                const int32_t *log2t);
+
 #endif

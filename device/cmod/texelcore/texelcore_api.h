@@ -205,23 +205,9 @@ static MP_DEFINE_CONST_FUN_OBJ_1(tc_refresh_obj, tc_refresh_fn);
 // compensated's loop over the waves k = 1 .. K-1 (K = len(invk)) for a brush of one
 // shape (_shape's (q, f, cut) for them all): invk[k] = q, and ll[k] from the power
 // a[k + 2] (Q28) - ll_none for none, else (log2_q24(p) >> 1) + base + f clamped
-// (below cut: ll_none; above ll_max: ll_max). Integers only, as the Python: 9 ms
-// of it on the emulated RP2040. log2t: the LOG2 table (257 Q24 values). base,
+// (below cut: ll_none; above ll_max: ll_max): brush_core.c tb_wave_ll. Integers
+// only, as the Python: 9 ms of it on the emulated RP2040. log2t: the LOG2 table (257 Q24 values). base,
 // f and cut: ints of 32 bits (brush.py passes base only then).
-static int32_t tc_log2_q24(int32_t v, const int32_t *t) {
-    // texel/gen/brush.py log2_q24: v's top bit n, then LOG2 between 256 points
-    int32_t n = 0, w = v;
-    if (w >= 65536) { w >>= 16; n += 16; }
-    if (w >= 256) { w >>= 8; n += 8; }
-    if (w >= 16) { w >>= 4; n += 4; }
-    if (w >= 4) { w >>= 2; n += 2; }
-    if (w >= 2) { n += 1; }
-    int32_t m = v << (29 - n);
-    int32_t i = (m >> 21) & 0xFF;
-    int32_t lo = t[i];
-    return (n << 24) + lo + (((t[i + 1] - lo) * ((m >> 9) & 0xFFF)) >> 12);
-}
-
 static mp_obj_t tc_wave_ll_fn(size_t n_args, const mp_obj_t *args) {
     (void)n_args;
     mp_buffer_info_t ib, lb;
@@ -239,16 +225,7 @@ static mp_obj_t tc_wave_ll_fn(size_t n_args, const mp_obj_t *args) {
     int64_t f = mp_obj_get_int(args[5]);
     int64_t cut = mp_obj_get_int(args[6]);
     int32_t ll_none = mp_obj_get_int(args[7]), ll_max = mp_obj_get_int(args[8]);
-    for (size_t k = 1; k < K; k++) {
-        invk[k] = q;
-        int32_t p = a[k + 2];
-        if (p <= 0) {
-            ll[k] = ll_none;
-            continue;
-        }
-        int64_t l2 = (int64_t)(tc_log2_q24(p, t) >> 1) + base + f;
-        ll[k] = l2 < cut ? ll_none : (l2 > ll_max ? ll_max : (int32_t)l2);
-    }
+    tb_wave_ll(a, (int32_t)K, invk, ll, base, q, f, cut, ll_none, ll_max, t);
     return mp_const_none;
 }
 static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_wave_ll_obj, 10, 10, tc_wave_ll_fn);
@@ -781,8 +758,9 @@ static mp_obj_t tc_plan_fn(mp_obj_t tex, mp_obj_t n_in, mp_obj_t tab_in) {
                    tc_mdb(tc_pl_float(tex, MP_QSTR_quant_db)),
                    cap == mp_const_none ? 0 : tc_mdb(mp_obj_get_float(cap)), tab, k);
     uint16_t st[10];
-    tc_seeded((uint32_t)mp_obj_get_int_truncated(
-        mp_obj_subscr(tex, MP_OBJ_NEW_QSTR(MP_QSTR_seed), MP_OBJ_SENTINEL)), st);
+    uint32_t seed = (uint32_t)mp_obj_get_int_truncated(
+        mp_obj_subscr(tex, MP_OBJ_NEW_QSTR(MP_QSTR_seed), MP_OBJ_SENTINEL));
+    tc_seeded(seed, st);
     int32_t count = (n + L - 1) / L;
     mp_obj_array_t *o = (mp_obj_array_t *)m_malloc(sizeof(mp_obj_array_t));
     o->base.type = TC_ARRAY_TYPE;
@@ -800,9 +778,8 @@ static mp_obj_t tc_plan_fn(mp_obj_t tex, mp_obj_t n_in, mp_obj_t tab_in) {
         int32_t above = tc_texels(st, count, L, k[0], k[1], k[2], k[3], tab, t28, t28 + count,
                                   ys, &none, 2);
         int32_t out3[3];
-        tc_plan_options((uint32_t)mp_obj_get_int_truncated(
-                            mp_obj_subscr(tex, MP_OBJ_NEW_QSTR(MP_QSTR_seed), MP_OBJ_SENTINEL)),
-                        min_mc, reset, count, L, k, tab, ys, t28, t28 + count, above, out3);
+        tc_plan_options(seed, min_mc, reset, count, L, k, tab, ys, t28, t28 + count, above,
+                        out3);
         TC_FREE(ys, 4 * (size_t)count);
     }
     mp_float_t g = tc_pl_float(tex, MP_QSTR_gain) * (mp_float_t)16384 + (mp_float_t)0.5;
@@ -879,7 +856,7 @@ static mp_obj_t tc_leak_start_fn(size_t n_args, const mp_obj_t *args) {
         volatile mp_float_t z = y + (mp_float_t)0.5;
         int32_t p = (int32_t)z;                  // int(): toward zero (z >= 0.5)
         a[i + 3] = p;
-        q[i + 3] = (p >> 14) * inv0 + (((p & 16383) * inv0) >> 14);     // brush._mulq
+        q[i + 3] = tb_mulq(inv0, p);
     }
     return best;
 }

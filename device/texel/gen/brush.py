@@ -257,8 +257,7 @@ def validate(brush, path="brush"):
             raise ValueError("%s.%s: this display paints with %s = %d, got %r"
                              % (path, key, key, want, brush[key]))
     out = {}
-    c = _native_c()
-    fin = getattr(c, "floats_in", None) if c is not None else None
+    fin = getattr(_native_c(), "floats_in", None)
     for key, lo, hi in (("k", K_MIN, K_MAX), ("lam", 0.0, LAM_MAX)):
         v = brush.get(key)
         if not isinstance(v, (list, tuple)):
@@ -395,8 +394,7 @@ def compensated(brush):
     a, lmax = leakage(brush["lam"])
     base = _q24(math.log(lmax) / math.log(2.0) + l2amp) - (14 << 24) if lmax > 0.0 else 0
     ks = brush["k"]
-    c = _native_c()
-    fast = getattr(c, "wave_ll", None) if c is not None else None
+    fast = getattr(_native_c(), "wave_ll", None)
     if fast is not None and -(1 << 31) <= base < (1 << 31) \
             and ks.count(ks[1]) - (ks[0] == ks[1]) == K - 1:
         # a brush of one shape (a designed one), its base a 32-bit int (a brush of
@@ -480,8 +478,7 @@ def _leak_start(lams):
     or (None, zeros, 0.0) for a brush without waves."""
     n = K - 1
     a = array_i(n + 6)
-    c = _native_c()
-    fast = getattr(c, "leak_start", None) if c is not None else None
+    fast = getattr(_native_c(), "leak_start", None)
     if fast is not None:
         # the loops below in C (texelcore_api.h leak_start: the same float steps,
         # each rounded as here; 11.6 ms of Python on the emulated RP2040)
