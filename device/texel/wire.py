@@ -129,6 +129,22 @@ def staged(func, text, fill=(), args=(), scene_at=0, kwargs=None):
         return ("err", str(e))
 
 
+# the C core's answer writer where the board's floats are 32 bits (the texelpad
+# firmware, a deployed native module for the RP2040 or STM32), else None
+_say_c = getattr(compat.core(), "answer", None)
+
+
+def say(r):
+    """Print the answer r (plain data) as one line for the host's link: the C
+    core writes it with each float as its 32 bits (`<bits>j`, which
+    texelpad.link.protocol.floats_from_bits turns back into the float): a float's
+    repr() takes 0.3-1.7 ms on an RP2040, most of a push's answer
+    (docs/firmware.md). Where there is no C core, or r holds what it does not
+    write (a long int, a non-ASCII name), print(repr(r)) as before."""
+    if _say_c is None or not _say_c(r):
+        print(repr(r))
+
+
 replied_us = None      # ticks_us when reply() printed its last answer (bench/firmware.py)
 tidy_us = 0            # how long the collection after it took (us)
 
@@ -140,7 +156,7 @@ def reply(func, text, fill=(), args=(), scene_at=0, kwargs=None):
     the board answers before any gc.collect (5-15 ms on an RP2040)."""
     global replied_us, tidy_us
     r = staged(func, text, fill, args, scene_at, kwargs)
-    print(repr(r))
+    say(r)
     replied_us = t = compat.ticks_us()
     r = None
     app.tidy()

@@ -322,6 +322,119 @@ def test_the_c_core_installs_the_words_the_python_does(pico):
     assert got[0][3] == 15 + 3 + 5 and got[2][3] > 15 + 5 * 16 - 1, got
 
 
+# On the board: each case (floats given as {"__f": their bits}, an OrderedDict as
+# {"__od": its items}, n lists nested as {"__deep": n}) made into its value, printed by repr() and then by the C
+# core's answer writer (texel.wire.say's), which prints nothing and answers False
+# where it leaves the value to repr()
+_SAY = r"""
+import struct, texel.app as A, texel.wire as W
+from collections import OrderedDict
+def mk(v):
+    if isinstance(v, dict):
+        if '__f' in v:
+            return struct.unpack('<f', struct.pack('<I', v['__f']))[0]
+        if '__od' in v:
+            return OrderedDict(v['__od'])
+        if '__deep' in v:
+            d = [1]
+            for _ in range(v['__deep'] - 1):
+                d = [d]
+            return d
+        return {k: mk(x) for k, x in v.items()}
+    if isinstance(v, list):
+        return [mk(x) for x in v]
+    if isinstance(v, tuple):
+        return tuple(mk(x) for x in v)
+    return v
+for c in %r + [A.changes()]:
+    v = mk(c)
+    print('R' + repr(v))
+    print('C', end='')
+    ok = W._say_c(v)
+    if not ok:
+        print()
+    print('S' + repr(ok))
+"""
+
+
+def _same(a, b):
+    """Equal, floats as float32 (NaN equal to NaN, -0.0 not 0.0), types too."""
+    import struct
+    if isinstance(a, float) and isinstance(b, float):
+        return struct.pack("<f", a) == struct.pack("<f", b) or (a != a and b != b)
+    if type(a) is not type(b):
+        return False
+    if isinstance(a, dict):
+        return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, (list, tuple)):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+    return a == b
+
+
+def test_the_c_core_writes_answers_as_repr_with_floats_as_their_bits(pico):
+    """texel.wire.say's C writer (texelcore_api.h answer) on the firmware: every
+    value it writes reads back on the host (floats_from_bits) as repr()'s value,
+    each float32 the same float32 (random bit patterns, zeros, subnormals, the
+    largest, infinities, NaN) and, where there is no float, the same text byte
+    for byte (quotes, backslashes, 1-tuples, empty containers, 16 levels); what
+    it does not write - an int beyond a small int, bytes, text to escape or
+    UTF-8, an OrderedDict, 17 levels - it leaves to repr(), printing nothing."""
+    import ast
+    import random
+    from texelpad.link.protocol import _f32, floats_from_bits
+    rng = random.Random(11)
+    fb = [0, 0x80000000, 1, 0x807FFFFF, 0x7F7FFFFF, 0x7F800000, 0xFF800000, 0x7FC00000,
+          0x3DCCCCCD, 0x41A00000] + [rng.getrandbits(32) for _ in range(150)]
+
+    def deep(n):
+        return {"__deep": n}
+    plain = ["", "a", "it's", 'say "hi"', "both ' and \"", "back\\slash", "~", [], (), {},
+             (1,), [(), [], {}, (None,)], {"k": {"k2": [1, (2, -3)]}, 5: True, "f": False},
+             0, -1, (1 << 30) - 1, -(1 << 30) + 1, deep(16)]
+    leave = [1 << 30, 1 << 40, -(1 << 31), b"x", "tab\t", "caf\u00e9", "\x7f",
+             {"__od": [("a", 1)]}, deep(17), [1, 2, "\n"]]
+    floats = [{"__f": b} for b in fb] + [{"pitch_db": {"__f": 0x40C9999A}, "n": [{"__f": 1}]}]
+    cases = plain + leave + floats
+    with _connect(pico.port) as b:
+        b.push({"regions": [{"start_mm": 0, "end_mm": 50, "texture": {
+            "kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7}}]})
+        out = b.link.exec(_SAY % (cases,), timeout=300)
+    lines = out.replace("\r\n", "\n").split("\n")
+    got = []
+    for k in range(0, len(lines) - 2, 3):
+        r, c, s = lines[k], lines[k + 1], lines[k + 2]
+        assert r[0] == "R" and c[0] == "C" and s[0] == "S", lines[k:k + 3]
+        got.append((r[1:], c[1:], ast.literal_eval(s[1:])))
+    assert len(got) == len(cases) + 1
+
+    def host(v):                        # the case as the host expects it read back
+        if isinstance(v, dict) and "__f" in v:
+            return _f32(v["__f"])
+        if isinstance(v, dict) and "__deep" in v:
+            d = [1]
+            for _ in range(v["__deep"] - 1):
+                d = [d]
+            return d
+        if isinstance(v, dict):
+            return {k: host(x) for k, x in v.items()}
+        if isinstance(v, (list, tuple)):
+            return type(v)(host(x) for x in v)
+        return v
+    for case, (r, c, said) in zip(cases, got):
+        if case in leave:
+            assert said is False and c == "", (case, c)
+            continue
+        assert said is True, case
+        assert _same(floats_from_bits(ast.literal_eval(c)), host(case)), (case, c)
+        if case in plain:
+            assert c == r, (case, c, r)          # repr's own text
+    # the playing scene's changes() (push's answer): repr()'s values, float32 for float32
+    r, c, said = got[-1]
+    assert said is True and "j" in c
+    st = floats_from_bits(ast.literal_eval(c))
+    assert _same(st, ast.literal_eval(r)) and st["scene"]["regions"][0]["pitch_db"] == 6.3
+
+
 def test_a_bad_push_is_refused_and_the_scene_kept(pico):
     from texelpad.link.transport import LinkError
     good = {"regions": [{"start_mm": 0, "end_mm": 50.88,

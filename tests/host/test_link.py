@@ -191,12 +191,12 @@ def test_board_without_the_image(tmp_path):
 
 def test_image_older_than_host(vb, monkeypatch):
     monkeypatch.setattr(board_mod, "HOST_IMAGE_VERSION", "9.0.0")
-    with pytest.raises(ImageTooOld, match=r"texel %s \(protocol 2\).*run texelpad deploy"
+    with pytest.raises(ImageTooOld, match=r"texel %s \(protocol 3\).*run texelpad deploy"
                        % re.escape(texel.__version__)):
         texelpad.connect(vb.port)
     monkeypatch.setattr(board_mod, "HOST_IMAGE_VERSION", texel.__version__)
-    monkeypatch.setattr(board_mod, "PROTOCOL", 3)
-    with pytest.raises(ImageTooOld, match="protocol 2"):
+    monkeypatch.setattr(board_mod, "PROTOCOL", 4)
+    with pytest.raises(ImageTooOld, match="protocol 3"):
         texelpad.connect(vb.port)
 
 

@@ -26,7 +26,7 @@ def test_mpremote_drives_the_realtime_virtual_board():
         r = mpremote(port, "import texel.app as app; st = app.start('virtual', realtime=True); "
                            "print(repr((st['board'], st['refresh'], st['protocol'])))")
         assert r.returncode == 0, r.stderr
-        assert ast.literal_eval(r.stdout.strip()) == ("virtual", "viper", 2)
+        assert ast.literal_eval(r.stdout.strip()) == ("virtual", "viper", 3)
         time.sleep(0.5)
         st1 = _status(port)
         assert st1["running"] is True and st1["faults"] == 0

@@ -134,7 +134,7 @@ def test_duty_never_exceeds_cap(swipe):
 
 def test_status_reports_scene_and_versions(swipe):
     st = swipe["start"]
-    assert st["protocol"] == 2 and st["running"] is True
+    assert st["protocol"] == 3 and st["running"] is True
     regs = st["scene"]["regions"]
     assert [r["kind"] for r in regs] == ["reference", "texel"]
     # the reference half as a 9,600-sample uint16 map, the texel half as its

@@ -48,6 +48,9 @@ mp_obj_t mpy_init(mp_obj_fun_bc_t *self, size_t n_args, size_t n_kw, mp_obj_t *a
     mp_store_global(MP_QSTR_leak_start, MP_OBJ_FROM_PTR(&tc_leak_start_obj));
     mp_store_global(MP_QSTR_floats_in, MP_OBJ_FROM_PTR(&tc_floats_in_obj));
 #endif
+#if MICROPY_FLOAT_IMPL == MICROPY_FLOAT_IMPL_FLOAT && !defined(TC_NO_FLOAT)
+    mp_store_global(MP_QSTR_answer, MP_OBJ_FROM_PTR(&tc_answer_obj));
+#endif
     mp_store_global(MP_QSTR_BUILD, MP_OBJ_NEW_QSTR(MP_QSTR_native));
     mp_store_global(MP_QSTR_API, MP_OBJ_NEW_SMALL_INT(TC_API));
     MP_DYNRUNTIME_INIT_EXIT

@@ -862,3 +862,192 @@ static mp_obj_t tc_leak_start_fn(size_t n_args, const mp_obj_t *args) {
 }
 static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_leak_start_obj, 4, 4, tc_leak_start_fn);
 #endif  // TC_NO_FLOAT
+
+#if MICROPY_FLOAT_IMPL == MICROPY_FLOAT_IMPL_FLOAT && !defined(TC_NO_FLOAT)
+// answer(value) -> True after printing value as one line of a literal the
+// host's link reads (texel.wire.say: an answer), False having printed nothing
+// when it holds something this does not write (the caller prints repr()). As
+// repr() prints it, except each float: `<its 32 bits>j`, an imaginary int
+// literal (no answer holds a complex), which the host turns back into the float
+// (texelpad.link.protocol.floats_from_bits). MicroPython's float repr searches
+// for a round-tripping text (py/formatfloat.c), 0.3-1.7 ms a float on the
+// RP2040: most of a push's answer (docs/firmware.md). Written: None, bools,
+// small ints, floats, str of printable ASCII, and dict, list and tuple of them
+// exactly (not subclasses) up to TC_ANS_DEPTH deep. Allocates nothing: a 256-byte
+// buffer on the C stack, printed to the board's stdout as print() prints.
+// Not in the native modules without float code (armv6m: it would take 1.3 KB
+// of a stock Pico's heap, where pushes are refused for RAM; docs/firmware.md).
+#define TC_ANS_DEPTH 16
+
+typedef struct {
+    size_t n;
+    char b[256];
+} tc_out_t;
+
+static void tc_out_flush(tc_out_t *o) {
+    if (o->n) {
+        mp_plat_print.print_strn(mp_plat_print.data, o->b, o->n);
+        o->n = 0;
+    }
+}
+
+static void tc_out_ch(tc_out_t *o, char c) {
+    if (o->n == sizeof(o->b)) {
+        tc_out_flush(o);
+    }
+    o->b[o->n++] = c;
+}
+
+static void tc_out_s(tc_out_t *o, const char *s) {
+    while (*s) {
+        tc_out_ch(o, *s++);
+    }
+}
+
+static void tc_out_u(tc_out_t *o, uint32_t v) {
+    char t[10];
+    int k = 0;
+    do {
+        t[k++] = (char)('0' + v % 10);
+        v /= 10;
+    } while (v);
+    while (k) {
+        tc_out_ch(o, t[--k]);
+    }
+}
+
+// write v to o (o NULL: only check it can be written); 0 when it cannot
+static int tc_ans(tc_out_t *o, mp_obj_t v, int depth) {
+    if (depth > TC_ANS_DEPTH) {
+        return 0;
+    }
+    if (v == mp_const_none || v == mp_const_true || v == mp_const_false) {
+        if (o) {
+            tc_out_s(o, v == mp_const_none ? "None" : v == mp_const_true ? "True" : "False");
+        }
+        return 1;
+    }
+    if (mp_obj_is_small_int(v)) {
+        if (o) {
+            mp_int_t x = MP_OBJ_SMALL_INT_VALUE(v);
+            if (x < 0) {
+                tc_out_ch(o, '-');
+            }
+            tc_out_u(o, x < 0 ? 0u - (uint32_t)x : (uint32_t)x);
+        }
+        return 1;
+    }
+    if (mp_obj_is_str(v)) {
+        size_t n;
+        const char *s = mp_obj_str_get_data(v, &n);
+        // py/objstr.c mp_str_print_quoted: ' unless the text has a ' and no " (its
+        // scan stops at the first ")
+        int single = 0, dbl = 0;
+        for (size_t i = 0; i < n; i++) {
+            unsigned char c = (unsigned char)s[i];
+            if (c < 0x20 || c >= 0x7f) {
+                return 0;               // escapes and UTF-8: repr() words them
+            }
+            if (!dbl) {
+                if (c == '\'') {
+                    single = 1;
+                } else if (c == '"') {
+                    dbl = 1;
+                }
+            }
+        }
+        if (o) {
+            char q = (single && !dbl) ? '"' : '\'';
+            tc_out_ch(o, q);
+            for (size_t i = 0; i < n; i++) {
+                if (s[i] == q || s[i] == '\\') {
+                    tc_out_ch(o, '\\');
+                }
+                tc_out_ch(o, s[i]);
+            }
+            tc_out_ch(o, q);
+        }
+        return 1;
+    }
+    const mp_obj_type_t *t = mp_obj_get_type(v);
+    if (t->name == MP_QSTR_float) {
+        if (o) {
+            union {
+                float f;
+                uint32_t u;
+            } b;
+            b.f = mp_obj_get_float(v);
+            tc_out_u(o, b.u);
+            tc_out_ch(o, 'j');
+        }
+        return 1;
+    }
+    if (t == TC_DICT_TYPE) {
+        mp_map_t *map = &((mp_obj_dict_t *)MP_OBJ_TO_PTR(v))->map;
+        int first = 1;
+        if (o) {
+            tc_out_ch(o, '{');
+        }
+        for (size_t j = 0; j < map->alloc; j++) {
+            if (!mp_map_slot_is_filled(map, j)) {
+                continue;
+            }
+            if (o && !first) {
+                tc_out_s(o, ", ");
+            }
+            first = 0;
+            if (!tc_ans(o, map->table[j].key, depth + 1)) {
+                return 0;
+            }
+            if (o) {
+                tc_out_s(o, ": ");
+            }
+            if (!tc_ans(o, map->table[j].value, depth + 1)) {
+                return 0;
+            }
+        }
+        if (o) {
+            tc_out_ch(o, '}');
+        }
+        return 1;
+    }
+    int tuple = t == &mp_type_tuple;
+    if (tuple || t == &mp_type_list) {
+        size_t n;
+        mp_obj_t *items;
+        mp_obj_get_array(v, &n, &items);
+        if (o) {
+            tc_out_ch(o, tuple ? '(' : '[');
+        }
+        for (size_t i = 0; i < n; i++) {
+            if (o && i) {
+                tc_out_s(o, ", ");
+            }
+            if (!tc_ans(o, items[i], depth + 1)) {
+                return 0;
+            }
+        }
+        if (o) {
+            if (tuple && n == 1) {
+                tc_out_ch(o, ',');
+            }
+            tc_out_ch(o, tuple ? ')' : ']');
+        }
+        return 1;
+    }
+    return 0;
+}
+
+static mp_obj_t tc_answer_fn(mp_obj_t v) {
+    if (!tc_ans(NULL, v, 0)) {
+        return mp_const_false;
+    }
+    tc_out_t o;
+    o.n = 0;
+    tc_ans(&o, v, 0);
+    tc_out_ch(&o, '\n');
+    tc_out_flush(&o);
+    return mp_const_true;
+}
+static MP_DEFINE_CONST_FUN_OBJ_1(tc_answer_obj, tc_answer_fn);
+#endif  // MICROPY_FLOAT_IMPL_FLOAT

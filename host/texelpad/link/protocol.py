@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 
 import math
+import struct
 import sys
 from typing import Any, Sequence
 
@@ -203,10 +204,47 @@ HELLO_LOADED = HELLO.replace(
 
 def call(module: str, func: str, args: Sequence[Any] = (), kwargs: dict | None = None) -> str:
     """`module.func(*args, **kwargs)`, answering ('ok', value) or ('err', the
-    device's ValueError text)."""
+    device's ValueError text), printed by texel.wire.say (floats as their bits
+    where the board's C core writes it: floats_from_bits)."""
     argtext = ", ".join([literal(a) for a in args] + (["**" + literal(kwargs)] if kwargs else []))
     return ("import %s as _m\ntry:\n _r = ('ok', _m.%s(%s))\nexcept ValueError as _e:\n"
-            " _r = ('err', str(_e))\nprint(repr(_r))\n_m = _r = None" % (module, func, argtext))
+            " _r = ('err', str(_e))\nimport texel.wire as _m\n_m.say(_r)\n_m = _r = None"
+            % (module, func, argtext))
+
+
+def _f32(bits: int) -> float:
+    """The float32 with these bits, as the shortest decimal that is that
+    float32 again (CPython's float of it): 6.3, not 6.300000190734863."""
+    packed = struct.pack("<I", bits)
+    x = struct.unpack("<f", packed)[0]
+    if math.isfinite(x):
+        for digits in range(1, 10):         # 9 significant digits always round-trip
+            y = float("%.*g" % (digits, x))
+            try:
+                if struct.pack("<f", y) == packed:
+                    return y
+            except OverflowError:           # rounded past the largest float32
+                pass
+    return x
+
+
+def floats_from_bits(value: Any) -> Any:
+    """An answer printed by the board's C core (texel.wire.say: each float32
+    as `<its 32 bits>j`, an imaginary int literal) with every such number
+    turned back into its float (_f32); anything else as it is. ValueError for
+    a complex that is not 32 bits (no answer holds one)."""
+    if isinstance(value, complex):
+        b = value.imag
+        if value.real != 0 or not (0 <= b < 1 << 32) or b != int(b):
+            raise ValueError("not a float's bits: %r" % (value,))
+        return _f32(int(b))
+    if isinstance(value, dict):
+        return {k: floats_from_bits(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [floats_from_bits(v) for v in value]
+    if isinstance(value, tuple):
+        return tuple(floats_from_bits(v) for v in value)
+    return value
 
 
 # --- long samples regions: data, not code -------------------------------------------

@@ -659,7 +659,9 @@ class Link:
         out = self.exec(code, timeout, reply_first).strip()
         last = out.splitlines()[-1] if out else ""
         try:
-            return ast.literal_eval(last)
+            value = ast.literal_eval(last)
+            # floats as their bits (`<bits>j`): the board's C core wrote the answer
+            return protocol.floats_from_bits(value) if "j" in last else value
         except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
             # TypeError: '{[]: 1}' parses but cannot be built; the others: a
             # line of 100,000 nested operators

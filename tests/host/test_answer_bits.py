@@ -1,0 +1,47 @@
+"""The answers a board's C core prints (texel.wire.say: each float32 as its
+bits, `<bits>j`) read back on the host (texelpad.link.protocol
+floats_from_bits): every float32 comes back as the shortest decimal that is
+that float32 again - numpy's float32 repr - and nothing else changes."""
+import ast
+import random
+import struct
+
+import numpy as np
+import pytest
+
+from texelpad.link.protocol import _f32, floats_from_bits
+
+
+def _bits(x):
+    return struct.unpack("<I", struct.pack("<f", x))[0]
+
+
+def test_every_float32_comes_back_as_its_shortest_decimal():
+    rng = random.Random(5)
+    hard = [0, 0x80000000, 1, 0x807FFFFF, 0x00800000, 0x7F7FFFFF, 0xFF7FFFFF, 0x3F800000,
+            0x3F800001, 0x4B7FFFFF, 0x4B800000, _bits(0.1), _bits(175.16121), _bits(-12.9)]
+    for b in hard + [rng.getrandbits(32) for _ in range(20000)]:
+        x = np.frombuffer(struct.pack("<I", b), dtype=np.float32)[0]
+        y = _f32(b)
+        if np.isnan(x):
+            assert y != y
+            continue
+        assert struct.pack("<f", y) == struct.pack("<I", b)       # the same float32
+        assert y == float(str(x))                                   # numpy's shortest
+
+
+def test_floats_from_bits_walks_an_answer_and_keeps_the_rest():
+    line = ("('ok', {'scene': {'regions': [{'pitch_db': %dj, 'start': 0, 'kind': 'texel', "
+            "'x': (1, %dj), 'e': [], 't': (%dj,)}]}, 'late': None, 'v': True, 'n': -7})"
+            % (_bits(6.3), _bits(-0.0), _bits(float("inf"))))
+    got = floats_from_bits(ast.literal_eval(line))
+    r = got[1]["scene"]["regions"][0]
+    assert r["pitch_db"] == 6.3 and r["start"] == 0 and r["kind"] == "texel" and r["e"] == []
+    assert r["x"][0] == 1 and str(r["x"][1]) == "-0.0" and r["t"] == (float("inf"),)
+    assert got[1]["late"] is None and got[1]["v"] is True and got[1]["n"] == -7
+
+
+@pytest.mark.parametrize("bad", ["1.5j", "(1+2j)", "4294967296j", "-3j"])
+def test_a_complex_that_is_no_float_s_bits_is_refused(bad):
+    with pytest.raises(ValueError, match="not a float's bits"):
+        floats_from_bits(ast.literal_eval(bad))
