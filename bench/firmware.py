@@ -30,6 +30,13 @@ ends at the swap. So:
 (The bytes' transfer over USB before the compile is not counted: "from the
 host's last byte".) The goal verdicts use these figures.
 
+On an RP2040 the link sends a push as a frame to the board's standing reader
+(texel.wire.stand, Board.stands): nothing is compiled, and a push is timed from
+when the reader has read the frame's last byte (texel.wire.read_us): compile 0,
+parse = to push's entry (the scene's JSON read). _tpf_pre / _tpf_post, two
+commands around the frame, note and read the figures (each ends the reader;
+the next frame starts it again, before the figures' clock starts).
+
 The sequence (one emulator, one boot):
   1. boot; connect; the first push after boot is a free-exploration scene;
   2. PUSHES pushes in a row cycling through the scene list: every shipped
@@ -124,6 +131,25 @@ def _tpf_req(code):
     gc.collect()
     print(repr((time.ticks_diff(t1, t0), None if tp is None else time.ticks_diff(tp, t0),
                 time.ticks_diff(t2, t0), rt.last_push if rt.pushes != n0 else None, err,
+                gc.mem_free(), rt.refresh.overruns - ov0, rt.refresh.worst_us, rt.pushes,
+                _tpf_wire.tidy_us)))
+_tpf_s = [None]
+def _tpf_pre():
+    rt = _tpf_app._rt
+    _tpf_s[0] = (rt.refresh.overruns, rt.pushes)
+    _tpf_t[0] = None
+    _tpf_wire.replied_us = None
+    _tpf_wire.read_us = None
+def _tpf_post():
+    rt = _tpf_app._rt
+    ov0, n0 = _tpf_s[0]
+    t0 = _tpf_wire.read_us
+    tp = _tpf_t[0]
+    t2 = _tpf_wire.replied_us
+    gc.collect()
+    print(repr((0, None if tp is None or t0 is None else time.ticks_diff(tp, t0),
+                None if t2 is None or t0 is None else time.ticks_diff(t2, t0),
+                rt.last_push if rt.pushes != n0 else None, None,
                 gc.mem_free(), rt.refresh.overruns - ov0, rt.refresh.worst_us, rt.pushes,
                 _tpf_wire.tidy_us)))
 def _tpf_heap():
@@ -238,19 +264,34 @@ def _request(b: Any, scene: dict[str, Any]) -> dict[str, Any]:
             b._upload([u for _, u in uploads], None)
         except (LinkError, ValueError) as e:
             return {"refused": "upload: %s" % (str(e)[:300],)}
-    code = protocol.staged_call(protocol.WIRE, "pushed", [plain], 0,      # as Board.push sends it
-                                {i: k for k, (i, _) in enumerate(uploads)})
+    slots = {i: k for k, (i, _) in enumerate(uploads)}
     try:
-        out = b.link.exec("_tpf_req(%r)" % code, timeout=600).strip().splitlines()
+        if b.stands:
+            # as Board.push sends it on an RP2040: a frame to texel.wire.stand(), timed
+            # from when the board has read its last byte (texel.wire.read_us); the
+            # figures are read by a command after it (which ends the reader: the next
+            # push starts it again before its frame, outside the figures)
+            head, data = protocol.staged_frame("pushed", [plain], 0, slots)
+            b.link.exec("_tpf_pre()")
+            try:
+                reply = b.link.eval_frame(head, data, timeout=600)
+            except LinkError as e:
+                reply = ("err", "link: %s" % e)
+            out = b.link.exec("_tpf_post()", timeout=600).strip().splitlines()
+            request_bytes = len(head) + len(data)
+        else:
+            code = protocol.staged_call(protocol.WIRE, "pushed", [plain], 0, slots)
+            out = b.link.exec("_tpf_req(%r)" % code, timeout=600).strip().splitlines()
+            reply = ast.literal_eval(out[-2]) if len(out) > 1 else None
+            request_bytes = len(code)
         (compile_us, entry_us, answer_us, lp, err, free, overruns, worst_us,
          pushes, tidy_us) = ast.literal_eval(out[-1])
-        reply = ast.literal_eval(out[-2]) if len(out) > 1 else None
     except (LinkError, ValueError, SyntaxError, IndexError) as e:
         return {"refused": "link: %s" % (str(e)[:300],)}
     r: dict[str, Any] = {"compile_us": compile_us, "answer_us": answer_us, "mem_free": free,
                          "tidy_us": tidy_us,
                          "overruns": overruns, "worst_us": worst_us, "pushes": pushes,
-                         "request_bytes": len(code)}
+                         "request_bytes": request_bytes}
     if err or not (isinstance(reply, tuple) and reply and reply[0] == "ok") or lp is None:
         r["refused"] = err or (reply[1] if isinstance(reply, tuple) else repr(out[-2:]))[:300]
         return r

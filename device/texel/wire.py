@@ -12,6 +12,7 @@ import gc
 # a push's "parse"; bench/request_parts.py, tests/runtime/test_imports.py)
 import binascii
 import json
+import sys
 from . import app, compat
 from .protocol import UPLOAD_PIECE_MAX      # values per piece (the contract's)
 from .runtime import scene as _scene
@@ -154,13 +155,66 @@ def reply(func, text, fill=(), args=(), scene_at=0, kwargs=None):
     the push left due (app.tidy()): the host's link takes the line and goes
     on (texelpad.link.transport: reply_first) while the board collects, so
     the board answers before any gc.collect (5-15 ms on an RP2040)."""
+    _said(staged(func, text, fill, args, scene_at, kwargs))
+
+
+def _said(r):
+    """say(r), then the collection the push left due (reply's, stand's)."""
     global replied_us, tidy_us
-    r = staged(func, text, fill, args, scene_at, kwargs)
     say(r)
     replied_us = t = compat.ticks_us()
     r = None
     app.tidy()
     tidy_us = compat.ticks_diff(compat.ticks_us(), t)
+
+
+# --- the standing reader ----------------------------------------------------------
+# A push costs the board a compile of its request before any work (the raw REPL
+# compiles what it is sent: 1.8-8.6 ms for the bench's scenes on the emulated
+# RP2040, most of it the scene's JSON as a string literal). stand() is one
+# command the link runs once and then talks to as data (texelpad.link.transport
+# Link.eval_frame): each request is a frame of a header line, JSON
+# [func, n, fill, args, scene_at, kwargs], and n bytes of the scene's JSON;
+# reply() runs it and prints its one answer line; nothing is compiled. Any
+# other byte where a frame begins (the link's empty line) ends it: the raw REPL again.
+# Ctrl-C (mpremote, Thonny's Stop, the link's resync) ends it too, as it ends any
+# command: what plays goes on playing (the refresh is an interrupt). Only where
+# the console has flow control (USB: the link stands on rp2 boards only; a UART
+# drops what its buffer cannot hold while the board collects).
+STAND_MARK = "\x1etexel-stand\n"     # what stand() prints first (stdout makes it \r\n)
+read_us = None      # ticks_us when stand() had read a frame's last byte (bench/firmware.py)
+
+
+def stand():
+    """Answer the link's frames until a line that is not one (the comment
+    above): each with one line, ('raise', its text) for an exception other than
+    a refusal, and the reader goes on; Ctrl-C ends it."""
+    global read_us
+    rd = sys.stdin.buffer
+    sys.stdout.write(STAND_MARK)
+    while True:
+        # the first byte alone: anything but a frame's "[" (the link's empty line,
+        # another tool's "\r" before its Ctrl-C and Ctrl-A) ends the reader at once,
+        # leaving what follows to the raw REPL - a readline() would take a Ctrl-A
+        # that came with the Ctrl-C before the interrupt is raised, and the tool
+        # would wait for its banner in vain
+        line = rd.read(1)
+        if line != b"[":
+            return
+        line += rd.readline()
+        try:
+            func, n, fill, args, scene_at, kwargs = json.loads(line)
+            line = rd.read(n)
+            read_us = compat.ticks_us()
+            r = staged(func, line, fill, args, scene_at, kwargs)
+        except Exception as e:              # not Ctrl-C (KeyboardInterrupt): that ends it
+            r = ("raise", "%s: %s" % (type(e).__name__, e))
+        line = None
+        try:
+            _said(r)                        # one line, whatever came
+        except Exception:                   # after it (the collection): the reader goes on
+            pass
+        r = None
 
 
 def upload_begin(sizes):

@@ -435,6 +435,60 @@ def test_the_c_core_writes_answers_as_repr_with_floats_as_their_bits(pico):
     assert _same(st, ast.literal_eval(r)) and st["scene"]["regions"][0]["pitch_db"] == 6.3
 
 
+def test_pushes_go_to_the_standing_reader_and_every_other_use_still_finds_the_repl(pico):
+    """On an RP2040 a push is a frame to texel.wire.stand() (no compile on the
+    board): pushes in a row stay in it, a refusal and a board-side exception
+    are answered there and it reads on, any other exchange ends it first, and a
+    host that vanished while it stood leaves the next tool - a plain mpremote
+    exec, texelpad's link - a REPL, with the display still playing."""
+    from support.vboard import mpremote
+    from texelpad.link import protocol
+    from texelpad.link.transport import BoardError
+
+    def scene(pitch):
+        return {"regions": [{"start_mm": 0, "end_mm": 50, "texture": {
+            "kind": "texel", "pitch_db": pitch, "irregularity_db": -12.9, "seed": 7}}]}
+    with _connect(pico.port) as b:
+        assert b.stands
+        n0 = b.status()["pushes"]
+        for k, pitch in enumerate((1.5, 2.5, 3.5)):
+            st = b.push(scene(pitch))
+            assert b.link.standing and st["pushes"] == n0 + k + 1
+            assert st["scene"]["regions"][0]["pitch_db"] == pitch
+        ans = b.link.eval_frame(*protocol.staged_frame("pushed", [scene(99.0)], 0), 60)
+        assert ans[0] == "err" and "pitch_db" in ans[1] and b.link.standing   # the board's
+        with pytest.raises(ValueError, match="pitch_db"):     # the host's own check
+            b.push(scene(99.0))
+        # a frame calling pushed with two arguments too many: the board's TypeError, answered
+        with pytest.raises(BoardError, match="TypeError"):
+            b.link.eval_frame(*protocol.staged_frame("pushed", [scene(4.0), 1, 2], 0), 60)
+        assert b.link.standing
+        st = b.push(scene(4.5))
+        assert st["scene"]["regions"][0]["pitch_db"] == 4.5
+        assert b.link.exec("print(6 * 7)").strip() == "42" and not b.link.standing
+        st2 = b.status()
+        assert st2["scene"] == st["scene"] and st2["pushes"] == n0 + 4
+        b.push(scene(5.5))
+        assert b.link.standing
+        b.link._close_port()                # the host vanished: no Ctrl-B, no empty line
+        b.link.t = None
+    r = mpremote(pico.port, "print(6 * 7)")
+    assert r.returncode == 0 and "42" in r.stdout, r.stdout + r.stderr
+    with _connect(pico.port) as b:
+        st = b.status()
+        assert st["running"] and st["scene"]["regions"][0]["pitch_db"] == 5.5
+        assert st["pushes"] == n0 + 5 and st["faults"] == 0
+        before = st["refreshes"]
+        assert b.status()["refreshes"] > before
+        b.push(scene(6.5))                  # and vanished again: the link itself next
+        assert b.link.standing
+        b.link._close_port()
+        b.link.t = None
+    with _connect(pico.port) as b:
+        st = b.status()
+        assert st["scene"]["regions"][0]["pitch_db"] == 6.5 and st["pushes"] == n0 + 6
+
+
 def test_a_bad_push_is_refused_and_the_scene_kept(pico):
     from texelpad.link.transport import LinkError
     good = {"regions": [{"start_mm": 0, "end_mm": 50.88,

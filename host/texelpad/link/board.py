@@ -36,6 +36,13 @@ from .transport import ImageTooOld, Interrupted, Link, LinkError, LinkTimeout, N
 from .transport import unexpected as _bad
 
 HOST_IMAGE_VERSION = texel.__version__
+# Where Board.push and start send frames to texel.wire.stand() instead of code for
+# the raw REPL (no compile of the request on the board: docs/firmware.md): the
+# RP2040's MicroPython, whose console is USB CDC - the host's writes wait while the
+# board does not read. Not the STM32 (its REPL is a UART: bytes sent while the board
+# collects after an answer overflow its buffer), CircuitPython (serve answers the
+# link) or the unix port (the virtual board).
+STAND_PLATFORMS = ("rp2",)
 # s: what a start or push may take on the board (start + a texel push: ~16 s wall on
 # the emulated Pico alone - tests/host/test_emulated_pico.py prints it - and over 30 s
 # on a CI host running two emulators at once); --timeout raises it
@@ -113,6 +120,9 @@ class Board:
         ver, impl, version, mpy, platform = _check_hello(link.port, hello)
         self.firmware = {"implementation": impl, "version": tuple(version), "mpy": mpy,
                          "platform": platform}
+        # pushes go to the board's standing reader (Link.eval_frame) where its console
+        # has flow control: MicroPython on an RP2040 (USB CDC)
+        self.stands = impl == "micropython" and platform in STAND_PLATFORMS
         self.image = None if ver[0] == "missing" else {"protocol": ver[0], "texel": ver[1]}
         self.lost = 0           # telemetry samples lost during the last monitor()
         self.received = 0       # telemetry samples read during the last monitor()
@@ -245,9 +255,14 @@ class Board:
             # its answer is only what a push changes (app.changes), merged here into
             # that status - the board's answer 4.5 ms, not 7.0 (bench/request_parts.py)
             lean = func == "push" and before is not None
-            ans = self.link.eval_reply(protocol.staged_call(
-                protocol.WIRE, "pushed" if lean else func, args, scene_at,
-                {i: k for k, (i, _) in enumerate(uploads)}, kwargs), timeout)
+            f = "pushed" if lean else func
+            slots = {i: k for k, (i, _) in enumerate(uploads)}
+            if self.stands:         # no compile on the board: a frame to texel.wire.stand()
+                ans = self.link.eval_frame(*protocol.staged_frame(f, args, scene_at, slots,
+                                                                  kwargs), timeout)
+            else:
+                ans = self.link.eval_reply(protocol.staged_call(
+                    protocol.WIRE, f, args, scene_at, slots, kwargs), timeout)
             got = answer(self.port, ans, func + "()")
             if lean and type(got) is dict:
                 got = dict(before or {}, **got)

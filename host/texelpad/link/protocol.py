@@ -329,6 +329,28 @@ def staged_call(module: str, func: str, args: Sequence[Any], scene_at: int,
         "__import__(%r).reply(%s)" % (top, ", ".join(parts))
 
 
+def staged_frame(func: str, args: Sequence[Any], scene_at: int,
+                 slots: dict[int, int] | None = None, kwargs: dict | None = None
+                 ) -> tuple[bytes, bytes]:
+    """staged_call() as a frame for the board's standing reader
+    (texel.wire.stand): (the header line, the scene's JSON as bytes). The
+    header is JSON [func, its byte count, fill, the other args, scene_at,
+    kwargs]: data the board's json module reads, never code; the same checks
+    as staged_call (literal(), scene_text())."""
+    rest = [a for k, a in enumerate(args) if k != scene_at]
+    fill = sorted([int(i), int(slot)] for i, slot in (slots or {}).items())
+    literal(rest)
+    literal(kwargs)
+    data = scene_text(args[scene_at]).encode("utf-8")
+    try:
+        head = json.dumps([func, len(data), fill, plain(rest), int(scene_at),
+                           plain(kwargs) if kwargs else None],
+                          ensure_ascii=False, allow_nan=False, separators=(",", ":"))
+    except (TypeError, ValueError) as e:
+        raise LiteralError("request: not JSON data: %s" % e) from None
+    return head.encode("utf-8") + b"\n", data
+
+
 def render_u16(params: dict[str, Any], engine: str | None) -> str:
     """texel.render_u16 on the board, the map back as base64 of its bytes."""
     return ("import texel, binascii\ntry:\n _m = texel.render_u16(%s, engine=%s)\n"

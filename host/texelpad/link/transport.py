@@ -474,6 +474,11 @@ SERVE_MARK = b"\x1etexel-serve\r\n"
 KNOCK_S = 1.0
 # s without a banner after which _enter_raw_repl sends Ctrl-A again
 RETRY_CTRL_A_S = 1.5
+# What texel.wire.stand() prints when it starts reading frames (Link.eval_frame),
+# then its line's end ("\r\n": the board's stdout makes "\n" that)
+STAND_MARK = b"\x1etexel-stand"
+# The one command that starts it
+STAND = b"__import__('texel.wire').wire.stand()"
 # The link's last command on a CircuitPython board that plays (Link.close(serve=True))
 HAND_OVER = b"import texel.app as _a\n_a.serve(False, True)\n_a = None"
 
@@ -497,6 +502,9 @@ class Link:
         # serving: the board runs texel.app.serve() (CircuitPython, playing): it
         # answers as the raw REPL does, and this link never interrupts it
         self.serving = False
+        # standing: the board runs texel.wire.stand() (eval_frame): every other
+        # exchange first ends it (_sit)
+        self.standing = False
         try:
             # a bare Ctrl-A first: a board at its REPL, or serving, answers it
             # without an interrupt; Ctrl-C only when a program holds the REPL
@@ -534,6 +542,7 @@ class Link:
         if getattr(self, "t", None) is None:
             return
         try:
+            self._sit()
             self.t.settle()             # the last answer's tail (a collection) first
             handed = False
             if serve and not self.serving:
@@ -579,6 +588,7 @@ class Link:
             raise LinkError("the link to %s is closed" % self.port)
         self.commands += 1
         self.serving = False        # Ctrl-C ends texel.app.serve(): its display stops
+        self.standing = False       # and texel.wire.stand() (the display plays on)
         try:
             self.t.enter_raw_repl(soft_reset=False,
                                   timeout_overall=self.timeout if timeout is None else timeout)
@@ -596,6 +606,7 @@ class Link:
             raise LinkError("the link to %s is closed" % self.port)
         self.commands += 1
         t = self.timeout if timeout is None else timeout
+        self._sit()
         was_serving = self.serving
         if was_serving:
             # out of texel.app.serve(): Ctrl-C stops its display. Run by the link's hand-over
@@ -631,6 +642,7 @@ class Link:
         if self.t is None:
             raise LinkError("the link to %s is closed" % self.port)
         self.commands += 1
+        self._sit()
         data = code.encode("utf-8")
         self.sent += len(data)
         run = self.t.exec_reply_first if reply_first else self.t.exec_raw
@@ -653,6 +665,86 @@ class Link:
         returns when that line arrives; the next use of the link first reads
         the rest."""
         return self.eval(code, timeout, reply_first=True)
+
+    def eval_frame(self, head: bytes, data: bytes, timeout: float | None = None) -> Any:
+        """A request to the board's standing reader (texel.wire.stand: a header
+        line and its data, protocol.staged_frame), started first when it does not
+        run: returns the value of its one answer line, as eval_reply does - no
+        compile on the board, and no raw-REPL exchange per request. A board that
+        raised answers ('raise', its text): BoardError, and the reader goes on."""
+        if self.t is None:
+            raise LinkError("the link to %s is closed" % self.port)
+        self.commands += 1
+        t = self.timeout if timeout is None else timeout
+        self.sent += len(head) + len(data)
+        try:
+            with self.t.deadline(t + (len(head) + len(data)) / MIN_BYTES_PER_S, t), \
+                    redirect_stdout(io.StringIO()):
+                if not self.standing:
+                    self._stand()
+                self.t.serial.write(head + data)
+                buf = bytearray()
+                while not buf.endswith(b"\n"):
+                    c = self.t.serial.read(1)
+                    if c == b"\x04":           # the reader itself ended: its error text
+                        self.standing = False
+                        self.t.late_error = ""
+                        self.t.tail = b"\x04"
+                        self.t.settle()
+                        raise BoardError(self.t.late_error or "the board's reader ended")
+                    buf += c
+        except TransportError as e:
+            raise LinkTimeout("%s stopped answering (%s); the board may have reset or been "
+                              "unplugged" % (self.port, e)) from None
+        except (serial.SerialException, OSError) as e:
+            raise LinkTimeout("%s: the serial link failed (%s); was the board unplugged?"
+                              % (self.port, e)) from None
+        self.received += len(buf)
+        out = bytes(buf).decode("utf-8", "replace").strip()
+        try:
+            value = ast.literal_eval(out)
+            value = protocol.floats_from_bits(value) if "j" in out else value
+        except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
+            raise LinkError("unexpected answer from %s: %r" % (self.port, out[-200:])) from None
+        if type(value) is tuple and len(value) == 2 and value[0] == "raise":
+            raise BoardError(str(value[1]))
+        return value
+
+    def _stand(self) -> None:
+        """Start texel.wire.stand() (under the caller's deadline): its mark
+        says it reads frames; an error instead (an image without it) raises."""
+        self.t.settle()
+        self.t.late_error = ""
+        self.t.exec_raw_no_follow(STAND)
+        got = b""
+        while not (got.endswith(b"\n") and STAND_MARK in got):
+            c = self.t.serial.read(1)
+            if c == b"\x04":                   # it ended at once: its error text
+                self.t.tail = b"\x04"
+                self.t.settle()
+                raise BoardError(self.t.late_error or "texel.wire.stand() ended at once")
+            got = (got + c)[-len(STAND_MARK) - 4:]
+        self.standing = True
+
+    def _sit(self) -> None:
+        """End the standing reader, if it runs (an empty line: stand() returns
+        and the raw REPL prints the command's end, read here), so that the next
+        exchange finds the raw REPL. A board that does not answer raises
+        LinkTimeout; the link then knows nothing of it (resync)."""
+        if not self.standing:
+            return
+        self.standing = False
+        try:
+            with redirect_stdout(io.StringIO()):
+                self.t.serial.write(b"\n")
+                self.t.tail = b""
+                self.t.settle()
+        except TransportError as e:
+            raise LinkTimeout("%s stopped answering (%s); the board may have reset or been "
+                              "unplugged" % (self.port, e)) from None
+        except (serial.SerialException, OSError) as e:
+            raise LinkTimeout("%s: the serial link failed (%s); was the board unplugged?"
+                              % (self.port, e)) from None
 
     def eval(self, code: str, timeout: float | None = None, reply_first: bool = False) -> Any:
         """Run code whose last printed line is a repr() literal; return its value."""
@@ -680,6 +772,7 @@ class Link:
         buffer from overrunning); progress(bytes_done) after each chunk."""
         if self.t is None:
             raise LinkError("the link to %s is closed" % self.port)
+        self._sit()
         try:
             self.t.fs_writefile(path, bytes(data), chunk_size=chunk, progress_callback=(
                 (lambda done, total: progress(done)) if progress else None))
