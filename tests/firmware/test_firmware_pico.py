@@ -489,6 +489,86 @@ def test_pushes_go_to_the_standing_reader_and_every_other_use_still_finds_the_re
         assert st["scene"]["regions"][0]["pitch_db"] == 6.5 and st["pushes"] == n0 + 6
 
 
+# On the board: each text read by json.loads and by the C reader (scene_json);
+# printed per text: (the same value or the same exception, the C read it itself)
+_JSON_SAME = r"""
+import json, _texelcore
+def run(f, t):
+    try:
+        return ('ok', repr(f(t)))
+    except Exception as e:
+        return ('exc', type(e).__name__, str(e))
+out = []
+for t in %r:
+    a = run(json.loads, t)
+    c = run(_texelcore.scene_json, t)
+    fast = c != ('ok', 'None')
+    out.append((a == c or not fast, fast))
+print(repr(out))
+"""
+
+
+def _json_cases(seed):
+    """Texts for the C reader: (text, whether it must read it itself). Strict
+    JSON as the host writes it (every bench scene, random documents with
+    escapes, UTF-8, ints past 32 bits, exponents, float32's edges, 20 levels)
+    and what it must leave to json.loads (a \\u escape, modjson's lenient
+    commas and colons, syntax errors, 30 levels) - a number that is no number
+    raises the same error from both."""
+    import json as pyjson
+    import random
+    from bench.firmware import scene_list
+    from texelpad.link import protocol
+    from texelpad.link.board import host_check
+    rng = random.Random(seed)
+    texts = []
+    for _, _, sc in scene_list({"positions": 19200, "dx_um": 5.3})[:12]:
+        texts.append((protocol.scene_text(host_check(sc)), True))
+    words = ["a", "", 'say "hi"', "back\\slash", "tab\t and\nnew", "caf\u00e9 \u2192",
+             "sl/ash", "regions", "pitch_db"]
+    nums = [0, -1, 7, 2 ** 31, -(2 ** 40), 10 ** 20, 0.0, -0.0, 1.5, -12.9, 6.3, 1e-45, 1e-38,
+            3.4e38, 1e39, 1.7976931348623157e308, 123456789.123, 5e-324]
+
+    def doc(d):
+        r = rng.random()
+        if d > 3 or r < 0.35:
+            return rng.choice(nums + words + [None, True, False])
+        if r < 0.65:
+            return [doc(d + 1) for _ in range(rng.randrange(4))]
+        return {rng.choice(words): doc(d + 1) for _ in range(rng.randrange(4))}
+    docs = [d for d in (doc(0) for _ in range(80)) if d is not None]     # null: the C's None
+    for d in docs[:60]:
+        texts.append((pyjson.dumps(d, ensure_ascii=False, separators=(",", ":")), True))
+    for d in docs[60:70]:
+        texts.append((pyjson.dumps(d, ensure_ascii=False, indent=1), True))
+    texts.append(("[" * 20 + "1" + "]" * 20, True))
+    texts.append((' { "a" : [ 1 , 2.5e3 , -3E-2 ] , "b" : "x" } \r\n', True))
+    for t in ['"\\u00e9"', '{"a" 1}', "[1 2]", '{"a":1,}', "[1,,2]", "{1:2}", "[" * 30 + "]" * 30,
+              "", "[", '"abc', "tru", "nul", "[1]x", "{}}"]:
+        texts.append((t, False))
+    for t in ['{"a":1.2.3}', "[1e5e5]", "-", "[--1]", '{"b":1-2}']:
+        texts.append((t, True))                     # the same ValueError from both
+    return texts
+
+
+def test_the_c_core_reads_a_scenes_json_as_json_loads_does(pico):
+    """The firmware's C reader of a pushed scene's JSON (texelcore_api.h
+    scene_json, texel/wire.py staged) gives json.loads's value - the same repr(),
+    so the same types, float32s and dict order - or json.loads's own ValueError,
+    and leaves what it does not read strictly to json.loads (_json_cases)."""
+    import ast
+    cases = _json_cases(21)
+    with _connect(pico.port) as b:
+        got = []
+        for k in range(0, len(cases), 20):
+            out = b.link.exec(_JSON_SAME % ([t for t, _ in cases[k:k + 20]],), timeout=300)
+            got += ast.literal_eval(out.strip().splitlines()[-1])
+    assert len(got) == len(cases)
+    for (text, fast), (same, c_read) in zip(cases, got):
+        assert same, text
+        assert c_read == fast, (text, c_read)
+
+
 def test_a_bad_push_is_refused_and_the_scene_kept(pico):
     from texelpad.link.transport import LinkError
     good = {"regions": [{"start_mm": 0, "end_mm": 50.88,

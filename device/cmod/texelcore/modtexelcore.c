@@ -9,6 +9,7 @@
 #define TC_FREE(ptr, bytes) m_del(uint8_t, ptr, bytes)
 #define TC_ARRAY_TYPE (&mp_type_array)
 #define TC_DICT_TYPE (&mp_type_dict)
+#define TC_FIRMWARE 1              // the firmware-only functions (scene_json)
 
 #include "texelcore_api.h"
 
@@ -34,6 +35,7 @@ static const mp_rom_map_elem_t texelcore_globals_table[] = {
     #if MICROPY_FLOAT_IMPL == MICROPY_FLOAT_IMPL_FLOAT
     { MP_ROM_QSTR(MP_QSTR_answer), MP_ROM_PTR(&tc_answer_obj) },
     #endif
+    { MP_ROM_QSTR(MP_QSTR_scene_json), MP_ROM_PTR(&tc_scene_json_obj) },
     { MP_ROM_QSTR(MP_QSTR_BUILD), MP_ROM_QSTR(MP_QSTR_firmware) },
     { MP_ROM_QSTR(MP_QSTR_API), MP_ROM_INT(TC_API) },
 };

@@ -1,7 +1,8 @@
-"""The answers a board's C core prints (texel.wire.say: each float32 as its
-bits, `<bits>j`) read back on the host (texelpad.link.protocol
-floats_from_bits): every float32 comes back as the shortest decimal that is
-that float32 again - numpy's float32 repr - and nothing else changes."""
+"""The link's frames for the board's standing reader (protocol.staged_frame),
+and the answers a board's C core prints (texel.wire.say: each float32 as its
+bits, `<bits>j`) read back on the host (protocol.floats_from_bits): every
+float32 comes back as the shortest decimal that is that float32 again -
+numpy's float32 repr - and nothing else changes."""
 import ast
 import random
 import struct
@@ -45,3 +46,26 @@ def test_floats_from_bits_walks_an_answer_and_keeps_the_rest():
 def test_a_complex_that_is_no_float_s_bits_is_refused(bad):
     with pytest.raises(ValueError, match="not a float's bits"):
         floats_from_bits(ast.literal_eval(bad))
+
+
+def test_a_frame_is_one_json_header_line_and_the_scenes_json():
+    """protocol.staged_frame (texel.wire.stand's frames): a header of plain JSON
+    on one line - the function, the data's byte count, the upload slots, the
+    other arguments, where the scene goes, the keyword arguments - then the
+    scene's JSON, UTF-8 (its byte count, not its characters); what cannot
+    cross the link is refused as staged_call refuses it."""
+    import json
+
+    from texelpad.link.protocol import LiteralError, scene_text, staged_frame
+    scene = {"name": "café\nline", "regions": [{"start_mm": 0, "end_mm": 10, "texture": {
+        "kind": "constant", "level": 0.5}}]}
+    head, data = staged_frame("start", ["pico", scene], 1, {0: 2}, {"realtime": True})
+    assert head.endswith(b"\n") and head.count(b"\n") == 1 and b"\x03" not in head + data
+    assert json.loads(head) == ["start", len(data), [[0, 2]], ["pico"], 1, {"realtime": True}]
+    assert data == scene_text(scene).encode("utf-8") and len(data) > len(scene_text(scene))
+    assert json.loads(data) == scene
+    for bad in ({"regions": [], "x": float("nan")}, {"regions": [], "x": object()}):
+        with pytest.raises(LiteralError):
+            staged_frame("pushed", [bad], 0)
+    with pytest.raises(LiteralError):
+        staged_frame("pushed", [scene, float("inf")], 0)
