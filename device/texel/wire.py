@@ -166,11 +166,16 @@ def reply(func, text, fill=(), args=(), scene_at=0, kwargs=None):
 
 
 def _said(r):
-    """say(r), then the collection the push left due (reply's, stand's)."""
-    global replied_us, tidy_us
+    """say(r), then the collection the push left due (reply's)."""
     say(r)
-    replied_us = t = compat.ticks_us()
     r = None
+    _collect()
+
+
+def _collect():
+    """app.tidy() after an answer, timed (bench/firmware.py)."""
+    global replied_us, tidy_us
+    replied_us = t = compat.ticks_us()
     app.tidy()
     tidy_us = compat.ticks_diff(compat.ticks_us(), t)
 
@@ -181,8 +186,8 @@ def _said(r):
 # RP2040, most of it the scene's JSON as a string literal). stand() is one
 # command the link runs once and then talks to as data (texelpad.link.transport
 # Link.eval_frame): each request is a frame of a header line, JSON
-# [func, n, fill, args, scene_at, kwargs], and n bytes of the scene's JSON;
-# reply() runs it and prints its one answer line; nothing is compiled. Any
+# [n, func, fill, args, scene_at, kwargs], and n bytes of the scene's JSON;
+# staged() runs it and say() prints its one answer line; nothing is compiled. Any
 # other byte where a frame begins (the link's empty line) ends it: the raw REPL again.
 # Ctrl-C (mpremote, Thonny's Stop, the link's resync) ends it too, as it ends any
 # command: what plays goes on playing (the refresh is an interrupt). Only where
@@ -190,38 +195,59 @@ def _said(r):
 # drops what its buffer cannot hold while the board collects).
 STAND_MARK = "\x1etexel-stand\n"     # what stand() prints first (stdout makes it \r\n)
 read_us = None      # ticks_us when stand() had read a frame's last byte (bench/firmware.py)
+# stand()'s answer when the answer's own text found no room (allocates nothing)
+NO_ANSWER = "('raise', 'MemoryError: no room on the board for the answer')"
+NO_ANSWER_ENDED = "('raise', 'MemoryError: no room on the board for the request', 'ended')"
 
 
 def stand():
-    """Answer the link's frames until a line that is not one (the comment
-    above): each with one line, ('raise', its text) for an exception other than
-    a refusal, and the reader goes on; Ctrl-C ends it."""
+    """Answer the link's frames until a byte that does not begin one (the
+    comment above): each with one line - ('raise', its text) for an exception
+    other than a refusal, and the reader goes on; ('raise', its text, 'ended')
+    where a frame could not be read to its end (no room for its header), and
+    the reader has ended. Ctrl-C ends it. Nothing here may end it otherwise
+    while the link thinks it reads: on a stock Pico's heap a push's own
+    allocations fail (tests/firmware/test_firmware_pico.py sends a frame too
+    large for the heap)."""
     global read_us
     rd = sys.stdin.buffer
+    one = bytearray(1)                      # the first byte, read without allocating
+    sink = bytearray(64)                    # a frame's data where there is no room for it
     sys.stdout.write(STAND_MARK)
     while True:
-        # the first byte alone: anything but a frame's "[" (the link's empty line,
-        # another tool's "\r" before its Ctrl-C and Ctrl-A) ends the reader at once,
-        # leaving what follows to the raw REPL - a readline() would take a Ctrl-A
-        # that came with the Ctrl-C before the interrupt is raised, and the tool
-        # would wait for its banner in vain
-        line = rd.read(1)
-        if line != b"[":
+        if rd.readinto(one) != 1 or one[0] != 0x5B:        # "["
             return
-        line += rd.readline()
+        n = -1                              # the data's byte count, once the header says it
         try:
-            func, n, fill, args, scene_at, kwargs = json.loads(line)
+            line = rd.readline()
+            n = int(line[:line.index(b",")])
+            _, func, fill, args, scene_at, kwargs = json.loads(b"[" + line)
             line = rd.read(n)
+            n = 0
             read_us = compat.ticks_us()
             r = staged(func, line, fill, args, scene_at, kwargs)
         except Exception as e:              # not Ctrl-C (KeyboardInterrupt): that ends it
-            r = ("raise", "%s: %s" % (type(e).__name__, e))
+            line = None
+            while n > 0:                    # the data not read: read past it, in step again
+                n -= rd.readinto(sink, min(n, 64))
+            try:
+                r = ("raise", "%s: %s" % (type(e).__name__, e)) + (("ended",) if n < 0 else ())
+            except Exception:
+                r = None
         line = None
         try:
-            _said(r)                        # one line, whatever came
-        except Exception:                   # after it (the collection): the reader goes on
-            pass
+            if r is None:
+                raise MemoryError
+            say(r)                          # one line, whatever came
+        except Exception:                   # no block for its text (a stock Pico's heap):
+            print(NO_ANSWER_ENDED if n < 0 else NO_ANSWER)  # a line all the same
+        if n < 0:
+            return                          # the header cut: the link resyncs
         r = None
+        try:
+            _collect()
+        except Exception:                   # after the line: the reader goes on
+            pass
 
 
 def upload_begin(sizes):

@@ -437,8 +437,8 @@ def test_the_c_core_writes_answers_as_repr_with_floats_as_their_bits(pico):
 
 def test_pushes_go_to_the_standing_reader_and_every_other_use_still_finds_the_repl(pico):
     """On an RP2040 a push is a frame to texel.wire.stand() (no compile on the
-    board): pushes in a row stay in it, a refusal and a board-side exception
-    are answered there and it reads on, any other exchange ends it first, and a
+    board): pushes in a row stay in it, a refusal, a board-side exception and
+    a frame too large for the heap are answered there and it reads on, any other exchange ends it first, and a
     host that vanished while it stood leaves the next tool - a plain mpremote
     exec, texelpad's link - a REPL, with the display still playing."""
     from support.vboard import mpremote
@@ -462,6 +462,11 @@ def test_pushes_go_to_the_standing_reader_and_every_other_use_still_finds_the_re
         # a frame calling pushed with two arguments too many: the board's TypeError, answered
         with pytest.raises(BoardError, match="TypeError"):
             b.link.eval_frame(*protocol.staged_frame("pushed", [scene(4.0), 1, 2], 0), 60)
+        assert b.link.standing
+        # a frame whose data has no room on the heap (200,000 bytes): the board reads
+        # past it, answers the MemoryError and reads on
+        with pytest.raises(BoardError, match="MemoryError"):
+            b.link.eval_frame(b'[200000,"pushed",[],[],0,null]\n', b" " * 200000, 120)
         assert b.link.standing
         st = b.push(scene(4.5))
         assert st["scene"]["regions"][0]["pitch_db"] == 4.5

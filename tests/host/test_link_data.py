@@ -50,7 +50,7 @@ def test_a_complex_that_is_no_float_s_bits_is_refused(bad):
 
 def test_a_frame_is_one_json_header_line_and_the_scenes_json():
     """protocol.staged_frame (texel.wire.stand's frames): a header of plain JSON
-    on one line - the function, the data's byte count, the upload slots, the
+    on one line - the data's byte count, the function, the upload slots, the
     other arguments, where the scene goes, the keyword arguments - then the
     scene's JSON, UTF-8 (its byte count, not its characters); what cannot
     cross the link is refused as staged_call refuses it."""
@@ -61,7 +61,8 @@ def test_a_frame_is_one_json_header_line_and_the_scenes_json():
         "kind": "constant", "level": 0.5}}]}
     head, data = staged_frame("start", ["pico", scene], 1, {0: 2}, {"realtime": True})
     assert head.endswith(b"\n") and head.count(b"\n") == 1 and b"\x03" not in head + data
-    assert json.loads(head) == ["start", len(data), [[0, 2]], ["pico"], 1, {"realtime": True}]
+    assert json.loads(head) == [len(data), "start", [[0, 2]], ["pico"], 1, {"realtime": True}]
+    assert head.startswith(b"[%d," % len(data))            # the count first, as the board reads it
     assert data == scene_text(scene).encode("utf-8") and len(data) > len(scene_text(scene))
     assert json.loads(data) == scene
     for bad in ({"regions": [], "x": float("nan")}, {"regions": [], "x": object()}):

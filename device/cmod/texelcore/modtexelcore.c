@@ -9,9 +9,9 @@
 #define TC_FREE(ptr, bytes) m_del(uint8_t, ptr, bytes)
 #define TC_ARRAY_TYPE (&mp_type_array)
 #define TC_DICT_TYPE (&mp_type_dict)
-#define TC_FIRMWARE 1              // the firmware-only functions (scene_json)
 
 #include "texelcore_api.h"
+#include "texelcore_fw.h"            // the firmware-only functions (scene_json)
 
 static const mp_rom_map_elem_t texelcore_globals_table[] = {
     { MP_ROM_QSTR(MP_QSTR___name__), MP_ROM_QSTR(MP_QSTR__texelcore) },

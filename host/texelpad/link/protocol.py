@@ -334,16 +334,17 @@ def staged_frame(func: str, args: Sequence[Any], scene_at: int,
                  ) -> tuple[bytes, bytes]:
     """staged_call() as a frame for the board's standing reader
     (texel.wire.stand): (the header line, the scene's JSON as bytes). The
-    header is JSON [func, its byte count, fill, the other args, scene_at,
-    kwargs]: data the board's json module reads, never code; the same checks
-    as staged_call (literal(), scene_text())."""
+    header is JSON [the data's byte count, func, fill, the other args,
+    scene_at, kwargs] (the count first: the board reads past the data by it
+    where it has no room for the rest): data the board's json module reads,
+    never code; the same checks as staged_call (literal(), scene_text())."""
     rest = [a for k, a in enumerate(args) if k != scene_at]
     fill = sorted([int(i), int(slot)] for i, slot in (slots or {}).items())
     literal(rest)
     literal(kwargs)
     data = scene_text(args[scene_at]).encode("utf-8")
     try:
-        head = json.dumps([func, len(data), fill, plain(rest), int(scene_at),
+        head = json.dumps([len(data), func, fill, plain(rest), int(scene_at),
                            plain(kwargs) if kwargs else None],
                           ensure_ascii=False, allow_nan=False, separators=(",", ":"))
     except (TypeError, ValueError) as e:

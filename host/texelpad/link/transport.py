@@ -706,7 +706,11 @@ class Link:
             value = protocol.floats_from_bits(value) if "j" in out else value
         except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
             raise LinkError("unexpected answer from %s: %r" % (self.port, out[-200:])) from None
-        if type(value) is tuple and len(value) == 2 and value[0] == "raise":
+        if type(value) is tuple and len(value) in (2, 3) and value[0] == "raise":
+            if len(value) == 3:
+                # the board could not read the frame to its end and its reader ended:
+                # what is left of the frame waits at the raw REPL's prompt (Ctrl-A clears it)
+                self.resync()
             raise BoardError(str(value[1]))
         return value
 
