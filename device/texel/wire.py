@@ -102,7 +102,7 @@ _uploads = []
 
 
 STAGED = ("push", "start", "pushed")     # what staged() calls (app's functions)
-# the firmware's C reader of a scene's JSON (texelcore_api.h scene_json: json.loads's
+# the firmware's C reader of a scene's JSON (texelcore_fw.h scene_json: json.loads's
 # objects; 16 texel regions' 1,902 bytes in 3.9 ms, json.loads 7.6, on the emulated
 # RP2040), else None
 _json_c = getattr(compat.core(), "scene_json", None)
@@ -185,8 +185,9 @@ def _collect():
 # compiles what it is sent: 1.8-8.6 ms for the bench's scenes on the emulated
 # RP2040, most of it the scene's JSON as a string literal). stand() is one
 # command the link runs once and then talks to as data (texelpad.link.transport
-# Link.eval_frame): each request is a frame of a header line, JSON
-# [n, func, fill, args, scene_at, kwargs], and n bytes of the scene's JSON;
+# Link.eval_frame): each request is a frame: "[", the data's byte count n, ",",
+# the header's h, ",", h bytes of JSON [func, fill, args, scene_at, kwargs],
+# then n bytes of the scene's JSON;
 # staged() runs it and say() prints its one answer line; nothing is compiled. Any
 # other byte where a frame begins (the link's empty line) ends it: the raw REPL again.
 # Ctrl-C (mpremote, Thonny's Stop, the link's resync) ends it too, as it ends any
@@ -197,52 +198,72 @@ STAND_MARK = "\x1etexel-stand\n"     # what stand() prints first (stdout makes i
 read_us = None      # ticks_us when stand() had read a frame's last byte (bench/firmware.py)
 # stand()'s answer when the answer's own text found no room (allocates nothing)
 NO_ANSWER = "('raise', 'MemoryError: no room on the board for the answer')"
-NO_ANSWER_ENDED = "('raise', 'MemoryError: no room on the board for the request', 'ended')"
+BAD_FRAME = "('raise', 'stand: a frame without its byte counts', 'ended')"
+
+
+def _count(rd, one):
+    """The decimal digits up to a comma, read a byte at a time (nothing
+    allocated): a frame's byte counts. -1 for anything else."""
+    n = 0
+    while True:
+        rd.readinto(one)
+        c = one[0]
+        if c == 0x2C:                       # ","
+            return n
+        if not 0x30 <= c <= 0x39 or n > 10000000:
+            return -1
+        n = n * 10 + c - 0x30
 
 
 def stand():
     """Answer the link's frames until a byte that does not begin one (the
-    comment above): each with one line - ('raise', its text) for an exception
-    other than a refusal, and the reader goes on; ('raise', its text, 'ended')
-    where a frame could not be read to its end (no room for its header), and
-    the reader has ended. Ctrl-C ends it. Nothing here may end it otherwise
-    while the link thinks it reads: on a stock Pico's heap a push's own
-    allocations fail (tests/firmware/test_firmware_pico.py sends a frame too
-    large for the heap)."""
+    comment above): each with exactly one line, ('raise', its text) for an
+    exception other than a refusal - no room for its header or data included:
+    they are read past by their counts - and the reader goes on; a frame whose
+    counts are not digits is answered ('raise', text, 'ended') and ends it (the
+    link resyncs). Ctrl-C ends it. Nothing else may end it while the link
+    thinks it reads: on a stock Pico's heap a push's own allocations fail
+    (tests/firmware/test_firmware_pico.py sends a frame too large for the heap)."""
     global read_us
     rd = sys.stdin.buffer
-    one = bytearray(1)                      # the first byte, read without allocating
-    sink = bytearray(64)                    # a frame's data where there is no room for it
+    one = bytearray(1)                      # a byte, read without allocating
+    sink = bytearray(64)                    # what is read past where there is no room
     sys.stdout.write(STAND_MARK)
     while True:
         if rd.readinto(one) != 1 or one[0] != 0x5B:        # "["
             return
-        n = -1                              # the data's byte count, once the header says it
+        n = _count(rd, one)                 # the data's bytes
+        h = _count(rd, one) if n >= 0 else -1               # the header's
+        if h < 0:
+            print(BAD_FRAME)
+            return
+        r = None
         try:
-            line = rd.readline()
-            n = int(line[:line.index(b",")])
-            _, func, fill, args, scene_at, kwargs = json.loads(b"[" + line)
-            line = rd.read(n)
+            head = bytearray(h)             # allocated before reading: a failure here
+            rd.readinto(head)               # leaves the bytes to read past
+            h = 0
+            func, fill, args, scene_at, kwargs = json.loads(head)
+            head = bytearray(n)
+            rd.readinto(head)
             n = 0
             read_us = compat.ticks_us()
-            r = staged(func, line, fill, args, scene_at, kwargs)
+            r = staged(func, head, fill, args, scene_at, kwargs)
         except Exception as e:              # not Ctrl-C (KeyboardInterrupt): that ends it
-            line = None
-            while n > 0:                    # the data not read: read past it, in step again
+            head = None
+            n += h
+            while n > 0:                    # what was not read: read past it, in step again
                 n -= rd.readinto(sink, min(n, 64))
             try:
-                r = ("raise", "%s: %s" % (type(e).__name__, e)) + (("ended",) if n < 0 else ())
+                r = ("raise", "%s: %s" % (type(e).__name__, e))
             except Exception:
                 r = None
-        line = None
+        head = None
         try:
             if r is None:
                 raise MemoryError
             say(r)                          # one line, whatever came
         except Exception:                   # no block for its text (a stock Pico's heap):
-            print(NO_ANSWER_ENDED if n < 0 else NO_ANSWER)  # a line all the same
-        if n < 0:
-            return                          # the header cut: the link resyncs
+            print(NO_ANSWER)                # a line all the same
         r = None
         try:
             _collect()

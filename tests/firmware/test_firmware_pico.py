@@ -466,7 +466,7 @@ def test_pushes_go_to_the_standing_reader_and_every_other_use_still_finds_the_re
         # a frame whose data has no room on the heap (200,000 bytes): the board reads
         # past it, answers the MemoryError and reads on
         with pytest.raises(BoardError, match="MemoryError"):
-            b.link.eval_frame(b'[200000,"pushed",[],[],0,null]\n', b" " * 200000, 120)
+            b.link.eval_frame(b'[200000,23,["pushed",[],[],0,null]', b" " * 200000, 120)
         assert b.link.standing
         st = b.push(scene(4.5))
         assert st["scene"]["regions"][0]["pitch_db"] == 4.5
@@ -549,7 +549,7 @@ def _json_cases(seed):
     texts.append(("[" * 20 + "1" + "]" * 20, True))
     texts.append((' { "a" : [ 1 , 2.5e3 , -3E-2 ] , "b" : "x" } \r\n', True))
     for t in ['"\\u00e9"', '{"a" 1}', "[1 2]", '{"a":1,}', "[1,,2]", "{1:2}", "[" * 30 + "]" * 30,
-              "", "[", '"abc', "tru", "nul", "[1]x", "{}}"]:
+              "", "[", '"abc', "tru", "nul", "[1]x", "{}}", '["a\x00b"]', '["a\\\x00"]']:
         texts.append((t, False))
     for t in ['{"a":1.2.3}', "[1e5e5]", "-", "[--1]", '{"b":1-2}']:
         texts.append((t, True))                     # the same ValueError from both

@@ -48,21 +48,23 @@ def test_a_complex_that_is_no_float_s_bits_is_refused(bad):
         floats_from_bits(ast.literal_eval(bad))
 
 
-def test_a_frame_is_one_json_header_line_and_the_scenes_json():
-    """protocol.staged_frame (texel.wire.stand's frames): a header of plain JSON
-    on one line - the data's byte count, the function, the upload slots, the
-    other arguments, where the scene goes, the keyword arguments - then the
-    scene's JSON, UTF-8 (its byte count, not its characters); what cannot
-    cross the link is refused as staged_call refuses it."""
+def test_a_frame_is_its_counts_a_json_header_and_the_scenes_json():
+    """protocol.staged_frame (texel.wire.stand's frames): "[", the data's byte
+    count, ",", the header's, ",", the header - plain JSON: the function, the
+    upload slots, the other arguments, where the scene goes, the keyword
+    arguments - then the scene's JSON, UTF-8 (counted in bytes, not
+    characters), no control byte anywhere (a Ctrl-C would interrupt the board);
+    what cannot cross the link is refused as staged_call refuses it."""
     import json
 
     from texelpad.link.protocol import LiteralError, scene_text, staged_frame
     scene = {"name": "café\nline", "regions": [{"start_mm": 0, "end_mm": 10, "texture": {
         "kind": "constant", "level": 0.5}}]}
-    head, data = staged_frame("start", ["pico", scene], 1, {0: 2}, {"realtime": True})
-    assert head.endswith(b"\n") and head.count(b"\n") == 1 and b"\x03" not in head + data
-    assert json.loads(head) == [len(data), "start", [[0, 2]], ["pico"], 1, {"realtime": True}]
-    assert head.startswith(b"[%d," % len(data))            # the count first, as the board reads it
+    head, data = staged_frame("start", ["pico", scene], 1, {0: 2}, {"realtime": "é"})
+    n, h, header = head[1:].split(b",", 2)
+    assert head[:1] == b"[" and int(n) == len(data) and int(h) == len(header)
+    assert json.loads(header) == ["start", [[0, 2]], ["pico"], 1, {"realtime": "é"}]
+    assert not any(b < 0x20 for b in head + data)
     assert data == scene_text(scene).encode("utf-8") and len(data) > len(scene_text(scene))
     assert json.loads(data) == scene
     for bad in ({"regions": [], "x": float("nan")}, {"regions": [], "x": object()}):

@@ -113,11 +113,11 @@ static mp_obj_t tc_js_value(tc_js_t *j, int depth) {
         // the text up to the closing quote: taken as it is when it has no escape
         // (the common case), else copied with modjson's escapes
         const char *s = ++j->p;
-        while (j->p < j->end && *j->p != '"' && *j->p != '\\') {
+        while (j->p < j->end && *j->p != '"' && *j->p != '\\' && *j->p != 0) {
             j->p++;
         }
-        if (j->p >= j->end) {
-            return MP_OBJ_NULL;
+        if (j->p >= j->end || *j->p == 0) {
+            return MP_OBJ_NULL;                 // a NUL: modjson's end of text (json.loads's)
         }
         if (*j->p == '"') {
             return tc_js_str(s, (size_t)(j->p++ - s));
@@ -128,7 +128,7 @@ static mp_obj_t tc_js_value(tc_js_t *j, int depth) {
         while (j->p < j->end && *j->p != '"') {
             char ch = *j->p;
             if (ch == '\\') {
-                if (++j->p >= j->end) {
+                if (++j->p >= j->end || *j->p == 0) {
                     break;
                 }
                 ch = *j->p;
@@ -142,10 +142,13 @@ static mp_obj_t tc_js_value(tc_js_t *j, int depth) {
                     default: break;                                     // \" \\ \/: itself
                 }
             }
+            if (ch == 0) {
+                break;
+            }
             vstr_add_byte(&vstr, (byte)ch);
             j->p++;
         }
-        if (j->p >= j->end) {
+        if (j->p >= j->end || *j->p != '"') {  // the end, or a NUL: json.loads's to read
             vstr_clear(&vstr);
             return MP_OBJ_NULL;
         }

@@ -205,18 +205,27 @@ HELLO_LOADED = HELLO.replace(
 def call(module: str, func: str, args: Sequence[Any] = (), kwargs: dict | None = None) -> str:
     """`module.func(*args, **kwargs)`, answering ('ok', value) or ('err', the
     device's ValueError text), printed by texel.wire.say (floats as their bits
-    where the board's C core writes it: floats_from_bits)."""
+    where the board's C core writes it: floats_from_bits; repr() on an image
+    older than protocol 3, which deploy still talks to)."""
     argtext = ", ".join([literal(a) for a in args] + (["**" + literal(kwargs)] if kwargs else []))
     return ("import %s as _m\ntry:\n _r = ('ok', _m.%s(%s))\nexcept ValueError as _e:\n"
-            " _r = ('err', str(_e))\nimport texel.wire as _m\n_m.say(_r)\n_m = _r = None"
-            % (module, func, argtext))
+            " _r = ('err', str(_e))\nimport texel.wire as _m\n_m = getattr(_m, 'say', None)\n"
+            "_m(_r) if _m else print(repr(_r))\n_m = _r = None" % (module, func, argtext))
 
 
 def _f32(bits: int) -> float:
     """The float32 with these bits, as the shortest decimal that is that
-    float32 again (CPython's float of it): 6.3, not 6.300000190734863."""
+    float32 again (CPython's float of it): 6.3, not 6.300000190734863 -
+    numpy's float32 str(), or where there is no numpy the nearest decimal of
+    the fewest digits that round-trips (at a power of two, where the float32's
+    rounding interval is lopsided, a digit longer than numpy's now and then)."""
     packed = struct.pack("<I", bits)
     x = struct.unpack("<f", packed)[0]
+    try:
+        import numpy as np
+        return float(str(np.frombuffer(packed, dtype="<f4")[0]))
+    except ImportError:
+        pass
     if math.isfinite(x):
         for digits in range(1, 10):         # 9 significant digits always round-trip
             y = float("%.*g" % (digits, x))
@@ -239,7 +248,7 @@ def floats_from_bits(value: Any) -> Any:
             raise ValueError("not a float's bits: %r" % (value,))
         return _f32(int(b))
     if isinstance(value, dict):
-        return {k: floats_from_bits(v) for k, v in value.items()}
+        return {floats_from_bits(k): floats_from_bits(v) for k, v in value.items()}
     if isinstance(value, list):
         return [floats_from_bits(v) for v in value]
     if isinstance(value, tuple):
@@ -333,23 +342,25 @@ def staged_frame(func: str, args: Sequence[Any], scene_at: int,
                  slots: dict[int, int] | None = None, kwargs: dict | None = None
                  ) -> tuple[bytes, bytes]:
     """staged_call() as a frame for the board's standing reader
-    (texel.wire.stand): (the header line, the scene's JSON as bytes). The
-    header is JSON [the data's byte count, func, fill, the other args,
-    scene_at, kwargs] (the count first: the board reads past the data by it
-    where it has no room for the rest): data the board's json module reads,
-    never code; the same checks as staged_call (literal(), scene_text())."""
+    (texel.wire.stand): (its head, the scene's JSON as bytes). The head is
+    "[", the data's byte count, ",", the header's byte count, ",", then the
+    header, JSON [func, fill, the other args, scene_at, kwargs]: data the
+    board's json module reads, never code. The counts come first so that the
+    board can read past both where it has no room for them. The same checks
+    as staged_call (literal(), scene_text())."""
     rest = [a for k, a in enumerate(args) if k != scene_at]
     fill = sorted([int(i), int(slot)] for i, slot in (slots or {}).items())
     literal(rest)
     literal(kwargs)
     data = scene_text(args[scene_at]).encode("utf-8")
     try:
-        head = json.dumps([len(data), func, fill, plain(rest), int(scene_at),
-                           plain(kwargs) if kwargs else None],
-                          ensure_ascii=False, allow_nan=False, separators=(",", ":"))
+        header = json.dumps([func, fill, plain(rest), int(scene_at),
+                             plain(kwargs) if kwargs else None],
+                            ensure_ascii=False, allow_nan=False, separators=(",", ":"))
     except (TypeError, ValueError) as e:
         raise LiteralError("request: not JSON data: %s" % e) from None
-    return head.encode("utf-8") + b"\n", data
+    hb = header.encode("utf-8")
+    return b"[%d,%d," % (len(data), len(hb)) + hb, data
 
 
 def render_u16(params: dict[str, Any], engine: str | None) -> str:

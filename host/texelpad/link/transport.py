@@ -479,6 +479,8 @@ RETRY_CTRL_A_S = 1.5
 STAND_MARK = b"\x1etexel-stand"
 # The one command that starts it
 STAND = b"__import__('texel.wire').wire.stand()"
+# Bytes of a frame per write (a write must end within the port's write_timeout)
+FRAME_PIECE = 1024
 # The link's last command on a CircuitPython board that plays (Link.close(serve=True))
 HAND_OVER = b"import texel.app as _a\n_a.serve(False, True)\n_a = None"
 
@@ -682,16 +684,19 @@ class Link:
                     redirect_stdout(io.StringIO()):
                 if not self.standing:
                     self._stand()
-                self.t.serial.write(head + data)
+                frame = head + data
+                for i in range(0, len(frame), FRAME_PIECE):    # each write within its timeout
+                    self.t.serial.write(frame[i:i + FRAME_PIECE])
                 buf = bytearray()
                 while not buf.endswith(b"\n"):
                     c = self.t.serial.read(1)
                     if c == b"\x04":           # the reader itself ended: its error text
-                        self.standing = False
                         self.t.late_error = ""
                         self.t.tail = b"\x04"
                         self.t.settle()
-                        raise BoardError(self.t.late_error or "the board's reader ended")
+                        err = self.t.late_error
+                        self.resync()           # what it did not read is at the raw REPL's prompt
+                        raise BoardError(err or "the board's reader ended")
                     buf += c
         except TransportError as e:
             raise LinkTimeout("%s stopped answering (%s); the board may have reset or been "
@@ -705,11 +710,15 @@ class Link:
             value = ast.literal_eval(out)
             value = protocol.floats_from_bits(value) if "j" in out else value
         except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
-            raise LinkError("unexpected answer from %s: %r" % (self.port, out[-200:])) from None
-        if type(value) is tuple and len(value) in (2, 3) and value[0] == "raise":
-            if len(value) == 3:
-                # the board could not read the frame to its end and its reader ended:
-                # what is left of the frame waits at the raw REPL's prompt (Ctrl-A clears it)
+            value = None
+        if type(value) is not tuple or len(value) not in (2, 3) or \
+                value[0] not in ("ok", "err", "raise"):
+            # not a frame's answer (a line something else printed: an interrupt handler's
+            # traceback): the answers are out of step with the frames - start afresh
+            self.resync()
+            raise LinkError("unexpected answer from %s: %r" % (self.port, out[-200:]))
+        if value[0] == "raise":
+            if len(value) == 3:         # the reader ended (a frame it could not read)
                 self.resync()
             raise BoardError(str(value[1]))
         return value

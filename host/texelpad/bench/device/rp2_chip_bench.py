@@ -28,10 +28,15 @@ def _tpb_now():
 
 
 def _tpb_sleep_until(t_us):
+    # the busy wait on ticks_us (small ints): _tpb_now's 64-bit ints are an
+    # allocation each, and a collection in the wait can outlast a hold's last
+    # 10 ms on a stock Pico's heap (a CI run read the 12th hold 20-30 ms late,
+    # in the next sweep)
     d = t_us - _tpb_now()
+    end = time.ticks_add(time.ticks_us(), d)
     if d > 2000:
         time.sleep_ms((d - 1000) // 1000)
-    while _tpb_now() < t_us:
+    while time.ticks_diff(end, time.ticks_us()) > 0:
         pass
 
 
@@ -88,6 +93,8 @@ def _tpb_holds(period_us, first_us, step_us, n, at_us, cc_addr, cc_shift):
     # at_us into each plateau, what plays: (t_us, position, amplitude, duty,
     # the slice's CC register as the PWM latches it).
     r = _tpb_app._rt.refresh
+    import gc
+    gc.collect()                    # none due during the holds
     t = _tpb_now()
     base = (t // period_us) * period_us + first_us
     if base + at_us <= t + 2000:
