@@ -648,14 +648,8 @@ class Link:
         data = code.encode("utf-8")
         self.sent += len(data)
         run = self.t.exec_reply_first if reply_first else self.t.exec_raw
-        try:
+        with self._answering():
             out, err = run(data, timeout=self.timeout if timeout is None else timeout)
-        except TransportError as e:
-            raise LinkTimeout("%s stopped answering (%s); the board may have reset or been "
-                              "unplugged" % (self.port, e)) from None
-        except (serial.SerialException, OSError) as e:
-            raise LinkTimeout("%s: the serial link failed (%s); was the board unplugged?"
-                              % (self.port, e)) from None
         self.received += len(out) + len(err)
         if err:
             raise BoardError(err.decode("utf-8", "replace"))
@@ -679,7 +673,7 @@ class Link:
         self.commands += 1
         t = self.timeout if timeout is None else timeout
         self.sent += len(head) + len(data)
-        try:
+        with self._answering():
             with self.t.deadline(t + (len(head) + len(data)) / MIN_BYTES_PER_S, t), \
                     redirect_stdout(io.StringIO()):
                 if not self.standing:
@@ -698,12 +692,6 @@ class Link:
                         self.resync()           # what it did not read is at the raw REPL's prompt
                         raise BoardError(err or "the board's reader ended")
                     buf += c
-        except TransportError as e:
-            raise LinkTimeout("%s stopped answering (%s); the board may have reset or been "
-                              "unplugged" % (self.port, e)) from None
-        except (serial.SerialException, OSError) as e:
-            raise LinkTimeout("%s: the serial link failed (%s); was the board unplugged?"
-                              % (self.port, e)) from None
         self.received += len(buf)
         out = bytes(buf).decode("utf-8", "replace").strip()
         try:
@@ -747,11 +735,17 @@ class Link:
         if not self.standing:
             return
         self.standing = False
+        with self._answering(), redirect_stdout(io.StringIO()):
+            self.t.serial.write(b"\n")
+            self.t.tail = b""
+            self.t.settle()
+
+    @contextmanager
+    def _answering(self) -> Iterator[None]:
+        """The port's failures in the block (a deadline passed, the port gone) as
+        LinkTimeout, in the words every exchange uses."""
         try:
-            with redirect_stdout(io.StringIO()):
-                self.t.serial.write(b"\n")
-                self.t.tail = b""
-                self.t.settle()
+            yield
         except TransportError as e:
             raise LinkTimeout("%s stopped answering (%s); the board may have reset or been "
                               "unplugged" % (self.port, e)) from None
