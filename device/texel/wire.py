@@ -162,18 +162,12 @@ def reply(func, text, fill=(), args=(), scene_at=0, kwargs=None):
     the push left due (app.tidy()): the host's link takes the line and goes
     on (texelpad.link.transport: reply_first) while the board collects, so
     the board answers before any gc.collect (5-15 ms on an RP2040)."""
-    _said(staged(func, text, fill, args, scene_at, kwargs))
-
-
-def _said(r):
-    """say(r), then the collection the push left due (reply's)."""
-    say(r)
-    r = None
+    say(staged(func, text, fill, args, scene_at, kwargs))
     _collect()
 
 
 def _collect():
-    """app.tidy() after an answer, timed (bench/firmware.py)."""
+    """app.tidy() after an answer (reply's, stand's), timed (bench/firmware.py)."""
     global replied_us, tidy_us
     replied_us = t = compat.ticks_us()
     app.tidy()

@@ -467,6 +467,16 @@ class _Transport(SerialTransport):
 
 # --- the link -----------------------------------------------------------------
 
+def _answer_value(line: str) -> Any:
+    """The value of a board's answer line: a repr() literal, each float as its
+    bits (`<bits>j`) where the board's C core wrote it (protocol.floats_from_bits).
+    ValueError, SyntaxError, TypeError, MemoryError or RecursionError for a line
+    that is not one (TypeError: '{[]: 1}' parses but cannot be built; the others:
+    a line of 100,000 nested operators)."""
+    value = ast.literal_eval(line)
+    return protocol.floats_from_bits(value) if "j" in line else value
+
+
 # What texel.app.serve() (device/texel/serve.py MARK) prints when it starts and
 # before each raw-REPL banner it answers.
 SERVE_MARK = b"\x1etexel-serve\r\n"
@@ -685,18 +695,14 @@ class Link:
                 while not buf.endswith(b"\n"):
                     c = self.t.serial.read(1)
                     if c == b"\x04":           # the reader itself ended: its error text
-                        self.t.late_error = ""
-                        self.t.tail = b"\x04"
-                        self.t.settle()
-                        err = self.t.late_error
+                        err = self._ended_text()
                         self.resync()           # what it did not read is at the raw REPL's prompt
                         raise BoardError(err or "the board's reader ended")
                     buf += c
         self.received += len(buf)
         out = bytes(buf).decode("utf-8", "replace").strip()
         try:
-            value = ast.literal_eval(out)
-            value = protocol.floats_from_bits(value) if "j" in out else value
+            value = _answer_value(out)
         except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
             value = None
         if type(value) is not tuple or len(value) not in (2, 3) or \
@@ -715,17 +721,22 @@ class Link:
         """Start texel.wire.stand() (under the caller's deadline): its mark
         says it reads frames; an error instead (an image without it) raises."""
         self.t.settle()
-        self.t.late_error = ""
         self.t.exec_raw_no_follow(STAND)
         got = b""
         while not (got.endswith(b"\n") and STAND_MARK in got):
             c = self.t.serial.read(1)
             if c == b"\x04":                   # it ended at once: its error text
-                self.t.tail = b"\x04"
-                self.t.settle()
-                raise BoardError(self.t.late_error or "texel.wire.stand() ended at once")
+                raise BoardError(self._ended_text() or "texel.wire.stand() ended at once")
             got = (got + c)[-len(STAND_MARK) - 4:]
         self.standing = True
+
+    def _ended_text(self) -> str:
+        """After the \\x04 that ends a command's output: its error text, read to
+        its own \\x04 (the raw REPL's prompt is left for the next command)."""
+        self.t.late_error = ""
+        self.t.tail = b"\x04"
+        self.t.settle()
+        return self.t.late_error
 
     def _sit(self) -> None:
         """End the standing reader, if it runs (an empty line: stand() returns
@@ -758,12 +769,8 @@ class Link:
         out = self.exec(code, timeout, reply_first).strip()
         last = out.splitlines()[-1] if out else ""
         try:
-            value = ast.literal_eval(last)
-            # floats as their bits (`<bits>j`): the board's C core wrote the answer
-            return protocol.floats_from_bits(value) if "j" in last else value
+            return _answer_value(last)
         except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
-            # TypeError: '{[]: 1}' parses but cannot be built; the others: a
-            # line of 100,000 nested operators
             raise LinkError("unexpected answer from %s: %r" % (self.port, out[-200:])) from None
 
     def call(self, module: str, func: str, *args: Any, timeout: float | None = None,
