@@ -24,7 +24,9 @@ EXTENSIBLE = {"array", "binascii", "bluetooth", "collections", "cryptolib", "err
 # once per boot or per start, never per push or per request: (file, function)
 ALLOWED = {
     ("main.py", "_config"),             # the power-up's /texelpad.json, once
-    ("rom.py", "data_beside"),          # where a module's data file is, at its import
+    ("rom.py", "_beside"),              # where a module's data file is: once per module
+                                        # (data_beside keeps it; a reference push called it
+                                        # twice a region, 2.0 ms each, before it did)
     ("app.py", "default_board"),        # start() without a board name: once per start
     ("compat.py", "console_reader"),    # texel.app.serve (CircuitPython): once per serve
 }

@@ -33,7 +33,7 @@ import math
 from array import array      # at the top: an extensible built-in imported inside a function
 #                              walks sys.path each time (1.64 ms on the emulated RP2040)
 import sys
-from ..compat import float_buffer, u16_buffer
+from ..compat import float_buffer, u16_buffer, ROM
 from .params import DX_MM, LENGTH_MAX
 from .rng import Rng
 
@@ -310,10 +310,19 @@ FLASH_DIR = "ref"
 FLASH_SAMPLES = 19200
 
 
+_FLASH = {}                 # (name, length) -> its view: flash_u16 opens each once
+_FLASH_KEEP = 16            # views kept (a few words each; region lengths vary)
+
+
 def flash_u16(name, length_samples):
     """The map of reference name, length_samples long, as a uint16 view of
-    flash (rom.rom_u16), or None where the image has no flash maps."""
-    from ..compat import ROM
+    flash (rom.rom_u16), or None where the image has no flash maps. Each view
+    is made once: opening it (a path, a stat, an open, a struct) took 2.9 ms
+    of every reference region's push on the emulated Pico, twice a region
+    (its block() and its store())."""
+    v = _FLASH.get((name, length_samples))
+    if v is not None:
+        return v
     if not ROM or name not in STUDY_NAMES or not 1 <= length_samples <= FLASH_SAMPLES:
         return None
     from ..rom import rom_u16, path_beside
@@ -322,7 +331,12 @@ def flash_u16(name, length_samples):
     except NameError:
         return None
     # frozen (texelpad firmware): the ROMFS's maps (rom.data_beside)
-    return rom_u16(path_beside(here, "%s/%s.u16" % (FLASH_DIR, name)), length_samples)
+    v = rom_u16(path_beside(here, "%s/%s.u16" % (FLASH_DIR, name)), length_samples)
+    if v is not None:
+        if len(_FLASH) >= _FLASH_KEEP:
+            _FLASH.clear()
+        _FLASH[(name, length_samples)] = v
+    return v
 
 
 def _swap16(buf, m):
