@@ -343,7 +343,15 @@ def _irq_costs(b: Any, display: dict[str, Any], reps: int, say: Progress) -> dic
         ("texel plan (format 2)", {"regions": [{"start_mm": 0, "end_mm": total, "texture": {
             "kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7, "v": 2}}]}),
         ("brush (RAM map)", brush_scene(display, 3)),
-        # 1,024 values tiled: a 38,400-byte map built in RAM (as a brush's)
+        # a few samples the refresh plays where they are (kinds/samples.py SMALL):
+        # 4 values tiled (K_TILE), and the shipped gradient's 2 stretched (K_STRETCH)
+        ("samples (4 tiled, in place)", {"regions": [{"start_mm": 0, "end_mm": total,
+                                                      "texture": {
+            "kind": "samples", "fit": "tile", "u16": [0, 65535, 30000, 9000]}}]}),
+        ("samples (2 stretched, in place)", {"regions": [{"start_mm": 0, "end_mm": total,
+                                                          "texture": {
+            "kind": "samples", "fit": "stretch", "u16": [0, 65535]}}]}),
+        # 1,024 values tiled (more than SMALL): a 38,400-byte map built in RAM (as a brush's)
         ("samples (1,024 tiled, RAM map)", {"regions": [{"start_mm": 0, "end_mm": total,
                                                          "texture": {
             "kind": "samples", "fit": "tile",

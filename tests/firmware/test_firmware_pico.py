@@ -299,8 +299,9 @@ def test_the_c_core_installs_the_words_the_python_does(pico):
     """A swap's word array W and region table built by the firmware's C core
     (texelcore_api.h install) against the Python's (refresh_fast._install):
     the same words and rows - every kind of region (a constant, a reference
-    map in flash, a texel plan, tiled samples and a 3-sample texel in chunks,
-    the int engine's one-block buffer), 16 texel regions, no scene at all."""
+    map in flash, a texel plan, three samples tiled in place (K_TILE: a plan's
+    5 words), a 3-sample texel in chunks, the int engine's one-block buffer),
+    16 texel regions, no scene at all."""
     import ast
     from texelpad.bench.link import regions16
     with _connect(pico.port) as b:
@@ -319,7 +320,8 @@ def test_the_c_core_installs_the_words_the_python_does(pico):
         out = b.link.exec(_INSTALL_SAME % (cases,), timeout=300)
     got = ast.literal_eval(out.strip().splitlines()[-1])
     assert [g[:3] for g in got] == [(True, False, True)] * len(cases), got
-    assert got[0][3] == 15 + 3 + 5 and got[2][3] > 15 + 5 * 16 - 1, got
+    # W_FIXED, two buffers (the flash map, the chunks), two plans (the texel's, the samples')
+    assert got[0][3] == 15 + 2 + 5 * 2 and got[2][3] > 15 + 5 * 16 - 1, got
 
 
 # On the board: each case (floats given as {"__f": their bits}, an OrderedDict as

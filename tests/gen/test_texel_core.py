@@ -467,8 +467,10 @@ def test_the_c_refresh_is_the_viper_refresh_word_for_word(x64_module):
         {"start_mm": 20, "end_mm": 40, "texture": {"kind": "reference", "name": "4sin"}},
         {"start_mm": 40, "end_mm": 60, "texture": {"kind": "texel", "pitch_db": 6.3,
                                                    "irregularity_db": -12.9, "seed": 7, "v": 2}},
-        {"start_mm": 60, "end_mm": 80, "texture": {"kind": "samples", "fit": "stretch",
+        {"start_mm": 60, "end_mm": 70, "texture": {"kind": "samples", "fit": "stretch",
                                                    "u16": [0, 65535, 100]}},
+        {"start_mm": 70, "end_mm": 80, "texture": {"kind": "samples", "fit": "tile",
+                                                   "u16": [5, 60000, 300, 12345, 65535]}},
         {"start_mm": 85, "end_mm": 101.76, "texture": {"kind": "bump", "width_mm": 8}}]}
     for stm in (False, True):
         # stm: the STM32 path (S_ADC_CS bit 4: DR read, CR2 |= ADON | SWSTART) on a stand-in
@@ -476,8 +478,9 @@ def test_the_c_refresh_is_the_viper_refresh_word_for_word(x64_module):
         code = REFRESH_SCRIPT % {"scene": scene, "n": 6000, "stm": stm, "edges": False}
         info = mpy.run_json(code, exe=toolchain.require_micropython(), heapsize="8M",
                             timeout=300, extra_path=str(x64_module))
-        # every way a region plays: K_CONST, K_BUF, K_PLAN, K_CHUNK (runtime/kinds/__init__.py)
-        assert info["code"] == "native" and info["kinds"] == [0, 1, 2, 3], info
+        # every way a region plays: K_CONST, K_BUF, K_PLAN, K_CHUNK, K_TILE, K_STRETCH
+        # (runtime/kinds/__init__.py)
+        assert info["code"] == "native" and info["kinds"] == [0, 1, 2, 3, 4, 5], info
         assert info["same"] == info["n"], (stm, info)
         if stm:
             assert info["cr2"] == [0x40000001, 0x40000401], info
@@ -501,20 +504,22 @@ def test_the_c_refresh_finds_the_region_the_table_walk_finds(x64_module):
     kinds = [{"kind": "constant", "level": 0.7},
              {"kind": "texel", "pitch_db": 3.1, "irregularity_db": -12.9, "seed": 5, "v": 2},
              {"kind": "samples", "fit": "stretch", "u16": [0, 65535, 100, 40000]},
-             {"kind": "reference", "name": "4sin"}]
+             {"kind": "reference", "name": "4sin"},
+             {"kind": "samples", "fit": "tile", "u16": [7, 65535, 0, 30000, 12]},
+             {"kind": "bump", "width_mm": 2}]
     regions = []
     for k in range(16):
         # a gap of ~1 mm before every region but the first (row 0 starts at 0) and
         # after the last (the sentinel row follows a gap)
         s0 = 0 if k == 0 else round(k * w + 1.0, 3)
         regions.append({"start_mm": s0, "end_mm": round((k + 1) * w - (1.0 if k == 15 else 0.5), 3),
-                        "texture": kinds[k % 4]})
+                        "texture": kinds[k % len(kinds)]})
     info = mpy.run_json(REFRESH_SCRIPT % {"scene": {"regions": regions, "idle_amplitude": 13107},
                                           "n": 400, "stm": False, "edges": True},
                         exe=toolchain.require_micropython(), heapsize="8M", timeout=300,
                         extra_path=str(x64_module))
     assert info["same"] == info["n"], info["first"]
-    assert len(info["rows"]) == 16 and info["kinds"] == [0, 1, 2, 3], info["rows"]
+    assert len(info["rows"]) == 16 and info["kinds"] == [0, 1, 2, 3, 4, 5], info["rows"]
     seen = set(info["seen"])
     # every region's first position, last position and the one past it, met exactly
     for st, en in info["rows"]:

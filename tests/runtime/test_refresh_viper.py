@@ -112,6 +112,8 @@ SCENE_A = ('{"regions": [{"start_mm": 0, "end_mm": 50.88, "texture": {"kind": "r
 SCENE_B = ('{"regions": [{"start_mm": 3, "end_mm": 20, "texture": {"kind": "constant", "level": 0.7}},'
            ' {"start_mm": 25, "end_mm": 40, "texture": {"kind": "samples", "values": [0, 0.5, 1, 0.25]}},'
            ' {"start_mm": 40, "end_mm": 41, "texture": {"kind": "reference", "name": "pink"}},'
+           ' {"start_mm": 45, "end_mm": 58, "texture": {"kind": "samples", "fit": "stretch",'
+           ' "u16": [0, 65535, 9, 40000]}},'
            ' {"start_mm": 60, "end_mm": 99, "texture": {"kind": "texel", "pitch_db": 15,'
            ' "irregularity_db": 0, "seed": 3, "texel_samples": 7}}], "idle_amplitude": 999}')
 

@@ -31,11 +31,13 @@ static const mp_rom_map_elem_t texelcore_globals_table[] = {
     { MP_ROM_QSTR(MP_QSTR_leak_start), MP_ROM_PTR(&tc_leak_start_obj) },
     { MP_ROM_QSTR(MP_QSTR_texel_check), MP_ROM_PTR(&tc_texel_check_obj) },
     { MP_ROM_QSTR(MP_QSTR_region_check), MP_ROM_PTR(&tc_region_check_obj) },
+    { MP_ROM_QSTR(MP_QSTR_regions_check), MP_ROM_PTR(&tc_regions_check_obj) },
     { MP_ROM_QSTR(MP_QSTR_plan), MP_ROM_PTR(&tc_plan_obj) },
     #if MICROPY_FLOAT_IMPL == MICROPY_FLOAT_IMPL_FLOAT
     { MP_ROM_QSTR(MP_QSTR_answer), MP_ROM_PTR(&tc_answer_obj) },
     #endif
     { MP_ROM_QSTR(MP_QSTR_scene_json), MP_ROM_PTR(&tc_scene_json_obj) },
+    { MP_ROM_QSTR(MP_QSTR_heap_hint), MP_ROM_PTR(&tc_heap_hint_obj) },
     { MP_ROM_QSTR(MP_QSTR_BUILD), MP_ROM_QSTR(MP_QSTR_firmware) },
     { MP_ROM_QSTR(MP_QSTR_API), MP_ROM_INT(TC_API) },
 };

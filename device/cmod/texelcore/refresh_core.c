@@ -184,6 +184,43 @@ TC_COLD static const int32_t *tc_row(const int32_t *tab, const int32_t *row, int
     return row;
 }
 
+// A few samples played where they are (kinds/samples.py plan(): the 5 words at
+// sp), out of line (not cold: gcc optimizes a cold function for size): in
+// tc_refresh itself these two kinds cost every other kind 10-20 cycles
+// (registers and branch reach; measured on the emulated Pico).
+// K_TILE (vals, m, R = 65536 // m + 1): vals[o mod m], the mod by reciprocal
+// as K_PLAN's j below offset 32,768. K_STRETCH (vals, A, B, n - 1, C =
+// (B << 17) // (n - 1)): q = o*A + floor(o*B / (n-1)); floor(o*C / 2^17) is
+// that floor or one less (o <= 2^15: the error is below o / 2^17 <= 1/4, and
+// o*C < 2^32), one compare corrects it - no divider in the interrupt.
+TC_RAMFUNC static int32_t tc_few(const uint32_t *w, int32_t kind, const uint32_t *sp, int32_t o) {
+    const uint16_t *v = (const uint16_t *)(tc_base(w) + (uintptr_t)sp[0]);
+    if (kind == 5) {
+        uint32_t u = (uint32_t)o;
+        uint32_t d = sp[3];
+        uint32_t x = u * sp[2];
+        uint32_t f = (u * sp[4]) >> 17;
+        if (x - f * d >= d) {
+            f += 1;
+        }
+        uint32_t q = u * sp[1] + f;
+        v += q >> 15;
+        int32_t a = v[0];
+        return a + RSHR((v[1] - a) * (int32_t)(((q & 0x7FFF) + 1) >> 1), 14);
+    }
+    int32_t m = (int32_t)sp[1];
+    int32_t k;
+    if (LIKELY(o < FAST_O)) {
+        k = o - ((o * (int32_t)sp[2]) >> 16) * m;
+        if (k < 0) {
+            k += m;
+        }
+    } else {
+        k = o % m;
+    }
+    return v[k];
+}
+
 // One telemetry sample into the ring (every S_TEL_EVERY refreshes).
 TC_COLD static void tc_tel(const uint32_t *w, int32_t *s, uint32_t t0, int32_t p, int32_t amp) {
     uintptr_t base = tc_base(w);
@@ -305,10 +342,12 @@ TC_RAMFUNC void tc_refresh(const uint32_t *w) {
             amp = ((const uint16_t *)(base + (uintptr_t)(uint32_t)row[3]))[p - st];
         } else if (kind == 0) {
             amp = row[3];
-        } else {                                // scene.K_CHUNK: the chunks' offsets
+        } else if (kind == 3) {                 // scene.K_CHUNK: the chunks' offsets
             int32_t o = p - st;
             const uint32_t *ct = (const uint32_t *)(base + (uintptr_t)(uint32_t)row[3]);
             amp = ((const uint16_t *)(base + (uintptr_t)ct[o >> 9]))[o & 511];
+        } else {                                // scene.K_TILE, K_STRETCH
+            amp = tc_few(w, kind, (const uint32_t *)(w + row[3]), p - st);
         }
     } else {
         s[S_POS1] = 0;                          // p + 1, p = -1

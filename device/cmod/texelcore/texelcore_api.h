@@ -240,7 +240,8 @@ static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_wave_ll_obj, 10, 10, tc_wave_ll_fn
 // the index of their plan's first word in W (refresh_fast._resolve). bufs:
 // the scene's buffers, each a buffer or a tuple of chunks (K_CHUNK: its chunks'
 // addresses go into chunk_tables, one array('I') for every such buffer, None
-// without any); plans: (t28, d28, L, gain_q14) each, into W_PLAN words.
+// without any); plans: (t28, d28, L, gain_q14) each, into W_PLAN words, or a few
+// samples' 5-tuple (kinds/samples.py plan(): its array's address, then its numbers).
 #define TC_W_FIXED 15           // refresh_fast.W_FIXED = W_BUF0
 #define TC_W_TAB 3
 #define TC_W_PLAN 5
@@ -314,11 +315,18 @@ static mp_obj_t tc_install_fn(size_t n_args, const mp_obj_t *args) {
         size_t n4;
         mp_obj_t *pl;
         mp_obj_get_array(plans[p], &n4, &pl);
+        uint32_t *q = w + TC_W_FIXED + nbuf + TC_W_PLAN * p;
+        if (n4 == 5) {                           // a few samples (kinds/samples.py plan())
+            q[0] = tc_addr(pl[0]);
+            for (size_t i = 1; i < 5; i++) {
+                q[i] = (uint32_t)mp_obj_get_int_truncated(pl[i]);
+            }
+            continue;
+        }
         mp_int_t L = n4 == 4 ? mp_obj_get_int(pl[2]) : 0;
         if (L < 1) {
             mp_raise_ValueError(MP_ERROR_TEXT("install: a plan is (t28, d28, L >= 1, gain)"));
         }
-        uint32_t *q = w + TC_W_FIXED + nbuf + TC_W_PLAN * p;
         q[0] = tc_addr(pl[0]);
         q[1] = tc_addr(pl[1]);
         q[2] = (uint32_t)L;
@@ -327,7 +335,7 @@ static mp_obj_t tc_install_fn(size_t n_args, const mp_obj_t *args) {
     }
     for (size_t r = 0; r + 4 < nt; r += 4) {     // every row but the sentinel
         int32_t kind = tab[r + 2], v = tab[r + 3];
-        if (kind == 2) {                         // scene.K_PLAN
+        if (kind == 2 || kind == 4 || kind == 5) {   // scene.K_PLAN, K_TILE, K_STRETCH
             if (v < 0 || (size_t)v >= nplan) {
                 mp_raise_ValueError(MP_ERROR_TEXT("install: a row names no plan"));
             }
@@ -685,6 +693,67 @@ static mp_obj_t tc_region_check_fn(size_t n_args, const mp_obj_t *args) {
     return mp_obj_new_tuple(5, out);
 }
 static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_region_check_obj, 4, 4, tc_region_check_fn);
+
+// regions_check(regs, lim, positions, dx_um, spec) -> a list, one entry a region,
+// or None (regs not a list or tuple): scene.py _check's loop over the regions in
+// one call - a Python call costs ~20 us on the emulated Pico, and the loop made
+// six a region. Each entry: (region, start, end) when region_check and, for a
+// texture of kind "texel", texel_check(texture, spec) take it - region the
+// canonical {"start_mm", "end_mm", "texture"} dict, made in the order _check
+// makes it; region_check's 5-tuple when only it does (the texture is Python's);
+// None when it does not (Python words the refusal).
+static mp_obj_t tc_regions_check_fn(size_t n_args, const mp_obj_t *args) {
+    (void)n_args;
+    const mp_obj_type_t *t = mp_obj_get_type(args[0]);
+    if (t != &mp_type_list && t != &mp_type_tuple) {
+        return mp_const_none;
+    }
+    size_t n;
+    mp_obj_t *regs;
+    mp_obj_get_array(args[0], &n, &regs);
+    mp_obj_t out = mp_obj_new_list(n, NULL);
+    mp_obj_t *items;
+    size_t n2;
+    mp_obj_get_array(out, &n2, &items);
+    for (size_t i = 0; i < n; i++) {
+        mp_obj_t a[4] = {regs[i], args[1], args[2], args[3]};
+        mp_obj_t f = tc_region_check_fn(4, a);
+        items[i] = f;
+        if (f == mp_const_none) {
+            continue;
+        }
+        size_t n5;
+        mp_obj_t *v;
+        mp_obj_get_array(f, &n5, &v);
+        mp_obj_t tx = v[4];
+        if (mp_obj_get_type(tx) != TC_DICT_TYPE) {
+            continue;
+        }
+        mp_map_t *map = &((mp_obj_dict_t *)MP_OBJ_TO_PTR(tx))->map;
+        int texel = 0;
+        for (size_t j = 0; j < map->alloc; j++) {
+            if (mp_map_slot_is_filled(map, j) && tc_ck_word(map->table[j].key, "kind")) {
+                texel = tc_ck_word(map->table[j].value, "texel");
+                break;
+            }
+        }
+        if (!texel) {
+            continue;
+        }
+        mp_obj_t tex = tc_texel_check_fn(tx, args[4]);
+        if (tex == mp_const_none) {
+            continue;
+        }
+        mp_obj_t d = mp_obj_new_dict(3);
+        mp_obj_dict_store(d, MP_OBJ_NEW_QSTR(MP_QSTR_start_mm), v[0]);
+        mp_obj_dict_store(d, MP_OBJ_NEW_QSTR(MP_QSTR_end_mm), v[1]);
+        mp_obj_dict_store(d, MP_OBJ_NEW_QSTR(MP_QSTR_texture), tex);
+        mp_obj_t r[3] = {d, v[2], v[3]};
+        items[i] = mp_obj_new_tuple(3, r);
+    }
+    return out;
+}
+static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_regions_check_obj, 5, 5, tc_regions_check_fn);
 
 // plan(tex, n, tab) -> (both, count, L, gain_q14), or None: kinds/texel.py
 // plan_of for a canonical format-2 texture (texel_check's or the Python

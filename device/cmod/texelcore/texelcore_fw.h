@@ -200,3 +200,40 @@ static mp_obj_t tc_scene_json_fn(mp_obj_t text) {
     return v == MP_OBJ_NULL || j.p != j.end ? mp_const_none : v;
 }
 static MP_DEFINE_CONST_FUN_OBJ_1(tc_scene_json_obj, tc_scene_json_fn);
+
+// heap_hint(blocks) -> the allocation table bytes it skipped: where MicroPython's
+// allocator starts looking for free blocks (gc_last_free_atb_index, py/gc.c),
+// moved up to the first run of at least `blocks` free blocks. gc_alloc looks for
+// every allocation of more than one block (16 bytes) from that index on, a
+// table byte (4 blocks) at a time; after a collection (the tidy after every
+// answer) it is the first free block, under ~40 KB of modules, functions and the
+// playing scene with small holes between them - so a push paid that walk on
+// each of its dicts, plans and buffers: a 512-byte bytearray took 175 us on the
+// emulated Pico, and gc_alloc was 9-13 % of an rp2emu --profile of pushes.
+// Moving the index up is safe: the allocator only looks from it on (py/gc.c
+// gc_alloc), gc_free moves it back down to a freed block, and a collection -
+// the tidy's, or gc_alloc's own when nothing above has room - resets it to 0.
+// The holes below stay free for after that collection. Firmware only (a native
+// module cannot reach the allocator's state).
+static mp_obj_t tc_heap_hint_fn(mp_obj_t blocks_in) {
+    mp_int_t want = mp_obj_get_int(blocks_in);
+    #if MICROPY_GC_SPLIT_HEAP
+    (void)want;
+    return MP_OBJ_NEW_SMALL_INT(0);
+    #else
+    mp_state_mem_area_t *area = &MP_STATE_MEM(area);
+    const byte *atb = area->gc_alloc_table_start;
+    size_t len = area->gc_alloc_table_byte_len;
+    size_t from = area->gc_last_free_atb_index, run = 0;
+    for (size_t i = from; i < len; i++) {
+        if (atb[i] != 0) {                   // a table byte with any block in use
+            run = 0;
+        } else if (++run * 4 >= (size_t)want) {
+            area->gc_last_free_atb_index = i + 1 - run;
+            return MP_OBJ_NEW_SMALL_INT(i + 1 - run - from);
+        }
+    }
+    return MP_OBJ_NEW_SMALL_INT(0);
+    #endif
+}
+static MP_DEFINE_CONST_FUN_OBJ_1(tc_heap_hint_obj, tc_heap_hint_fn);

@@ -40,7 +40,9 @@ W_ROW = const(14)       # the C core's own: the table row the finger was in, in 
                         # from the table's start (0 at a swap: a new W); viper ignores it
 W_BUF0 = const(15)      # scene buffer k at W_BUF0 + k (scene.K_CHUNK: its chunk-offset
                         # table); then plan p at W_BUF0 + nbuf + W_PLAN*p: t28, d28,
-                        # L, gain Q14, R = 65536 // L + 1 (see the texel branch)
+                        # L, gain Q14, R = 65536 // L + 1 (see the texel branch), or a
+                        # few samples' 5 words (kinds/samples.py plan(): the value's
+                        # address, then its numbers as they are)
 W_FIXED = const(15)
 W_PLAN = const(5)
 
@@ -243,7 +245,7 @@ def _resolve(words, tab, addr, chunked, nbuf):
             ct[c] = _offset(cs[c], base)
     for r in range(0, len(tab) - 4, 4):      # every row but the sentinel
         kind = tab[r + 2]
-        if kind == 2:                       # scene.K_PLAN
+        if kind == 2 or kind >= 4:          # scene.K_PLAN, K_TILE, K_STRETCH
             tab[r + 3] = W_BUF0 + nbuf + W_PLAN * tab[r + 3]
         elif kind == 1 or kind == 3:        # scene.K_BUF, K_CHUNK
             v = words[W_BUF0 + tab[r + 3]]
@@ -407,8 +409,13 @@ class FastRefresh(Refresh):
             addr.append((W_BUF0 + k, uctypes.addressof(b)))
         for k in range(len(plans)):
             b = W_BUF0 + nbuf + W_PLAN * k
-            t28, d28, ln, g = plans[k]
-            addr.append((b, uctypes.addressof(t28)))
+            pl = plans[k]
+            addr.append((b, uctypes.addressof(pl[0])))
+            if len(pl) == 5:                # a few samples (kinds/samples.py plan()): as they are
+                for i in range(1, 5):
+                    words[b + i] = pl[i]
+                continue
+            t28, d28, ln, g = pl
             addr.append((b + 1, uctypes.addressof(d28)))
             words[b + 2] = ln
             words[b + 3] = g
@@ -486,7 +493,7 @@ class FastRefresh(Refresh):
 from . import kinds as _k
 if _k.CHUNK_BITS != 9 or _k.CHUNK_MASK != 511:
     raise ImportError("refresh_fast: scene chunk size differs from the literals in refresh_viper.core()")
-if (_k.K_CONST, _k.K_BUF, _k.K_PLAN, _k.K_CHUNK) != (0, 1, 2, 3):
+if (_k.K_CONST, _k.K_BUF, _k.K_PLAN, _k.K_CHUNK, _k.K_TILE, _k.K_STRETCH) != (0, 1, 2, 3, 4, 5):
     raise ImportError("refresh_fast: the region table's codes (runtime/kinds/__init__.py) "
                       "differ from the literals in refresh_viper.core()")
 if TELEMETRY_SLOTS != _SLOTS:

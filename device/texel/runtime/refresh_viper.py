@@ -61,7 +61,9 @@ W_SINE = const(13)      # sine_table (array 'H') for plan-backed texel regions
 W_ROW = const(14)       # the C core's own (its last table row); core() ignores it
 W_BUF0 = const(15)      # scene buffer k at W_BUF0 + k (scene.K_CHUNK: its chunk-offset
                         # table); then plan p at W_BUF0 + nbuf + W_PLAN*p: t28, d28,
-                        # L, gain Q14, R = 65536 // L + 1 (see the texel branch)
+                        # L, gain Q14, R = 65536 // L + 1 (see the texel branch), or a
+                        # few samples' 5 words (kinds/samples.py plan(): the value's
+                        # address, then its numbers as they are)
 W_FIXED = const(15)
 W_PLAN = const(5)
 
@@ -258,13 +260,36 @@ def core(w: int):
             amp = int(ptr16(base + int(tab[i + 2]))[p - st])
         elif kind == 0:
             amp = int(tab[i + 2])
-        else:
+        elif kind == 3:
             # scene.K_CHUNK, an uploaded map in chunks: the row's value is
             # the offset of its chunk-offset table
             o = p - st
             ct = ptr32(base + int(tab[i + 2]))
             # scene.CHUNK_BITS, CHUNK_MASK (checked below)
             amp = int(ptr16(base + int(ct[o >> 9]))[o & 511])
+        elif kind == 4:
+            # scene.K_TILE, a few samples tiled: vals[o mod m] (kinds/samples.py
+            # plan(): vals, m, R = 65536 // m + 1), the mod as the texel branch's
+            b = int(tab[i + 2])
+            o = p - st
+            m = int(ptr32(w)[b + 1])
+            if o < _FAST_O:
+                k = o - ((o * int(ptr32(w)[b + 2])) >> 16) * m
+                if k < 0:
+                    k += m
+            else:
+                k = o % m
+            amp = int(ptr16(base + int(ptr32(w)[b]))[k])
+        else:
+            # scene.K_STRETCH, a few samples stretched (plan(): vals, A, B, n - 1):
+            # q = floor(o*(m-1)*2^15 / (n-1)), its value and 15-bit fraction
+            b = int(tab[i + 2])
+            o = p - st
+            q = o * int(ptr32(w)[b + 1]) + (o * int(ptr32(w)[b + 2])) // int(ptr32(w)[b + 3])
+            vals = ptr16(base + int(ptr32(w)[b]))
+            k = q >> 15
+            v = int(vals[k])
+            amp = v + (((int(vals[k + 1]) - v) * (((q & 0x7FFF) + 1) >> 1) + 8192) >> 14)
     else:
         amp = int(ptr32(w)[W_IDLE])
     # --- duty: DutyLaw.duty ----------------------------------------------------

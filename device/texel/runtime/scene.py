@@ -55,7 +55,7 @@
 # 16-region case: linear scan.
 from array import array
 from . import kinds
-from .kinds import K_CONST, K_BUF, K_PLAN, K_CHUNK, CHUNK_BITS, CHUNK_MASK
+from .kinds import K_CONST, K_BUF, K_PLAN, K_CHUNK, K_TILE, K_STRETCH, CHUNK_BITS, CHUNK_MASK
 from ..gen.params import LENGTH_MAX
 # the checks every device validator shares (their words: gen/check.py)
 from ..gen.check import BIG, fail, got as _got, qstr as _qstr, check_keys as _check_keys, \
@@ -75,7 +75,8 @@ REGION_KEYS = ("start_mm", "end_mm", "texture")
 # Region table: STRIDE ints per region, (start, end, how, value), sorted by
 # start, then one sentinel row (SENTINEL, SENTINEL, K_CONST, 0) that ends the
 # scan. how (kinds/__init__.py): K_CONST, value is the amplitude; K_BUF and
-# K_CHUNK, value indexes the buffers; K_PLAN, value indexes the plans.
+# K_CHUNK, value indexes the buffers; K_PLAN, K_TILE and K_STRETCH, value indexes
+# the plans.
 STRIDE = 4
 # > any position, and still a small int on a 32-bit board (2^30 - 1): a
 # larger value would come out of the array as a heap bigint inside the IRQ.
@@ -217,9 +218,16 @@ def _check(scene, display):
     canon = []
     fast = _fast_region()
     lim = _lim(total_mm, dx_um)
+    # the C core's loop over every region (texture checks of texel regions too): one
+    # call instead of ~6 a region (kinds/texel.py fast_regions)
+    done = kinds.get("texel").fast_regions(regs, lim, positions, dx_um) if fast else None
     for i in range(len(regs)):
         r = regs[i]
-        f = fast(r, lim, positions, dx_um) if fast else None      # (None for a non-dict)
+        f = done[i] if done is not None else fast(r, lim, positions, dx_um) if fast else None
+        if f is not None and len(f) == 3:   # (region, start, end): checked whole
+            canon.append(f[0])
+            spans.append((f[1], f[2], i))
+            continue
         if f is None:
             s_mm, e_mm, s, e, tex = _region(i, r, total_mm, positions, dx_um)
         else:
@@ -312,8 +320,10 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
         idle = c["idle_amplitude"]
     else:
         idle = _int("idle_default", idle_default, 0, U16_MAX)
-    need, nbuf, ntab = _need(c, spans, engine)
+    # (what the regions need is worked out only where it is used: a budget, a
+    # refusal - 0.8 ms of a six-region push on the emulated Pico otherwise)
     if max_bytes is not None:
+        need, nbuf, ntab = _need(c, spans, engine)
         max_bytes = _int("max_bytes", max_bytes, 0, BIG)
         if need > max_bytes:
             raise ValueError("scene: needs %d bytes (%d of sample buffers and plans + %d of region table), "
@@ -335,6 +345,7 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
     if sc is None:
         # whatever was allocated is unreachable now: give it back (memory_words collects)
         from ..compat import memory_words
+        need, nbuf, ntab = _need(c, spans, engine)
         block = _biggest_block(c, spans, engine)
         raise OutOfMemory("scene: out of memory while building (needs %d bytes: %d of sample "
                          "buffers and plans + %d of region table; %s%s)%s"
@@ -387,7 +398,7 @@ def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
         table[j + 2] = how
         if how == K_CONST:
             table[j + 3] = value
-        elif how == K_PLAN:
+        elif how in _PLANNED:
             table[j + 3] = len(plans)
             plans.append(value)
         else:
@@ -403,6 +414,19 @@ def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
                 s, e = spans[k]
                 m.fill(regions[k]["texture"], e - s, target, engine, dx_um)
     return Scene(table, tuple(bufs), idle, c, spans, positions, dx_um, tuple(plans))
+
+
+# status()'s word for how a region plays, by its table kind
+MODES = ("constant", "map", "plan", "map", "tile", "stretch")
+_PLANNED = (K_PLAN, K_TILE, K_STRETCH)      # rows whose value indexes the plans
+
+
+def _plan_bytes(pl):
+    """The RAM a plan holds: a texel plan's two int32 tables, or a few
+    samples' uint16 values (a 5-tuple)."""
+    if len(pl) == 5:
+        return 2 * len(pl[0])
+    return 4 * len(pl[0]) + 4 * len(pl[1])
 
 
 class Scene:
@@ -428,7 +452,7 @@ class Scene:
             elif isinstance(b, array):  # not a map in flash (rom.rom_u16): no RAM
                 self.buffer_bytes += 2 * len(b)
         for pl in plans:
-            self.buffer_bytes += 4 * len(pl[0]) + 4 * len(pl[1])
+            self.buffer_bytes += _plan_bytes(pl)
         self.nbytes = self.buffer_bytes + self.table_bytes
 
     def amp(self, pos):
@@ -452,6 +476,17 @@ class Scene:
         if kind == K_CHUNK:
             o = pos - s
             return self._bufs[t[i + 2]][o >> CHUNK_BITS][o & CHUNK_MASK]
+        if kind == K_TILE:                  # (vals, m, ...): kinds/samples.py plan()
+            pl = self._plans[t[i + 2]]
+            return pl[0][(pos - s) % pl[1]]
+        if kind == K_STRETCH:               # (vals, A, B, n - 1, ...): the same
+            pl = self._plans[t[i + 2]]
+            o = pos - s
+            q = o * pl[1] + (o * pl[2]) // pl[3]
+            v = pl[0]
+            k = q >> 15
+            a = v[k]
+            return a + (((v[k + 1] - a) * (((q & 0x7FFF) + 1) >> 1) + 8192) >> 14)
         # K_PLAN: engine_int's sample k (1-based) of texel j, computed directly:
         # phase (t28[j] + k*d28[j]) mod 2^28 with k*d in two 14-bit limbs
         # (k <= PLAN_MAX_L < 2^16: each product < 2^30, a small int), then
@@ -475,7 +510,9 @@ class Scene:
         return self._bufs
 
     def plans(self):
-        """The plan-backed texel regions' (t28, d28, L, gain_q14), in order."""
+        """What K_PLAN, K_TILE and K_STRETCH rows play, in order: a texel
+        region's (t28, d28, L, gain_q14), a few samples' 5-tuple
+        (kinds/samples.py plan())."""
         return self._plans
 
     def spans(self):
@@ -499,8 +536,8 @@ class Scene:
             d = {"kind": tex["kind"], "start": s, "end": e,
                  "start_mm": _mm(s, self.dx_um), "end_mm": _mm(e, self.dx_um),
                  "bytes": (0 if flash else 2 * (e - s) if how in (K_BUF, K_CHUNK) else
-                           8 * len(self._plans[t[j + 3]][0]) if how == K_PLAN else 0),
-                 "mode": "flash" if flash else ("constant", "map", "plan", "map")[how]}
+                           _plan_bytes(self._plans[t[j + 3]]) if how in _PLANNED else 0),
+                 "mode": "flash" if flash else MODES[how]}
             d.update(kinds.get(tex["kind"]).describe(tex))     # its own fields
             regs.append(d)
         out = {"regions": regs, "count": self.count, "idle": self.idle,

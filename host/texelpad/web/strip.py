@@ -76,7 +76,7 @@ def render(canonical: dict[str, Any] | None, display: dict[str, Any],
             out[s:e] = value
         elif kind == _scene.K_CHUNK:            # 1 KB chunks: a brush painted here
             out[s:e] = np.concatenate([np.frombuffer(c, dtype=np.uint16) for c in bufs[value]])
-        else:                                   # a plan (K_PLAN)
+        else:                                   # a plan (K_PLAN, K_TILE, K_STRETCH)
             amp = sc.amp
             out[s:e] = np.fromiter((amp(p) for p in range(s, e)), dtype=np.uint16,
                                    count=e - s)

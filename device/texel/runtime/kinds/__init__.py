@@ -38,6 +38,12 @@ K_CONST = 0             # the row's value is the amplitude
 K_BUF = 1               # the value indexes the buffers: an array('H') (or a map in flash)
 K_PLAN = 2              # a texel region played from its integer plan, sample by sample
 K_CHUNK = 3             # the value indexes the buffers: a tuple of array('H') chunks
+# A few samples the refresh plays where they are (kinds/samples.py, SMALL values at
+# most): no map at all, so no 38 KB of chunks to allocate and fill for a full-screen
+# gradient. The value indexes the plans (as K_PLAN): the plan is a 5-tuple
+# (vals, x1, x2, x3, x4) whose numbers samples.py's store() explains.
+K_TILE = 4              # value k mod m at region position k
+K_STRETCH = 5           # the m values spread linearly over the region
 CHUNK_BITS = 9          # 512 values (1 KB) per chunk (upload.py and refresh_viper.py use these)
 CHUNK_MASK = 511
 

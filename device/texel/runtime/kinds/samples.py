@@ -15,7 +15,7 @@
 # tuple is kept as it is, a list is copied once.
 from ...compat import u16_one_block, array, core
 from ...gen.check import fail, got, num, int_in, check_keys
-from . import K_CHUNK, CHUNK_BITS, CHUNK_MASK, new_chunks
+from . import K_CONST, K_CHUNK, K_TILE, K_STRETCH, CHUNK_BITS, CHUNK_MASK, new_chunks
 
 NAME = "samples"
 KEYS = ("kind", "values", "u16", "fit")
@@ -226,15 +226,79 @@ def plays_as_is(tex, n):
             and len(tex["u16"]) == n)
 
 
+# Up to SMALL values the refresh plays where they are, with no map (K_TILE and
+# K_STRETCH, runtime/kinds/__init__.py): a full-screen gradient was 38,400 bytes of
+# chunks that took 8.9 ms to allocate and fill on the emulated Pico, and is now m + 1
+# values. SMALL keeps their block as small as a chunk. A stretch that shrinks (m > n)
+# or spans more than 32,769 positions (_loop's "small" case no longer holds) is a map.
+SMALL = 1 << CHUNK_BITS
+STRETCH_MAX_N = 32769
+
+
+def how(tex, n):
+    """How the refresh plays tex over n positions: K_CONST (one value),
+    K_TILE, K_STRETCH (the values where they are) or K_CHUNK (a map)."""
+    vals = tex["u16"]
+    if getattr(vals, "CHUNKS", False) or len(vals) > SMALL:
+        return K_CHUNK
+    m = len(vals)
+    if m == 1:
+        return K_CONST
+    if tex["fit"] == "tile" or n == 1:
+        return K_TILE
+    return K_STRETCH if m <= n <= STRETCH_MAX_N else K_CHUNK
+
+
+def plan(tex, n, kind=None):
+    """The 5-tuple a K_TILE or K_STRETCH row plays (scene.Scene.amp and the
+    three refresh cores compute _loop's values from it, value for value):
+    K_TILE (vals, m, 65536 // m + 1, 0, 0): vals[o mod m] at offset o, the mod by
+        that reciprocal below offset 32,768 (as a texel plan's texel index);
+    K_STRETCH (vals + its last value again, A, B, n - 1, (B << 17) // (n - 1))
+        with A, B = divmod((m - 1) << 15, n - 1): at offset o,
+        q = o*A + o*B // (n - 1) is floor(o*(m-1)*2^15 / (n-1)) = k*2^15 + f,
+        k = floor(o*(m-1) / (n-1)) and f = floor(r*2^15 / (n-1)) for its
+        remainder r, so value k + its weight (f + 1) >> 1 is _loop's. Every
+        product stays below 2^30 (o, n - 1 <= 32768; A <= 2^15 * m/n). The last
+        word is the C refresh's, for its division by multiplication (refresh_core.c
+        tc_few; below 2^17: a small int).
+        The repeated last value is read, with weight 0, at the last position."""
+    vals = tex["u16"]
+    m = len(vals)
+    if kind is None:
+        kind = how(tex, n)
+    if kind == K_TILE:
+        return (array("H", vals), m, 65536 // m + 1, 0, 0)
+    den = n - 1
+    a, b = divmod((m - 1) << 15, den)
+    v = array("H", vals)
+    v.append(vals[m - 1])
+    return (v, a, b, den, (b << 17) // den)
+
+
+def _vals_bytes(tex, k):
+    # plan()'s array: the m values, and the last once more for a stretch
+    return 0 if k == K_CONST else 2 * (len(tex["u16"]) + (k == K_STRETCH))
+
+
 def need(tex, n, engine):
-    return 2 * n
+    k = how(tex, n)
+    return 2 * n if k == K_CHUNK else _vals_bytes(tex, k)
 
 
 def block(tex, n, engine):
-    return 2 * min(n, 1 << CHUNK_BITS)     # chunks of 512 values (fill_chunks)
+    k = how(tex, n)
+    if k == K_CHUNK:
+        return 2 * min(n, 1 << CHUNK_BITS)     # chunks of 512 values (fill_chunks)
+    return _vals_bytes(tex, k)
 
 
 def store(tex, n, engine):
+    k = how(tex, n)
+    if k == K_CONST:
+        return K_CONST, tex["u16"][0], None
+    if k != K_CHUNK:
+        return k, plan(tex, n, k), None
     if plays_as_is(tex, n):
         return K_CHUNK, tex["u16"].chunks, None     # the upload itself, exactly region-long
     ch = new_chunks(n)

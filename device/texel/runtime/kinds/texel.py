@@ -67,6 +67,25 @@ def fast_check(tex):
     return None
 
 
+_regions = None             # the core's regions_check, False where there is none
+
+
+def fast_regions(regs, lim, positions, dx_um):
+    """The C core's regions_check (texelcore_api.h) of a scene's regions,
+    texel_check for its texel textures - one entry a region: (region dict,
+    start, end), region_check's 5-tuple, or None - or None where there is no
+    such core (or fast_check is off)."""
+    global _regions
+    if _fast is None:
+        fast_check(None)            # (sets _fast and _spec)
+    if not _fast:
+        return None
+    if _regions is None:
+        from ...compat import core
+        _regions = getattr(core(), "regions_check", None) or False
+    return _regions(regs, lim, positions, dx_um, _spec) if _regions else None
+
+
 def check(path, tex, n):
     c = fast_check(tex)
     if c is not None:
