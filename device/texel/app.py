@@ -445,6 +445,7 @@ def push(scene):
 
 def _push(scene):
     rt = _running()
+    compat.skip_holes()
     clock = getattr(rt.hw, "cost_ticks", rt.ticks)
     t0 = clock()
     checked = _scene.check(scene, rt.board["display"])

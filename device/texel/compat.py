@@ -232,6 +232,21 @@ def core():
     return _core or None
 
 
+_hint = None
+
+
+def skip_holes(blocks=64):
+    """Start the allocator's search for free memory above the heap's small
+    holes: at the first run of `blocks` free blocks (the firmware's C core,
+    texelcore_fw.h heap_hint: every allocation of more than 16 bytes walked
+    the holes first). No-op elsewhere. A push calls it before it allocates."""
+    global _hint
+    if _hint is None:
+        _hint = getattr(core(), "heap_hint", None) or False
+    if _hint:
+        _hint(blocks)
+
+
 ENGINES = ("c", "viper", "py")          # fastest first: the same integers on each
 
 

@@ -233,6 +233,7 @@ def stand():
             return
         r = None
         try:
+            compat.skip_holes()             # this frame's allocations: above the holes
             head = bytearray(h)             # allocated before reading: a failure here
             rd.readinto(head)               # leaves the bytes to read past
             h = 0
