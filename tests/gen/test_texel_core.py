@@ -760,6 +760,78 @@ def test_native_region_check_is_the_python_scene_check(x64_module, tmp_path):
     assert info["ok"] > 150 and info["fast_regions"] > 1000, info
 
 
+DESCRIBE_SCRIPT = r"""
+import json, random
+import texel
+from texel.runtime import scene as S
+from texel.runtime.kinds import reference as KR
+# a map in flash stood in for by a memoryview (not an array: mode "flash", 0 bytes)
+KR.flash = lambda name, n: memoryview(texel.reference_u16(name, n))
+random.seed(5)
+names = ["2sin", "4sin", "square", "pink"]
+def texture():
+    k = random.randrange(7)
+    if k == 0:
+        return {"kind": "texel", "pitch_db": random.choice([0, 3.1, 6.3, 12.0]),
+                "irregularity_db": random.choice([-12.9, -3.0, 0]), "seed": random.randrange(99),
+                "v": random.choice([1, 2])}
+    if k == 1:
+        return {"kind": "reference", "name": random.choice(names)}
+    if k == 2:
+        return {"kind": "constant", "level": random.random()}
+    if k == 3:
+        return {"kind": "samples", "fit": random.choice(["tile", "stretch"]),
+                "u16": [random.randrange(65536) for _ in range(random.choice([1, 2, 5, 600]))]}
+    if k == 4:
+        return {"kind": "bump", "width_mm": random.choice([0.5, 2, 8])}
+    return {"kind": "texel", "pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7,
+            "texel_samples": random.choice([3, 18, 50])}
+bad = []
+n = 0
+modes = {}
+for dx in (5.3, 652.8, 0.001, 13.37, 1.0):
+    positions = 400 if dx > 100 else 19200
+    disp = {"positions": positions, "dx_um": dx}
+    total = positions * dx / 1000.0
+    for _ in range(12):
+        cuts = sorted(set(round(random.uniform(0, total), 3) for _ in range(random.randrange(2, 9))))
+        regs = []
+        for i in range(0, len(cuts) - 1, 1 + random.randrange(2)):
+            regs.append({"start_mm": cuts[i], "end_mm": cuts[i + 1], "texture": texture()})
+        try:
+            c = S.validate({"regions": regs, "name": "d"}, disp)
+        except ValueError:
+            continue
+        b = S.build(c, disp)
+        S._DESCRIBE = None
+        a = b.describe()
+        have = bool(S._DESCRIBE)
+        S._DESCRIBE = False
+        p = b.describe()
+        S._DESCRIBE = None
+        n += 1
+        for r in a["regions"]:
+            modes[r["mode"]] = 1
+        ta = [sorted((k, repr(v), type(v).__name__) for k, v in r.items()) for r in a["regions"]]
+        tp = [sorted((k, repr(v), type(v).__name__) for k, v in r.items()) for r in p["regions"]]
+        if a != p or ta != tp:
+            bad.append([dx, ta, tp])
+print(json.dumps({"n": n, "bad": bad[:2], "c": have, "modes": sorted(modes)}))
+"""
+
+
+def test_the_c_describe_is_scene_describe(x64_module):
+    """Scene.describe() with the x64 native module's describe_regions and
+    with the Python loop: the same regions - keys, values, their types and
+    reprs - over 60 scenes of every kind and play mode (a map in flash stood
+    in for), on five displays (dx 0.001 to 652.8 um: the mm rounding)."""
+    info = mpy.run_json(DESCRIBE_SCRIPT, exe=toolchain.require_micropython(), heapsize="16M",
+                        timeout=300, extra_path=str(x64_module))
+    assert info["c"] and info["bad"] == [], info["bad"]
+    assert info["n"] >= 40, info
+    assert info["modes"] == ["constant", "flash", "map", "plan", "stretch", "tile"], info
+
+
 def test_an_old_native_module_is_not_used(tmp_path):
     """A /lib/_texelcore.mpy of another API (a board deployed by another
     texelpad) is passed over: the viper loops run, with the same plan."""

@@ -600,6 +600,17 @@ def test_samples_played_in_place_are_the_maps_value_for_value():
     assert seen == {S.K_CONST, S.K_CHUNK, S.K_TILE, S.K_STRETCH}
 
 
+def test_describe_rounds_mm_as_round_does_on_micropython():
+    """scene._mm on MicroPython (its round(x, 4)'s float operations without
+    the pow) is round(x, 4) there, at every 7th position of five displays."""
+    res = mpy.run_json(
+        "import json\nfrom texel.runtime import scene as S\n"
+        "bad = [(p, dx) for dx in (5.3, 1.0, 652.8, 0.001, 13.37) for p in range(0, 20000, 7)"
+        " if S._mm(p, dx) != round(p * dx / 1000.0, 4)]\n"
+        "print(json.dumps({'bad': bad[:5], 'n': len(bad)}))\n", timeout=120)
+    assert res == {"bad": [], "n": 0}
+
+
 def test_samples_stretch():
     u = [0, 65535, 1000, 40000, 40000]
     sc = S.build(_samples_scene({"u16": u, "fit": "stretch"}), D)

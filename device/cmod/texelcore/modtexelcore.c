@@ -32,6 +32,7 @@ static const mp_rom_map_elem_t texelcore_globals_table[] = {
     { MP_ROM_QSTR(MP_QSTR_texel_check), MP_ROM_PTR(&tc_texel_check_obj) },
     { MP_ROM_QSTR(MP_QSTR_region_check), MP_ROM_PTR(&tc_region_check_obj) },
     { MP_ROM_QSTR(MP_QSTR_regions_check), MP_ROM_PTR(&tc_regions_check_obj) },
+    { MP_ROM_QSTR(MP_QSTR_describe_regions), MP_ROM_PTR(&tc_describe_regions_obj) },
     { MP_ROM_QSTR(MP_QSTR_plan), MP_ROM_PTR(&tc_plan_obj) },
     #if MICROPY_FLOAT_IMPL == MICROPY_FLOAT_IMPL_FLOAT
     { MP_ROM_QSTR(MP_QSTR_answer), MP_ROM_PTR(&tc_answer_obj) },

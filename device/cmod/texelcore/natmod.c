@@ -45,6 +45,7 @@ mp_obj_t mpy_init(mp_obj_fun_bc_t *self, size_t n_args, size_t n_kw, mp_obj_t *a
     mp_store_global(MP_QSTR_texel_check, MP_OBJ_FROM_PTR(&tc_texel_check_obj));
     mp_store_global(MP_QSTR_region_check, MP_OBJ_FROM_PTR(&tc_region_check_obj));
     mp_store_global(MP_QSTR_regions_check, MP_OBJ_FROM_PTR(&tc_regions_check_obj));
+    mp_store_global(MP_QSTR_describe_regions, MP_OBJ_FROM_PTR(&tc_describe_regions_obj));
     mp_store_global(MP_QSTR_plan, MP_OBJ_FROM_PTR(&tc_plan_obj));
     mp_store_global(MP_QSTR_leak_start, MP_OBJ_FROM_PTR(&tc_leak_start_obj));
     mp_store_global(MP_QSTR_floats_in, MP_OBJ_FROM_PTR(&tc_floats_in_obj));

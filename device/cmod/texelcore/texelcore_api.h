@@ -701,7 +701,10 @@ static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_region_check_obj, 4, 4, tc_region_
 // texture of kind "texel", texel_check(texture, spec) take it - region the
 // canonical {"start_mm", "end_mm", "texture"} dict, made in the order _check
 // makes it; region_check's 5-tuple when only it does (the texture is Python's);
-// None when it does not (Python words the refusal).
+// None when it does not (Python words the refusal). When every entry is the
+// first kind, sorted they overlap nowhere and there are at most TC_RC_MAX:
+// (regions, spans) - _check's own regions list and [(start, end)], sorted.
+#define TC_RC_MAX 16            // scene.MAX_REGIONS
 static mp_obj_t tc_regions_check_fn(size_t n_args, const mp_obj_t *args) {
     (void)n_args;
     const mp_obj_type_t *t = mp_obj_get_type(args[0]);
@@ -751,9 +754,167 @@ static mp_obj_t tc_regions_check_fn(size_t n_args, const mp_obj_t *args) {
         mp_obj_t r[3] = {d, v[2], v[3]};
         items[i] = mp_obj_new_tuple(3, r);
     }
-    return out;
+    // every region checked whole: sorted by (start, end, index) as _check sorts its
+    // spans, and none overlapping the one before - then _check's result itself,
+    // (regions, spans); else the list, and Python words what it finds
+    if (n > TC_RC_MAX) {
+        return out;
+    }
+    size_t order[TC_RC_MAX];
+    mp_int_t st[TC_RC_MAX], en[TC_RC_MAX];
+    for (size_t i = 0; i < n; i++) {
+        if (items[i] == mp_const_none || mp_obj_get_type(items[i]) != &mp_type_tuple) {
+            return out;
+        }
+        size_t n3;
+        mp_obj_t *r;
+        mp_obj_get_array(items[i], &n3, &r);
+        if (n3 != 3) {
+            return out;
+        }
+        st[i] = mp_obj_get_int(r[1]);
+        en[i] = mp_obj_get_int(r[2]);
+        size_t j = i;
+        while (j > 0 && (st[order[j - 1]] > st[i] ||
+                         (st[order[j - 1]] == st[i] && en[order[j - 1]] > en[i]))) {
+            order[j] = order[j - 1];
+            j--;
+        }
+        order[j] = i;
+    }
+    for (size_t j = 1; j < n; j++) {
+        if (st[order[j]] < en[order[j - 1]]) {
+            return out;
+        }
+    }
+    mp_obj_t regions = mp_obj_new_list(n, NULL), spans = mp_obj_new_list(n, NULL);
+    mp_obj_t *ri, *si;
+    size_t nr;
+    mp_obj_get_array(regions, &nr, &ri);
+    mp_obj_get_array(spans, &nr, &si);
+    for (size_t j = 0; j < n; j++) {
+        size_t n3;
+        mp_obj_t *r;
+        mp_obj_get_array(items[order[j]], &n3, &r);
+        ri[j] = r[0];
+        mp_obj_t se[2] = {r[1], r[2]};
+        si[j] = mp_obj_new_tuple(2, se);
+    }
+    mp_obj_t both[2] = {regions, spans};
+    return mp_obj_new_tuple(2, both);
 }
 static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_regions_check_obj, 5, 5, tc_regions_check_fn);
+
+// describe_regions(t, src, dx_um, bufs, plans, words, own) -> the list of region
+// dicts Scene.describe() makes (runtime/scene.py), or None (a boundary too far
+// for the int below: Python makes them): kind, start, end, start_mm, end_mm,
+// bytes, mode, then the kind's own fields - a texel's pitch_db, irregularity_db,
+// seed and v (kinds/texel.py describe) here, any other kind's from
+// own(kind, texture). t: the scene's table; src: its canonical regions; words:
+// scene.MODES and "flash". The mm values are scene._mm's on MicroPython -
+// round(x * 10000.0) / 10000.0, round() half to even - in the same float
+// operations. Python's loop took ~470 us a region on the emulated Pico (the
+// texel-sweep's 6: 2.8 ms of its answer).
+static mp_obj_t tc_mm(mp_int_t pos, mp_float_t dx, int *ok) {
+    mp_float_t v = (mp_float_t)pos * dx;
+    v = v / (mp_float_t)1000.0;
+    v = v * (mp_float_t)10000.0;
+    if (!(v >= 0 && v < (mp_float_t)1073741824.0)) {
+        *ok = 0;
+        return mp_const_none;
+    }
+    int32_t i = (int32_t)v;                     // v >= 0: the floor
+    mp_float_t f = v - (mp_float_t)i;           // exact
+    if (f > (mp_float_t)0.5 || (f == (mp_float_t)0.5 && (i & 1))) {
+        i += 1;
+    }
+    return mp_obj_new_float((mp_float_t)i / (mp_float_t)10000.0);
+}
+
+static mp_obj_t tc_describe_regions_fn(size_t n_args, const mp_obj_t *args) {
+    (void)n_args;
+    mp_buffer_info_t tb;
+    mp_get_buffer_raise(args[0], &tb, MP_BUFFER_READ);
+    const int32_t *t = (const int32_t *)tb.buf;
+    size_t nsrc, nbuf, nplan, nw;
+    mp_obj_t *src, *bufs, *plans, *words;
+    mp_obj_get_array(args[1], &nsrc, &src);
+    mp_float_t dx = mp_obj_get_float(args[2]);
+    mp_obj_get_array(args[3], &nbuf, &bufs);
+    mp_obj_get_array(args[4], &nplan, &plans);
+    mp_obj_get_array(args[5], &nw, &words);
+    if (nw != 7 || tb.len / 16 < nsrc + 1) {
+        mp_raise_ValueError(MP_ERROR_TEXT("describe_regions: bad table or words"));
+    }
+    mp_obj_t out = mp_obj_new_list(0, NULL);
+    for (size_t k = 0; k < nsrc; k++) {
+        const int32_t *row = t + 4 * k;
+        int32_t s = row[0], e = row[1], how = row[2], v = row[3];
+        mp_obj_t tex = mp_obj_subscr(src[k], MP_OBJ_NEW_QSTR(MP_QSTR_texture), MP_OBJ_SENTINEL);
+        mp_obj_t kind = mp_obj_subscr(tex, MP_OBJ_NEW_QSTR(MP_QSTR_kind), MP_OBJ_SENTINEL);
+        mp_int_t n = 0;
+        mp_obj_t mode;
+        if (how < 0 || how > 5) {
+            mp_raise_ValueError(MP_ERROR_TEXT("describe_regions: a row's kind"));
+        }
+        mode = words[how];
+        if (how == 1 || how == 3) {             // K_BUF, K_CHUNK
+            if (v < 0 || (size_t)v >= nbuf) {
+                mp_raise_ValueError(MP_ERROR_TEXT("describe_regions: a row names no buffer"));
+            }
+            if (how == 1 && mp_obj_get_type(bufs[v]) != TC_ARRAY_TYPE) {
+                mode = words[6];                // a map in flash: no RAM
+            } else {
+                n = 2 * (mp_int_t)(e - s);
+            }
+        } else if (how != 0) {                  // a plan's: as Scene.nbytes counts it
+            if (v < 0 || (size_t)v >= nplan) {
+                mp_raise_ValueError(MP_ERROR_TEXT("describe_regions: a row names no plan"));
+            }
+            size_t np;
+            mp_obj_t *pl;
+            mp_obj_get_array(plans[v], &np, &pl);
+            n = mp_obj_get_int(mp_obj_len(pl[0])) * (np == 5 ? 2 : 8);
+        }
+        int ok = 1;
+        mp_obj_t a = tc_mm(s, dx, &ok), b = tc_mm(e, dx, &ok);
+        if (!ok) {
+            return mp_const_none;
+        }
+        mp_obj_t d = mp_obj_new_dict(11);
+        mp_obj_dict_store(d, MP_OBJ_NEW_QSTR(MP_QSTR_kind), kind);
+        mp_obj_dict_store(d, MP_OBJ_NEW_QSTR(MP_QSTR_start), mp_obj_new_int(s));
+        mp_obj_dict_store(d, MP_OBJ_NEW_QSTR(MP_QSTR_end), mp_obj_new_int(e));
+        mp_obj_dict_store(d, MP_OBJ_NEW_QSTR(MP_QSTR_start_mm), a);
+        mp_obj_dict_store(d, MP_OBJ_NEW_QSTR(MP_QSTR_end_mm), b);
+        mp_obj_dict_store(d, MP_OBJ_NEW_QSTR(MP_QSTR_bytes), mp_obj_new_int(n));
+        mp_obj_dict_store(d, MP_OBJ_NEW_QSTR(MP_QSTR_mode), mode);
+        if (tc_ck_word(kind, "texel")) {        // kinds/texel.py describe
+            // (not static: a native module's qstrs are known at its load only)
+            const qstr keys[4] = {MP_QSTR_pitch_db, MP_QSTR_irregularity_db, MP_QSTR_seed,
+                                  MP_QSTR_v};
+            for (int i = 0; i < 4; i++) {
+                mp_obj_t key = MP_OBJ_NEW_QSTR(keys[i]);
+                mp_obj_dict_store(d, key, mp_obj_subscr(tex, key, MP_OBJ_SENTINEL));
+            }
+        } else {                                // the kind's own describe(tex)
+            mp_obj_t ca[2] = {kind, tex};
+            mp_obj_t own = mp_call_function_n_kw(args[6], 2, 0, ca);
+            if (mp_obj_get_type(own) != TC_DICT_TYPE) {
+                mp_raise_ValueError(MP_ERROR_TEXT("describe_regions: own() gives a dict"));
+            }
+            mp_map_t *map = &((mp_obj_dict_t *)MP_OBJ_TO_PTR(own))->map;
+            for (size_t j = 0; j < map->alloc; j++) {
+                if (mp_map_slot_is_filled(map, j)) {
+                    mp_obj_dict_store(d, map->table[j].key, map->table[j].value);
+                }
+            }
+        }
+        mp_obj_list_append(out, d);
+    }
+    return out;
+}
+static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_describe_regions_obj, 7, 7, tc_describe_regions_fn);
 
 // plan(tex, n, tab) -> (both, count, L, gain_q14), or None: kinds/texel.py
 // plan_of for a canonical format-2 texture (texel_check's or the Python

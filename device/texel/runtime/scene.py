@@ -57,6 +57,8 @@ from array import array
 from . import kinds
 from .kinds import K_CONST, K_BUF, K_PLAN, K_CHUNK, K_TILE, K_STRETCH, CHUNK_BITS, CHUNK_MASK
 from ..gen.params import LENGTH_MAX
+from ..compat import IMPL as _IMPL
+from ..gen import sine_table as _sine_table
 # the checks every device validator shares (their words: gen/check.py)
 from ..gen.check import BIG, fail, got as _got, qstr as _qstr, check_keys as _check_keys, \
     need_dict as _dict, num as _num, int_in as _int
@@ -127,8 +129,17 @@ def _lim(total_mm, dx_um):
     return total_mm + 1.0 + dx_um / 500.0
 
 
-def _mm(pos, dx_um):
-    return round(pos * dx_um / 1000.0, 4)
+if _IMPL == "cpython":
+    def _mm(pos, dx_um):
+        return round(pos * dx_um / 1000.0, 4)
+else:
+    def _mm(pos, dx_um):
+        # MicroPython's round(x, 4) is nearbyint(x * pow(10, 4)) / pow(10, 4)
+        # (py/modbuiltins.c): these are its float operations without the pow, so
+        # the same float - 26 us a call on the emulated Pico, not 143 (describe()
+        # makes two a region; equal at every 7th position of a 19,200-position
+        # display in the firmware's float32, tests/runtime/test_scene.py on the unix port)
+        return round(pos * dx_um / 1000.0 * 10000.0) / 10000.0
 
 
 # --- textures ------------------------------------------------------------------
@@ -221,6 +232,9 @@ def _check(scene, display):
     # the C core's loop over every region (texture checks of texel regions too): one
     # call instead of ~6 a region (kinds/texel.py fast_regions)
     done = kinds.get("texel").fast_regions(regs, lim, positions, dx_um) if fast else None
+    if type(done) is tuple:             # (regions, spans): every region whole, sorted, apart
+        out["regions"] = done[0]
+        return out, done[1], positions, dx_um
     for i in range(len(regs)):
         r = regs[i]
         f = done[i] if done is not None else fast(r, lim, positions, dx_um) if fast else None
@@ -390,7 +404,7 @@ def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
         table[j + 1] = e
         tex = regions[k]["texture"]
         m = kinds.get(tex["kind"])
-        old = _shared(reuse, tex, e - s)
+        old = _shared(reuse, tex, e - s) if reuse is not None and m.SHARED else None
         if old is not None:                 # the playing scene's, as it is
             how, value, target = old[0], old[1], None
         else:
@@ -421,23 +435,14 @@ MODES = ("constant", "map", "plan", "map", "tile", "stretch")
 _PLANNED = (K_PLAN, K_TILE, K_STRETCH)      # rows whose value indexes the plans
 
 
-def _plan_bytes(pl):
-    """The RAM a plan holds: a texel plan's two int32 tables, or a few
-    samples' uint16 values (a 5-tuple)."""
-    if len(pl) == 5:
-        return 2 * len(pl[0])
-    return 4 * len(pl[0]) + 4 * len(pl[1])
-
-
 class Scene:
     """A built scene. amp(pos) is the only thing the refresh calls."""
 
     def __init__(self, table, bufs, idle, source, spans, positions, dx_um, plans=()):
-        from ..gen import sine_table
         self._t = table                 # array('i'): (start, end, kind, value) per region + sentinel
         self._bufs = bufs               # tuple of array('H'), fixed
         self._plans = plans             # tuple of (t28, d28, L, gain_q14), fixed
-        self._sine = sine_table.table()
+        self._sine = _sine_table.table()
         self.count = len(table) // STRIDE - 1      # regions (without the sentinel)
         self.idle = idle                # uint16 amplitude in gaps / out of range
         self.source = source            # the canonical dict
@@ -451,8 +456,8 @@ class Scene:
                     self.buffer_bytes += 2 * len(c)
             elif isinstance(b, array):  # not a map in flash (rom.rom_u16): no RAM
                 self.buffer_bytes += 2 * len(b)
-        for pl in plans:
-            self.buffer_bytes += _plan_bytes(pl)
+        for pl in plans:                # a texel plan's two int32 tables, a few samples' values
+            self.buffer_bytes += len(pl[0]) * (2 if len(pl) == 5 else 8)
         self.nbytes = self.buffer_bytes + self.table_bytes
 
     def amp(self, pos):
@@ -522,27 +527,64 @@ class Scene:
 
     def describe(self):
         """A small dict of literals for status()."""
-        regs = []
         src = self.source["regions"]
-        t = self._t
-        for k in range(self.count):
-            j = STRIDE * k
-            s, e = t[j], t[j + 1]
-            tex = src[k]["texture"]
-            how = t[j + 2]
-            # a map in flash (the firmware's references, rom.rom_u16: not an array) takes
-            # no RAM: its bytes are 0, as in nbytes, and its mode says where it plays from
-            flash = how == K_BUF and not isinstance(self._bufs[t[j + 3]], array)
-            d = {"kind": tex["kind"], "start": s, "end": e,
-                 "start_mm": _mm(s, self.dx_um), "end_mm": _mm(e, self.dx_um),
-                 "bytes": (0 if flash else 2 * (e - s) if how in (K_BUF, K_CHUNK) else
-                           _plan_bytes(self._plans[t[j + 3]]) if how in _PLANNED else 0),
-                 "mode": "flash" if flash else MODES[how]}
-            d.update(kinds.get(tex["kind"]).describe(tex))     # its own fields
-            regs.append(d)
+        fn = _describe_c()                  # the C core's loop (texelcore_api.h describe_regions)
+        regs = fn(self._t, src, self.dx_um, self._bufs, self._plans, _WORDS, _own) if fn else None
+        if regs is None:
+            regs = self._describe()
         out = {"regions": regs, "count": self.count, "idle": self.idle,
                 "positions": self.positions, "bytes": self.nbytes,
                 "buffer_bytes": self.buffer_bytes, "table_bytes": self.table_bytes}
         if "name" in self.source:
             out["name"] = self.source["name"]
         return out
+
+    def _describe(self):
+        regs = []
+        src = self.source["regions"]
+        t = self._t
+        dx = self.dx_um
+        get = kinds.get
+        for k in range(self.count):
+            j = STRIDE * k
+            s = t[j]
+            e = t[j + 1]
+            how = t[j + 2]
+            tex = src[k]["texture"]
+            kind = tex["kind"]
+            mode = MODES[how]
+            # a map in flash (the firmware's references, rom.rom_u16: not an array) takes
+            # no RAM: its bytes are 0, as in nbytes, and its mode says where it plays from
+            if how == K_BUF and not isinstance(self._bufs[t[j + 3]], array):
+                n = 0
+                mode = "flash"
+            elif how == K_BUF or how == K_CHUNK:
+                n = 2 * (e - s)
+            elif how == K_CONST:
+                n = 0
+            else:                           # a plan: as in nbytes
+                pl = self._plans[t[j + 3]]
+                n = len(pl[0]) * (2 if len(pl) == 5 else 8)
+            d = {"kind": kind, "start": s, "end": e, "start_mm": _mm(s, dx),
+                 "end_mm": _mm(e, dx), "bytes": n, "mode": mode}
+            d.update(get(kind).describe(tex))  # its own fields
+            regs.append(d)
+        return regs
+
+
+_WORDS = MODES + ("flash",)             # describe_regions' words
+_DESCRIBE = None                        # the core's describe_regions; False: none
+
+
+def _describe_c():
+    global _DESCRIBE
+    if _DESCRIBE is None:
+        from ..compat import core
+        _DESCRIBE = getattr(core(), "describe_regions", None) or False
+    return _DESCRIBE
+
+
+def _own(kind, tex):
+    # a kind's own fields of its region in status() (describe_regions calls it for
+    # every kind but texel, whose fields it copies itself)
+    return kinds.get(kind).describe(tex)

@@ -73,8 +73,9 @@ _regions = None             # the core's regions_check, False where there is non
 def fast_regions(regs, lim, positions, dx_um):
     """The C core's regions_check (texelcore_api.h) of a scene's regions,
     texel_check for its texel textures - one entry a region: (region dict,
-    start, end), region_check's 5-tuple, or None - or None where there is no
-    such core (or fast_check is off)."""
+    start, end), region_check's 5-tuple, or None; or, every region checked
+    whole and none overlapping, scene._check's (regions, spans) - or None
+    where there is no such core (or fast_check is off)."""
     global _regions
     if _fast is None:
         fast_check(None)            # (sets _fast and _spec)
@@ -222,9 +223,10 @@ def block(tex, n, engine):
 
 
 def store(tex, n, engine):
-    if on_plan(tex, n, engine):
-        return K_PLAN, plan_of(tex, n), None
     if engine is None:
+        L = tex["texel_samples"]
+        if 4 < L <= PLAN_MAX_L and L < n:      # on_plan, inline (a call: ~20 us on a Pico)
+            return K_PLAN, plan_of(tex, n), None
         ch = new_chunks(n)
         return K_CHUNK, ch, ch
     buf = u16_one_block(n)                  # exactly region-long
