@@ -4,6 +4,7 @@ port as a user's host sees it. No timing asserted: the figures are the benchmark
 (python -m bench.firmware)."""
 from __future__ import annotations
 
+import ast
 import hashlib
 import json
 
@@ -574,6 +575,20 @@ def test_the_c_core_reads_a_scenes_json_as_json_loads_does(pico):
     for (text, fast), (same, c_read) in zip(cases, got):
         assert same, text
         assert c_read == fast, (text, c_read)
+
+
+def test_the_heap_hint_skips_the_holes_and_not_with_gc_disabled(pico):
+    """texelcore_fw.h heap_hint (compat.skip_holes, before every push): after
+    a collection the allocator's search starts in the holes; the hint moves it
+    past them (and no further the second time), and does nothing while
+    gc.disable() is on (no collection would look below it again)."""
+    code = ("import gc, _texelcore as c\n_k = [bytearray(24) for _ in range(300)]\n"
+            "_k = _k[::2]\ngc.collect()\n_a = c.heap_hint(64)\n_b = c.heap_hint(64)\n"
+            "gc.collect()\ngc.disable()\n_d = c.heap_hint(64)\ngc.enable()\n_k = None\n"
+            "print(repr((_a, _b, _d)))\n")
+    with _connect(pico.port) as b:
+        a, b2, d = ast.literal_eval(b.link.exec(code, timeout=60).strip().splitlines()[-1])
+    assert a > 0 and b2 == 0 and d == 0, (a, b2, d)
 
 
 def test_a_bad_push_is_refused_and_the_scene_kept(pico):

@@ -213,14 +213,20 @@ static MP_DEFINE_CONST_FUN_OBJ_1(tc_scene_json_obj, tc_scene_json_fn);
 // Moving the index up is safe: the allocator only looks from it on (py/gc.c
 // gc_alloc), gc_free moves it back down to a freed block, and a collection -
 // the tidy's, or gc_alloc's own when nothing above has room - resets it to 0.
-// The holes below stay free for after that collection. Firmware only (a native
-// module cannot reach the allocator's state).
+// The holes below stay free for after that collection. Not with gc.disable() (no
+// collection would ever look below). Firmware only (a native module cannot reach
+// the allocator's state).
 static mp_obj_t tc_heap_hint_fn(mp_obj_t blocks_in) {
     mp_int_t want = mp_obj_get_int(blocks_in);
     #if MICROPY_GC_SPLIT_HEAP
     (void)want;
     return MP_OBJ_NEW_SMALL_INT(0);
     #else
+    if (!MP_STATE_MEM(gc_auto_collect_enabled)) {
+        // gc.disable(): gc_alloc would not collect and look below the hint again, and
+        // a block that fits only there would be a MemoryError
+        return MP_OBJ_NEW_SMALL_INT(0);
+    }
     mp_state_mem_area_t *area = &MP_STATE_MEM(area);
     const byte *atb = area->gc_alloc_table_start;
     size_t len = area->gc_alloc_table_byte_len;

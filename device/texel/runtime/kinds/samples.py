@@ -271,9 +271,10 @@ def plan(tex, n, kind=None):
         return (array("H", vals), m, 65536 // m + 1, 0, 0)
     den = n - 1
     a, b = divmod((m - 1) << 15, den)
-    v = array("H", vals)
-    v.append(vals[m - 1])
-    return (v, a, b, den, (b << 17) // den)
+    # (b << 17) // den in two steps below 2^30 (b << 17 can reach 2^32: a long int)
+    c, r = divmod(b << 13, den)
+    # one array of exactly m + 1 (array.append would grow it by 8)
+    return (array("H", tuple(vals) + (vals[m - 1],)), a, b, den, (c << 4) + (r << 4) // den)
 
 
 def _vals_bytes(tex, k):
