@@ -653,6 +653,90 @@ def test_a_partition_a_cut_off_deploy_left_is_repaired_by_the_next(pico, capsys)
         assert st["running"] and st["scene"]["regions"][0]["mode"] == "flash"   # 4sin from flash
 
 
+# On the board, texel.app stopped (its interrupt would run the same W): a FastRefresh
+# of the pico board's sensor on stand-in registers (arrays), a scene of every way a
+# region plays - K_TILE and K_STRETCH included (kinds/samples.py plan()) - and the
+# firmware's C refresh (refresh_core.c, built for the Cortex-M0+) against
+# refresh_viper.core, refresh by refresh: every state word and the CC word.
+_REFRESH_SAME = r"""
+import texel.app as A, _texelcore as c
+from texel.runtime import boards, refresh_viper as RV
+from texel.runtime import scene as S
+from texel.runtime.refresh_fast import FastRefresh
+from texel.runtime.sensor import make_sensor
+from texel.runtime.duty import DutyLaw
+from texel import compat
+A.stop()
+try:
+    board = boards.load("pico")
+    disp = board["display"]
+    sc = S.build(S.validate(%(scene)r, disp), disp)
+    sensor = make_sensor(board["sensor"], [lambda: 0], disp["positions"], 8333)
+    r = FastRefresh(sensor, DutyLaw(3675, 0.5), lambda d: None, lambda: 0,
+                    compat.ticks_us, compat.ticks_diff, 120, 77)
+    r.swap(sc)
+    st = r._S
+    kinds = sorted(set(sc._t[4 * i + 2] for i in range(sc.count)))
+    x = 12345
+    same = 0
+    first = None
+    n = 0
+    for k in range(%(n)d):
+        x = (x * 48271) %% 0x7FFFFFFF
+        m = k %% 300
+        raw = (2000 + (k * 211) %% 61000) if m < 200 else (x %% 65536 if m < 230 else
+               (x %% 300 if m < 240 else 1000 + (k * 37) %% 63000))
+        r._clk[0] = (k * 120 + 5) & 0x3FFFFFFF
+        r._adc[1] = raw
+        before = list(st)
+        cc0 = r._cc[0]
+        RV.core(RV._WA)
+        a = list(st) + [r._cc[0]]
+        for i in range(len(before)):
+            st[i] = before[i]
+        r._cc[0] = cc0
+        c.refresh(RV._W)
+        b = list(st) + [r._cc[0]]
+        n += 1
+        if a == b:
+            same += 1
+        elif first is None:
+            first = (k, raw, [i for i in range(len(a)) if a[i] != b[i]])
+    out = (same, n, first, kinds, c.BUILD)
+finally:
+    A.start("pico")
+print(repr(out))
+"""
+
+
+def test_the_firmware_c_refresh_is_the_viper_refresh_for_every_kind(pico):
+    """The firmware's C refresh as the Cortex-M0+ runs it (tests/gen/test_texel_core.py
+    checks the x64 build) computes what refresh_viper.core computes on the same W:
+    a constant, a reference in flash, a texel plan, samples tiled and stretched in
+    place, samples and a 3-sample texel in chunks, gaps; the finger sweeping,
+    jumping, dropping out and lifted. texel.app plays again afterwards."""
+    scene = {"regions": [
+        {"start_mm": 0, "end_mm": 10, "texture": {"kind": "constant", "level": 0.3}},
+        {"start_mm": 10, "end_mm": 30, "texture": {"kind": "reference", "name": "2sin"}},
+        {"start_mm": 30, "end_mm": 45, "texture": {"kind": "texel", "pitch_db": 5.0,
+                                                    "irregularity_db": -9.0, "seed": 2}},
+        {"start_mm": 46, "end_mm": 60, "texture": {"kind": "samples", "fit": "stretch",
+                                                    "u16": [0, 65535, 7, 40000]}},
+        {"start_mm": 60, "end_mm": 70, "texture": {"kind": "samples", "fit": "tile",
+                                                    "u16": [9, 65535, 30000]}},
+        {"start_mm": 70, "end_mm": 80, "texture": {"kind": "samples", "fit": "tile",
+                                                    "u16": list(range(0, 65535, 97))}},
+        {"start_mm": 82, "end_mm": 101, "texture": {
+            "kind": "texel", "pitch_db": 12.0, "irregularity_db": -9.0, "seed": 2,
+            "texel_samples": 3}}]}
+    with _connect(pico.port) as b:
+        out = b.link.exec(_REFRESH_SAME % {"scene": scene, "n": 900}, timeout=300)
+        assert b.status()["running"]
+    same, n, first, kinds, build = ast.literal_eval(out.strip().splitlines()[-1])
+    assert build == "firmware" and kinds == [0, 1, 2, 3, 4, 5], (build, kinds)
+    assert same == n == 900, first
+
+
 def test_texelpad_virtual_boots_your_own_firmware(fw, tmp_path, capsys):
     """`texelpad virtual --chip rp2040 --firmware FILE.uf2` (issue 30): the maker's own
     build booted on the emulated Pico from the command line, its ROMFS partition in the
