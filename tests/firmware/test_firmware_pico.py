@@ -11,7 +11,7 @@ import json
 import numpy as np
 import pytest
 
-from support import digest
+from support import digest, refresh_same
 from support.cli import run_cli
 from support.firmware import built
 from support.pico import emulated_pico
@@ -653,62 +653,6 @@ def test_a_partition_a_cut_off_deploy_left_is_repaired_by_the_next(pico, capsys)
         assert st["running"] and st["scene"]["regions"][0]["mode"] == "flash"   # 4sin from flash
 
 
-# On the board, texel.app stopped (its interrupt would run the same W): a FastRefresh
-# of the pico board's sensor on stand-in registers (arrays), a scene of every way a
-# region plays - K_TILE and K_STRETCH included (kinds/samples.py plan()) - and the
-# firmware's C refresh (refresh_core.c, built for the Cortex-M0+) against
-# refresh_viper.core, refresh by refresh: every state word and the CC word.
-_REFRESH_SAME = r"""
-import texel.app as A, _texelcore as c
-from texel.runtime import boards, refresh_viper as RV
-from texel.runtime import scene as S
-from texel.runtime.refresh_fast import FastRefresh
-from texel.runtime.sensor import make_sensor
-from texel.runtime.duty import DutyLaw
-from texel import compat
-A.stop()
-try:
-    board = boards.load("pico")
-    disp = board["display"]
-    sc = S.build(S.validate(%(scene)r, disp), disp)
-    sensor = make_sensor(board["sensor"], [lambda: 0], disp["positions"], 8333)
-    r = FastRefresh(sensor, DutyLaw(3675, 0.5), lambda d: None, lambda: 0,
-                    compat.ticks_us, compat.ticks_diff, 120, 77)
-    r.swap(sc)
-    st = r._S
-    kinds = sorted(set(sc._t[4 * i + 2] for i in range(sc.count)))
-    x = 12345
-    same = 0
-    first = None
-    n = 0
-    for k in range(%(n)d):
-        x = (x * 48271) %% 0x7FFFFFFF
-        m = k %% 300
-        raw = (2000 + (k * 211) %% 61000) if m < 200 else (x %% 65536 if m < 230 else
-               (x %% 300 if m < 240 else 1000 + (k * 37) %% 63000))
-        r._clk[0] = (k * 120 + 5) & 0x3FFFFFFF
-        r._adc[1] = raw
-        before = list(st)
-        cc0 = r._cc[0]
-        RV.core(RV._WA)
-        a = list(st) + [r._cc[0]]
-        for i in range(len(before)):
-            st[i] = before[i]
-        r._cc[0] = cc0
-        c.refresh(RV._W)
-        b = list(st) + [r._cc[0]]
-        n += 1
-        if a == b:
-            same += 1
-        elif first is None:
-            first = (k, raw, [i for i in range(len(a)) if a[i] != b[i]])
-    out = (same, n, first, kinds, c.BUILD)
-finally:
-    A.start("pico")
-print(repr(out))
-"""
-
-
 def test_the_firmware_c_refresh_is_the_viper_refresh_for_every_kind(pico):
     """The firmware's C refresh as the Cortex-M0+ runs it (tests/gen/test_texel_core.py
     checks the x64 build) computes what refresh_viper.core computes on the same W:
@@ -730,7 +674,7 @@ def test_the_firmware_c_refresh_is_the_viper_refresh_for_every_kind(pico):
             "kind": "texel", "pitch_db": 12.0, "irregularity_db": -9.0, "seed": 2,
             "texel_samples": 3}}]}
     with _connect(pico.port) as b:
-        out = b.link.exec(_REFRESH_SAME % {"scene": scene, "n": 900}, timeout=300)
+        out = b.link.exec(refresh_same.script("pico", scene, 900, stop_app=True), timeout=300)
         assert b.status()["running"]
     same, n, first, kinds, build = ast.literal_eval(out.strip().splitlines()[-1])
     assert build == "firmware" and kinds == [0, 1, 2, 3, 4, 5], (build, kinds)

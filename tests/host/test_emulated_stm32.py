@@ -191,7 +191,8 @@ def test_the_c_cores_native_module_for_armv7emsp_gives_cpythons_plan(tmp_path):
     # and its C refresh (refresh_core.c, built for the Cortex-M4) against refresh_viper.core
     # on the same chip, refresh by refresh, over a constant, a texel plan and samples tiled
     # and stretched in place (kinds/samples.py plan())
-    script.write_text(_REFRESH_CHECK % {"scene": _EVERY_KIND, "n": 600})
+    from support import refresh_same
+    script.write_text(refresh_same.script("pyboard", _EVERY_KIND, 600, prefix="RESULT "))
     p = subprocess.run([str(kit / "run.sh"), "--icount", "3", "--romfs", str(romfs),
                         "--timeout", "240", str(script)], capture_output=True, text=True,
                        timeout=400)
@@ -210,51 +211,7 @@ _EVERY_KIND = {"regions": [
                                                 "u16": [0, 65535, 7, 40000]}},
     {"start_mm": 40, "end_mm": 50, "texture": {"kind": "samples", "fit": "tile",
                                                 "u16": [9, 65535, 30000]}}]}
+# (no map: a reference or chunks do not fit beside the rest in the emulated F405's heap in
+# script mode - 25,792 bytes free, the largest block 2,171; K_BUF and K_CHUNK are checked
+# on x64 and on the emulated Pico's firmware)
 
-# the pyboard's sensor on stand-in registers (arrays). No map: a reference or chunks do
-# not fit beside the rest in the emulated F405's heap in script mode (25,792 bytes free,
-# the largest block 2,171); K_BUF and K_CHUNK are checked on x64 and on the emulated
-# Pico's firmware
-_REFRESH_CHECK = r"""
-import _texelcore as c
-from texel.runtime import boards, refresh_viper as RV, scene as S
-from texel.runtime.refresh_fast import FastRefresh
-from texel.runtime.sensor import make_sensor
-from texel.runtime.duty import DutyLaw
-from texel import compat
-board = boards.load("pyboard")
-disp = board["display"]
-sc = S.build(S.validate(%(scene)r, disp), disp)
-sensor = make_sensor(board["sensor"], [lambda: 0], disp["positions"], 8333)
-r = FastRefresh(sensor, DutyLaw(3675, 0.5), lambda d: None, lambda: 0,
-                compat.ticks_us, compat.ticks_diff, 120, 77)
-r.swap(sc)
-st = r._S
-kinds = sorted(set(sc._t[4 * i + 2] for i in range(sc.count)))
-x = 12345
-same = 0
-first = None
-n = 0
-for k in range(%(n)d):
-    x = (x * 48271) %% 0x7FFFFFFF
-    m = k %% 300
-    raw = (2000 + (k * 211) %% 61000) if m < 200 else (x %% 65536 if m < 230 else
-           (x %% 300 if m < 240 else 1000 + (k * 37) %% 63000))
-    r._clk[0] = (k * 120 + 5) & 0x3FFFFFFF
-    r._adc[1] = raw
-    before = list(st)
-    cc0 = r._cc[0]
-    RV.core(RV._WA)
-    a = list(st) + [r._cc[0]]
-    for i in range(len(before)):
-        st[i] = before[i]
-    r._cc[0] = cc0
-    c.refresh(RV._W)
-    b = list(st) + [r._cc[0]]
-    n += 1
-    if a == b:
-        same += 1
-    elif first is None:
-        first = (k, raw, [i for i in range(len(a)) if a[i] != b[i]])
-print("RESULT", repr((same, n, first, kinds, c.BUILD)))
-"""
