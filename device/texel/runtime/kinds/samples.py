@@ -249,8 +249,8 @@ def how(tex, n):
     return K_STRETCH if m <= n <= STRETCH_MAX_N else K_CHUNK
 
 
-def plan(tex, n, kind=None):
-    """The 5-tuple a K_TILE or K_STRETCH row plays (scene.Scene.amp and the
+def plan(tex, n, kind):
+    """The 5-tuple a K_TILE or K_STRETCH row (kind: how(tex, n)) plays (scene.Scene.amp and the
     three refresh cores compute _loop's values from it, value for value):
     K_TILE (vals, m, 65536 // m + 1, 0, 0): vals[o mod m] at offset o, the mod by
         that reciprocal below offset 32,768 (as a texel plan's texel index);
@@ -265,8 +265,6 @@ def plan(tex, n, kind=None):
         The repeated last value is read, with weight 0, at the last position."""
     vals = tex["u16"]
     m = len(vals)
-    if kind is None:
-        kind = how(tex, n)
     if kind == K_TILE:
         return (array("H", vals), m, 65536 // m + 1, 0, 0)
     den = n - 1
