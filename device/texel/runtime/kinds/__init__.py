@@ -64,14 +64,21 @@ def new_chunks(n, slab=None):
     with no block above 1 KB where SLAB is 1 (upload.Chunks holds one; samples
     and RAM references play from them). A block the heap has no room for (one
     MemoryError, and MicroPython's collection inside it) turns the rest of the
-    map into 1 KB chunks."""
-    from ...compat import u16_one_block
+    map into 1 KB chunks.
+
+    Before each block the allocator's search starts above the chunks made
+    so far (compat.skip_holes, the firmware's; a no-op elsewhere): else each
+    chunk's search walked the ones before it, from the hint or from the first
+    free block - 38 chunks took 14.1 ms (9.3 with one hint first) on the
+    emulated Pico's firmware, 2.7 ms so."""
+    from ...compat import u16_one_block, skip_holes
     size = 1 << CHUNK_BITS
     per = SLAB if slab is None else slab
     out = []
     o = 0
     while o < n:
         k = min(n - o, per * size)
+        skip_holes()
         if k > size:
             try:
                 mv = memoryview(u16_one_block(k))
