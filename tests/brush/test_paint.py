@@ -63,6 +63,9 @@ def test_the_tables_are_their_formulas():
     assert {sum(B.HANN[(n + j * B.HOP) % B.WINDOW] for j in range(4))
             for n in range(B.WINDOW)} == {1024}
     assert B.WINDOW == 4 * B.HOP and B.K == B.WINDOW // 2 + 1
+    # POS (a literal: gen/brush.py): sub-transform k % 3, at the bit-reversed index of k // 3
+    assert B.POS == tuple(64 * (k % 3) + int(format(k // 3, "06b")[::-1], 2)
+                          for k in range(B.WINDOW))
     assert sorted(B.POS) == list(range(B.WINDOW))
 
 

@@ -621,21 +621,24 @@ def draws(rng, mag, ph, comp, tab):
 
 # --- two windows' frames by one inverse FFT ------------------------------------------
 
-def _positions():
-    """Where the FFT reads spectrum entry k: sub-transform k % 3 (64 entries
-    each), at the bit-reversed index of k // 3 (ifft())."""
-    out = [0] * WINDOW
-    for k in range(WINDOW):
-        m = k // 3
-        r = 0
-        for _ in range(6):
-            r = (r << 1) | (m & 1)
-            m >>= 1
-        out[k] = 64 * (k % 3) + r
-    return tuple(out)
-
-
-POS = _positions()
+# Where the FFT reads spectrum entry k: sub-transform k % 3 (64 entries each), at
+# the bit-reversed index of k // 3 (ifft()). A literal: worked out at import it
+# was 12 of the module's 18 ms import on the emulated Pico's firmware (a brush's
+# first push); tests/brush/test_paint.py works it out again.
+POS = (
+    0, 64, 128, 32, 96, 160, 16, 80, 144, 48, 112, 176, 8, 72, 136, 40,
+    104, 168, 24, 88, 152, 56, 120, 184, 4, 68, 132, 36, 100, 164, 20, 84,
+    148, 52, 116, 180, 12, 76, 140, 44, 108, 172, 28, 92, 156, 60, 124, 188,
+    2, 66, 130, 34, 98, 162, 18, 82, 146, 50, 114, 178, 10, 74, 138, 42,
+    106, 170, 26, 90, 154, 58, 122, 186, 6, 70, 134, 38, 102, 166, 22, 86,
+    150, 54, 118, 182, 14, 78, 142, 46, 110, 174, 30, 94, 158, 62, 126, 190,
+    1, 65, 129, 33, 97, 161, 17, 81, 145, 49, 113, 177, 9, 73, 137, 41,
+    105, 169, 25, 89, 153, 57, 121, 185, 5, 69, 133, 37, 101, 165, 21, 85,
+    149, 53, 117, 181, 13, 77, 141, 45, 109, 173, 29, 93, 157, 61, 125, 189,
+    3, 67, 131, 35, 99, 163, 19, 83, 147, 51, 115, 179, 11, 75, 139, 43,
+    107, 171, 27, 91, 155, 59, 123, 187, 7, 71, 135, 39, 103, 167, 23, 87,
+    151, 55, 119, 183, 15, 79, 143, 47, 111, 175, 31, 95, 159, 63, 127, 191,
+)
 SQRT3_2 = 3547              # round(4096 sqrt(3) / 2), Q12
 
 
