@@ -203,7 +203,9 @@ def start(board_name=None, scene=None, realtime=False, fast=None, report=True, *
     study's split screen). Stops a running display
     first - but only once everything that can be checked was (the board
     file, that it fits this firmware, the scene), and if the new start still
-    fails, the display that played is started again. Returns status(), or
+    fails, the display that played is started again. (A lean port whose
+    heap has no room for the board checks beside the playing scene stops
+    it before it loads them: compat.LEAN.) Returns status(), or
     None with report=False (main.py: status's full collection is ~30 ms of
     a stock Pico's power-up, which a friendly Ctrl-D waits for).
 
@@ -211,16 +213,33 @@ def start(board_name=None, scene=None, realtime=False, fast=None, report=True, *
     refresh_viper.py's in viper) - default on wherever
     the port has viper and the sensor is a linear ADC; on an RP2040 its IRQ
     then reads the ADC and writes the PWM compare register itself."""
-    board = _checked_board(default_board() if board_name is None else board_name)
+    name = default_board() if board_name is None else board_name
+    prev = _playing()
+    try:
+        board = _checked_board(name)
+    except MemoryError:
+        # A lean port (compat.LEAN: the board checks load into the heap, 17 KB of a
+        # stock Pico's) with no room for them beside the playing scene: the display
+        # stops first (below, outside this handler: its exception holds the frames),
+        # and plays again if the start fails
+        if prev is None:
+            raise
+        board = None
+    if board is None:
+        stop()
+        try:
+            board = _checked_board(name)
+        except Exception as e:
+            _failed(name, e, prev)
     # build the scene before touching the hardware: a bad scene changes nothing
-    if scene is None:
-        scene = _default_scene(board["display"])
-    canonical = _scene.validate(scene, board["display"])
-    prev = None
-    if _rt is not None:
-        sc = _rt.refresh.scene
-        prev = (_rt.board["name"], sc.source if sc is not None else None, _rt.start_opts)
-        sc = None                       # the old maps go with stop(): only the source stays
+    try:
+        if scene is None:
+            scene = _default_scene(board["display"])
+        canonical = _scene.validate(scene, board["display"])
+    except Exception as e:
+        if _rt is None and prev is not None:
+            _failed(name, e, prev)     # stopped above
+        raise
     stop()          # (nothing running: disarms what a soft reset left, hw/rp2.py clear_stale_tick)
     try:
         try:
@@ -232,18 +251,34 @@ def start(board_name=None, scene=None, realtime=False, fast=None, report=True, *
             gc.collect()
             _start(board, canonical, realtime, fast, hw_opts)
     except Exception as e:
-        # one line for the host, whatever the hardware raised (a ValueError
-        # crosses the link as text; anything else would be a board traceback)
-        why = str(e) if isinstance(e, ValueError) else "%s: %s" % (type(e).__name__, e)
-        now = "the display is off"
-        if prev is not None:
-            try:
-                start(prev[0], prev[1], **prev[2])
-                now = "the display plays what it played before (board %r)" % prev[0]
-            except Exception:
-                pass
-        raise ValueError("board %r did not start (%s); %s" % (board["name"], why, now))
+        _failed(board["name"], e, prev)
     return status() if report else None
+
+
+def _playing():
+    """(board name, scene source, start options) of the display that plays,
+    or None: what start() plays again when a new start fails. Only the
+    source: the old maps go with stop()."""
+    if _rt is None:
+        return None
+    sc = _rt.refresh.scene
+    return (_rt.board["name"], sc.source if sc is not None else None, _rt.start_opts)
+
+
+def _failed(name, e, prev):
+    """start() failed after the display stopped: the display that played
+    plays again where it can; ValueError, one line for the host whatever the
+    hardware raised (a ValueError crosses the link as text; anything else
+    would be a board traceback)."""
+    why = str(e) if isinstance(e, ValueError) else "%s: %s" % (type(e).__name__, e)
+    now = "the display is off"
+    if prev is not None:
+        try:
+            start(prev[0], prev[1], **prev[2])
+            now = "the display plays what it played before (board %r)" % prev[0]
+        except Exception:
+            pass
+    raise ValueError("board %r did not start (%s); %s" % (name, why, now))
 
 
 def _start(board, canonical, realtime, fast, hw_opts):

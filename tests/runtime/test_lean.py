@@ -147,3 +147,82 @@ def test_circuitpython_frees_the_board_checks_heap():
     print("\nCircuitPython (unix build): %d B free started, %d B after tidy()"
           % (out["started"], out["after"]))
     assert out["pushed"] == 8 and out["again"] is True
+
+
+RULE_SCRIPT = r"""
+import json, sys, types
+sys.path.insert(0, %(device)r)
+sys.implementation.name = "micropython"     # (only what compat reads at its import)
+sys.platform = %(platform)r
+if %(romfs)r:
+    sys.modules["vfs"] = types.SimpleNamespace(rom_ioctl=lambda *a: 0)
+from texel import compat
+print(json.dumps([compat.PORT, bool(compat.ROM), compat.LEAN]))
+"""
+
+
+@pytest.mark.parametrize("platform, romfs, want", [
+    ("rp2", False, ["rp2", False, True]),          # stock MicroPython + texelpad deploy
+    ("rp2", True, ["rp2", True, False]),           # the texelpad firmware
+    ("pyboard", False, ["stm32", False, True]),
+    ("pyboard", True, ["stm32", True, False]),
+])
+def test_a_port_without_its_romfs_is_lean(platform, romfs, want):
+    """compat: a port the texelpad firmware exists for, running without its
+    ROMFS (stock MicroPython: deploy's .mpy files load into the heap) is lean
+    as CircuitPython is; with the ROMFS its code stays in flash."""
+    p = subprocess.run([sys.executable, "-c", RULE_SCRIPT % {
+        "device": str(DEVICE.parent), "platform": platform, "romfs": romfs}],
+        capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    assert json.loads(p.stdout.strip().splitlines()[-1]) == want
+
+
+def _scene(level):
+    import texel.app as app
+    return app.full_screen({"kind": "constant", "level": level})
+
+
+def test_start_with_no_room_for_the_board_checks_stops_the_display_first(monkeypatch):
+    """A lean port whose playing scene leaves no room to load the board checks
+    (a MemoryError; a stock Pico playing 16 texel regions, bench/firmware.py
+    --stock): start() stops the display, loads them in the room that made and
+    starts - and when the start then fails, the display that played plays again."""
+    import texel.app as app
+    real = app._checked_board
+    calls = []
+
+    def tight(name):
+        calls.append(app._rt is not None)
+        if app._rt is not None:
+            raise MemoryError("memory allocation failed, allocating 876 bytes")
+        return real(name)
+    app.start("virtual", _scene(0.25), report=False)
+    try:
+        monkeypatch.setattr(app, "_checked_board", tight)
+        st = app.start("virtual", _scene(0.75))
+        assert calls == [True, False]
+        assert st["running"] and st["scene"]["regions"][0]["amplitude"] == 49151
+        # the retry fails (a board file that is not there): what played plays again
+        calls.clear()
+        with pytest.raises(ValueError) as e:
+            app.start("no_such_board", _scene(0.5))
+        assert calls == [True, False, False]        # the retry, then the restart's own
+        assert str(e.value).startswith("board 'no_such_board' did not start (")
+        assert str(e.value).endswith("the display plays what it played before (board 'virtual')")
+        st = app.status()
+        assert st["running"] and st["scene"]["regions"][0]["amplitude"] == 49151
+        # a bad scene after the stop: the same
+        with pytest.raises(ValueError) as e:
+            app.start("virtual", {"regions": "no"})
+        assert str(e.value).endswith("the display plays what it played before (board 'virtual')")
+        assert app.status()["scene"]["regions"][0]["amplitude"] == 49151
+        # nothing playing: the MemoryError is the caller's
+        app.stop()
+        monkeypatch.setattr(app, "_checked_board", lambda name: (_ for _ in ()).throw(
+            MemoryError("no room")))
+        with pytest.raises(MemoryError):
+            app.start("virtual", _scene(0.5))
+    finally:
+        monkeypatch.setattr(app, "_checked_board", real)
+        app.stop()
