@@ -94,19 +94,44 @@ def _boards():
 
 
 # Where the code itself takes the heap (compat.LEAN: CircuitPython compiles
-# the sources into RAM), tidy() forgets the board files' checks after a start
-# (runtime.boards, 13 KB: only start() needs them; the next start imports them
-# again). No module a playing board keeps imports it at its top
+# the sources into RAM; stock MicroPython loads deploy's .mpy into it), tidy()
+# forgets the board files' checks after a start (runtime.boards, 13 KB on
+# CircuitPython, 17 KB on a stock Pico: only start() needs them; the next start
+# imports them again). No module a playing board keeps imports it at its top
 # (tests/runtime/test_lean.py).
 LEAN = compat.LEAN
 
 
+# The brush painter (gen/brush.py: 22 KB of a stock Pico's heap with its tables)
+# is forgotten too while no brush plays: after a brush a stock Pico had no room
+# left for a full-screen map (bench/firmware.py --stock). A brush push imports it
+# again.
+_PAINTER = ("texel.gen.brush", "texel.gen.brush_viper")
+
+
 def _forget_builders():
-    """Forget the board files' checks (LEAN, above): True when they were loaded."""
-    if "texel.runtime.boards" not in sys.modules:
+    """Forget the board files' checks and, while no brush plays, the brush
+    painter (LEAN, above): True when any of them was loaded."""
+    gone = False
+    if "texel.runtime.boards" in sys.modules:
+        compat.forget("texel.runtime.boards")
+        gone = True
+    if _PAINTER[0] in sys.modules and not _plays("brush"):
+        for name in _PAINTER:
+            compat.forget(name)
+        gone = True
+    return gone
+
+
+def _plays(kind):
+    """Whether a region of the playing scene is of kind `kind`."""
+    sc = _rt.refresh.scene if _rt is not None else None
+    if sc is None:
         return False
-    compat.forget("texel.runtime.boards")
-    return True
+    for r in sc.source["regions"]:
+        if r["texture"]["kind"] == kind:
+            return True
+    return False
 
 
 def _fits(board):

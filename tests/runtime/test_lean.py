@@ -45,10 +45,11 @@ def _top_imports(path: Path) -> set[str]:
     return out
 
 
-def test_no_module_imports_the_board_checks_at_its_top():
-    # else forgetting them would free nothing (and a second import would hold them twice)
+@pytest.mark.parametrize("forgotten", ["texel.runtime.boards", "texel.gen.brush"])
+def test_no_module_imports_what_a_lean_port_forgets_at_its_top(forgotten):
+    # else forgetting it would free nothing (and a second import would hold it twice)
     users = sorted(str(p.relative_to(DEVICE)) for p in DEVICE.rglob("*.py")
-                   if "texel.runtime.boards" in _top_imports(p))
+                   if forgotten in _top_imports(p))
     assert users == []
 
 
@@ -226,3 +227,37 @@ def test_start_with_no_room_for_the_board_checks_stops_the_display_first(monkeyp
     finally:
         monkeypatch.setattr(app, "_checked_board", real)
         app.stop()
+
+
+PAINTER_SCRIPT = r"""
+import gc, json, sys, weakref
+sys.path.insert(0, %(device)r)
+import texel.app as app
+app.LEAN = True
+brush = {"kind": "brush", "brush": {"k": [2.0] * 97, "lam": [0.5] + [0.05] * 96}, "seed": 1}
+out = {}
+app.start("virtual", app.full_screen(brush), report=False)
+app.tidy()
+out["kept_while_playing"] = "texel.gen.brush" in sys.modules
+code = weakref.ref(sys.modules["texel.gen.brush"].paint)
+app.push(app.full_screen({"kind": "constant", "level": 0.5}))
+out["tidied"] = app.tidy()
+gc.collect()
+out["gone"] = ["texel.gen.brush" not in sys.modules, code() is None]
+st = app.push(app.full_screen(dict(brush, seed=2)))     # imported again
+out["again"] = [st["scene"]["regions"][0]["seed"], "texel.gen.brush" in sys.modules]
+app.stop()
+print(json.dumps(out))
+"""
+
+
+def test_tidy_forgets_the_brush_painter_while_no_brush_plays():
+    """A lean port (a stock Pico: gen/brush.py is 22 KB of its heap) keeps the
+    painter only while a brush plays; a brush push imports it again."""
+    p = subprocess.run([sys.executable, "-c", PAINTER_SCRIPT % {"device": str(DEVICE.parent)}],
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    out = json.loads(p.stdout.strip().splitlines()[-1])
+    assert out["kept_while_playing"] is True
+    assert out["tidied"] is True and out["gone"] == [True, True]
+    assert out["again"] == [2, True]
