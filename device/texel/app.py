@@ -105,8 +105,11 @@ LEAN = compat.LEAN
 # The brush painter (gen/brush.py: 22 KB of a stock Pico's heap with its tables)
 # is forgotten too while no brush plays: after a brush a stock Pico had no room
 # left for a full-screen map (bench/firmware.py --stock). A brush push imports it
-# again.
+# again: loading .mpy. Not on CircuitPython, which would compile its 48 KB source
+# again at each such push (forgetting the generator there: docs/runtime.md "The
+# heap"); not measured there.
 _PAINTER = ("texel.gen.brush", "texel.gen.brush_viper")
+FORGET_PAINTER = LEAN and compat.IMPL != "circuitpython"
 
 
 def _forget_builders():
@@ -116,7 +119,7 @@ def _forget_builders():
     if "texel.runtime.boards" in sys.modules:
         compat.forget("texel.runtime.boards")
         gone = True
-    if _PAINTER[0] in sys.modules and not _plays("brush"):
+    if FORGET_PAINTER and _PAINTER[0] in sys.modules and not _plays("brush"):
         for name in _PAINTER:
             compat.forget(name)
         gone = True
@@ -240,31 +243,25 @@ def start(board_name=None, scene=None, realtime=False, fast=None, report=True, *
     then reads the ADC and writes the PWM compare register itself."""
     name = default_board() if board_name is None else board_name
     prev = _playing()
+    checked = None
     try:
-        board = _checked_board(name)
+        # the board file and the scene checked before the hardware is touched:
+        # a bad one changes nothing
+        checked = _checks(name, scene)
     except MemoryError:
-        # A lean port (compat.LEAN: the board checks load into the heap, 17 KB of a
-        # stock Pico's) with no room for them beside the playing scene: the display
-        # stops first (below, outside this handler: its exception holds the frames),
-        # and plays again if the start fails
+        # A lean port (compat.LEAN: the board checks, 17 KB of a stock Pico's heap,
+        # and a kind's code load into the heap again) with no room for them beside
+        # the playing scene: the display stops first (below, outside this handler:
+        # its exception holds the frames), and plays again if the start fails
         if prev is None:
             raise
-        board = None
-    if board is None:
+    if checked is None:
         stop()
         try:
-            board = _checked_board(name)
+            checked = _checks(name, scene)
         except Exception as e:
             _failed(name, e, prev)
-    # build the scene before touching the hardware: a bad scene changes nothing
-    try:
-        if scene is None:
-            scene = _default_scene(board["display"])
-        canonical = _scene.validate(scene, board["display"])
-    except Exception as e:
-        if _rt is None and prev is not None:
-            _failed(name, e, prev)     # stopped above
-        raise
+    board, canonical = checked
     stop()          # (nothing running: disarms what a soft reset left, hw/rp2.py clear_stale_tick)
     try:
         try:
@@ -278,6 +275,14 @@ def start(board_name=None, scene=None, realtime=False, fast=None, report=True, *
     except Exception as e:
         _failed(board["name"], e, prev)
     return status() if report else None
+
+
+def _checks(name, scene):
+    """(board, canonical scene) for start(), or ValueError."""
+    board = _checked_board(name)
+    if scene is None:
+        scene = _default_scene(board["display"])
+    return board, _scene.validate(scene, board["display"])
 
 
 def _playing():
@@ -300,6 +305,8 @@ def _failed(name, e, prev):
     if prev is not None:
         try:
             start(prev[0], prev[1], **prev[2])
+            if prev[1] is None:         # it played idle (no scene): so again
+                _rt.refresh.swap(None)
             now = "the display plays what it played before (board %r)" % prev[0]
         except Exception:
             pass
@@ -508,8 +515,10 @@ def _push(scene):
     compat.skip_holes()
     clock = getattr(rt.hw, "cost_ticks", rt.ticks)
     t0 = clock()
-    checked = _scene.check(scene, rt.board["display"])
     try:
+        # (the check inside: on a lean port it may import a kind's code, e.g. the
+        # brush painter again, and the heap may have no room for it)
+        checked = _scene.check(scene, rt.board["display"])
         _install(checked[0], rt.diff(clock(), t0), checked)
     except MemoryError:
         gc.collect()

@@ -45,7 +45,8 @@ def _top_imports(path: Path) -> set[str]:
     return out
 
 
-@pytest.mark.parametrize("forgotten", ["texel.runtime.boards", "texel.gen.brush"])
+@pytest.mark.parametrize("forgotten", ["texel.runtime.boards", "texel.gen.brush",
+                                       "texel.gen.brush_viper"])
 def test_no_module_imports_what_a_lean_port_forgets_at_its_top(forgotten):
     # else forgetting it would free nothing (and a second import would hold it twice)
     users = sorted(str(p.relative_to(DEVICE)) for p in DEVICE.rglob("*.py")
@@ -153,27 +154,32 @@ def test_circuitpython_frees_the_board_checks_heap():
 RULE_SCRIPT = r"""
 import json, sys, types
 sys.path.insert(0, %(device)r)
-sys.implementation.name = "micropython"     # (only what compat reads at its import)
+sys.implementation.name = %(impl)r     # (only what compat reads at its import)
 sys.platform = %(platform)r
 if %(romfs)r:
     sys.modules["vfs"] = types.SimpleNamespace(rom_ioctl=lambda *a: 0)
 from texel import compat
-print(json.dumps([compat.PORT, bool(compat.ROM), compat.LEAN]))
+import texel.app as app
+print(json.dumps([compat.PORT, bool(compat.ROM), compat.LEAN, app.FORGET_PAINTER]))
 """
 
 
-@pytest.mark.parametrize("platform, romfs, want", [
-    ("rp2", False, ["rp2", False, True]),          # stock MicroPython + texelpad deploy
-    ("rp2", True, ["rp2", True, False]),           # the texelpad firmware
-    ("pyboard", False, ["stm32", False, True]),
-    ("pyboard", True, ["stm32", True, False]),
+@pytest.mark.parametrize("impl, platform, romfs, want", [
+    # stock MicroPython + texelpad deploy: lean, and the painter is forgotten
+    ("micropython", "rp2", False, ["rp2", False, True, True]),
+    ("micropython", "rp2", True, ["rp2", True, False, False]),     # the texelpad firmware
+    ("micropython", "pyboard", False, ["stm32", False, True, True]),
+    ("micropython", "pyboard", True, ["stm32", True, False, False]),
+    # CircuitPython: lean, but the painter stays (it would compile it again)
+    ("circuitpython", "RP2040", False, ["circuitpython", False, True, False]),
 ])
-def test_a_port_without_its_romfs_is_lean(platform, romfs, want):
+def test_a_port_without_its_romfs_is_lean(impl, platform, romfs, want):
     """compat: a port the texelpad firmware exists for, running without its
     ROMFS (stock MicroPython: deploy's .mpy files load into the heap) is lean
-    as CircuitPython is; with the ROMFS its code stays in flash."""
+    as CircuitPython is; with the ROMFS its code stays in flash. app: a lean
+    port forgets the brush painter while no brush plays, but CircuitPython."""
     p = subprocess.run([sys.executable, "-c", RULE_SCRIPT % {
-        "device": str(DEVICE.parent), "platform": platform, "romfs": romfs}],
+        "device": str(DEVICE.parent), "impl": impl, "platform": platform, "romfs": romfs}],
         capture_output=True, text=True, timeout=120)
     assert p.returncode == 0, p.stderr
     assert json.loads(p.stdout.strip().splitlines()[-1]) == want
@@ -218,6 +224,14 @@ def test_start_with_no_room_for_the_board_checks_stops_the_display_first(monkeyp
             app.start("virtual", {"regions": "no"})
         assert str(e.value).endswith("the display plays what it played before (board 'virtual')")
         assert app.status()["scene"]["regions"][0]["amplitude"] == 49151
+        # an idle display (a push that found no room even in the playing scene's:
+        # app._make_room) is idle again after a failed start, not the default scene
+        app._drop_playing(app._rt)
+        with pytest.raises(ValueError) as e:
+            app.start("no_such_board", _scene(0.5))
+        assert str(e.value).endswith("the display plays what it played before (board 'virtual')")
+        st = app.status()
+        assert st["running"] and st["scene"] is None, st["scene"]
         # nothing playing: the MemoryError is the caller's
         app.stop()
         monkeypatch.setattr(app, "_checked_board", lambda name: (_ for _ in ()).throw(
@@ -234,6 +248,7 @@ import gc, json, sys, weakref
 sys.path.insert(0, %(device)r)
 import texel.app as app
 app.LEAN = True
+app.FORGET_PAINTER = True       # (a stock Pico's: app.py)
 brush = {"kind": "brush", "brush": {"k": [2.0] * 97, "lam": [0.5] + [0.05] * 96}, "seed": 1}
 out = {}
 app.start("virtual", app.full_screen(brush), report=False)
@@ -241,7 +256,7 @@ app.tidy()
 out["kept_while_playing"] = "texel.gen.brush" in sys.modules
 code = weakref.ref(sys.modules["texel.gen.brush"].paint)
 app.push(app.full_screen({"kind": "constant", "level": 0.5}))
-out["tidied"] = app.tidy()
+out["forgot"] = app._forget_builders()
 gc.collect()
 out["gone"] = ["texel.gen.brush" not in sys.modules, code() is None]
 st = app.push(app.full_screen(dict(brush, seed=2)))     # imported again
@@ -252,12 +267,14 @@ print(json.dumps(out))
 
 
 def test_tidy_forgets_the_brush_painter_while_no_brush_plays():
-    """A lean port (a stock Pico: gen/brush.py is 22 KB of its heap) keeps the
-    painter only while a brush plays; a brush push imports it again."""
+    """A lean port that loads .mpy (a stock Pico: gen/brush.py is 22 KB of its
+    heap; app.FORGET_PAINTER) keeps the painter only while a brush plays; a
+    brush push imports it again. Not CircuitPython (it would compile it again)."""
     p = subprocess.run([sys.executable, "-c", PAINTER_SCRIPT % {"device": str(DEVICE.parent)}],
                        capture_output=True, text=True, timeout=300)
     assert p.returncode == 0, p.stderr
     out = json.loads(p.stdout.strip().splitlines()[-1])
     assert out["kept_while_playing"] is True
-    assert out["tidied"] is True and out["gone"] == [True, True]
+    assert out["forgot"] is True and out["gone"] == [True, True]
     assert out["again"] == [2, True]
+
