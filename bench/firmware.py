@@ -335,7 +335,7 @@ def _irq_costs(b: Any, display: dict[str, Any], reps: int, say: Progress) -> dic
     """Refresh cost incl. IRQ entry/exit for a full-screen scene of each
     region kind (and 16 texel regions), texelpad/bench/chip.py's method."""
     from texelpad.bench.chip import CPU_HZ, EXCEPTION_CYCLES
-    from texelpad.link.transport import LinkError
+    from texelpad.link.transport import BoardError
     total = _total(display)
     kinds = [
         ("constant", {"regions": [{"start_mm": 0, "end_mm": total,
@@ -374,9 +374,10 @@ def _irq_costs(b: Any, display: dict[str, Any], reps: int, say: Progress) -> dic
         try:
             rows = b.link.eval("print(repr(_tpb_irq_cost(%d, %d, %d)))" % (IRQ_SPIN, reps, 40),
                                timeout=600)
-        except LinkError as e:
+        except BoardError as e:
             # (a stock Pico's heap: a MemoryError in the measuring loop's own
-            # allocations) recorded as that kind's refusal; the other kinds go on
+            # allocations) recorded as that kind's refusal; the other kinds go on. A
+            # link that times out or is lost ends the run as before
             out[name] = {"refused": "measuring: %s" % (str(e)[:300],)}
             say("refresh, %s: not measured (%s)" % (name, str(e)[:120]))
             continue
