@@ -457,24 +457,32 @@ def run_board(firmware: str | None, pushes: int, scenes: int | None, irq_reps: i
             # 3: the refresh per region kind
             res["refresh"] = _irq_costs(b, display, irq_reps, say)
             # 4: the heap, playing the power-up scene, then before texelpad starts
-            try:
-                b.start(BOARD)
-            except Exception as e:      # (LinkError, DeviceError: the board's words)
-                # a stock Pico after the run: every kind's code and the bench's
-                # helpers (their refresh IRQ holds the last scene) in its heap. The
-                # error is a figure; the heap one then comes after a soft reset
-                res["start_error"] = "%s: %s" % (type(e).__name__, str(e)[:300])
-                say("%s: start after the run failed: %s" % (label, res["start_error"]))
-                b.link.soft_reset(timeout=120)
-                b.start(BOARD)
-                b.link.exec(DEVICE_CODE, timeout=60)
-            res["heap_free_playing_default"] = b.link.eval("print(_tpf_heap())")
-            b.stop()
-            b.link.soft_reset(timeout=120)
-            res["heap_free_bare"] = b.link.eval("import gc\ngc.collect()\nprint(gc.mem_free())")
-            res["heap_free_after_import"] = b.link.eval(
-                "import texel.app, gc\ngc.collect()\nprint(gc.mem_free())")
+            res.update(_heap_figures(b, label, say))
     res["wall_s"] = time.monotonic() - t_wall
+    return res
+
+
+def _heap_figures(b: Any, label: str, say: Progress) -> dict[str, Any]:
+    """run_board's step 4: the heap playing the power-up scene (started
+    again), then after a soft reset, bare and with texel.app imported."""
+    res: dict[str, Any] = {}
+    try:
+        b.start(BOARD)
+    except Exception as e:      # (LinkError, DeviceError: the board's words)
+        # a stock Pico after the run: every kind's code and the bench's
+        # helpers (their refresh IRQ holds the last scene) in its heap. The
+        # error is a figure; the heap one then comes after a soft reset
+        res["start_error"] = "%s: %s" % (type(e).__name__, str(e)[:300])
+        say("%s: start after the run failed: %s" % (label, res["start_error"]))
+        b.link.soft_reset(timeout=120)
+        b.start(BOARD)
+        b.link.exec(DEVICE_CODE, timeout=60)
+    res["heap_free_playing_default"] = b.link.eval("print(_tpf_heap())")
+    b.stop()
+    b.link.soft_reset(timeout=120)
+    res["heap_free_bare"] = b.link.eval("import gc\ngc.collect()\nprint(gc.mem_free())")
+    res["heap_free_after_import"] = b.link.eval(
+        "import texel.app, gc\ngc.collect()\nprint(gc.mem_free())")
     return res
 
 
