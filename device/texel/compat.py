@@ -33,8 +33,8 @@ except ImportError:
 #   lean       its code takes the heap (CircuitPython compiles the sources into RAM; no
 #              ROM, no texelpad .mpy; also a "rom" port without its ROMFS, below ROM:
 #              stock MicroPython loads deploy's .mpy into RAM): app.tidy() forgets the
-#              board files' checks after a start (13 KB; the next start imports them again). Forgetting
-#              the generator after each push too would free 18 KB more, but every push
+#              board files' checks after a start (13 KB; the next start imports them
+#              again). Forgetting the generator after each push too would free 18 KB more, but every push
 #              compiled it again (+0.5 s) and soon found the heap too fragmented for
 #              its buffers (measured on the emulated Pico): not done.
 #   loop_hz    the most refreshes a second its paced loop ("loop" mode) can be
@@ -75,7 +75,6 @@ def port_of(impl, platform):
 
 
 PORT = port_of(IMPL, sys.platform)      # this interpreter's port, or None
-LEAN = PORT is not None and PORT_TABLE[PORT]["lean"]     # (its comment above)
 
 
 def forget(name):
@@ -125,12 +124,11 @@ def _romfs():
 
 
 ROM = PORT is not None and PORT_TABLE[PORT]["rom"] and _romfs()    # data may be in ROMFS
-# A stock rp2/stm32 MicroPython (no ROMFS: texelpad deploy's .mpy files in its
-# filesystem) loads the code into its heap as CircuitPython does: lean too. The
-# board checks' 17 KB of a stock Pico's heap (measured on the emulated one)
-# come back to the scenes once a start is done.
-if PORT is not None and PORT_TABLE[PORT]["rom"] and not ROM:
-    LEAN = True
+# The port's "lean" (its comment above), or a stock rp2/stm32 MicroPython (no
+# ROMFS: texelpad deploy's .mpy files in its filesystem), which loads the code
+# into its heap as CircuitPython does. The board checks' 17 KB of a stock Pico's
+# heap (measured on the emulated one) come back to the scenes once a start is done.
+LEAN = PORT is not None and (PORT_TABLE[PORT]["lean"] or (PORT_TABLE[PORT]["rom"] and not ROM))
 
 
 def default_board():
