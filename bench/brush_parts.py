@@ -21,9 +21,6 @@ Figures only; never fails on them. ~1 wall minute with the firmware built.
 """
 from __future__ import annotations
 
-import argparse
-import ast
-import json
 import shutil
 import subprocess
 import sys
@@ -89,31 +86,14 @@ def build() -> bytes:
 
 
 def measure(uf2: str) -> dict[str, Any]:
-    from bench.firmware import brush_scene
-    from texelpad.link.transport import Link
-    from texelpad.sim.emulated import EmulatedPico, why_not
-    why = why_not()
-    if why:
-        raise SystemExit("brush_parts: %s" % why)
+    from bench.firmware import brush_scene, literal_on_firmware
     mpy = build()
-    emu = EmulatedPico(firmware=uf2)
-    emu.start()
-    try:
-        link = Link(emu.port, timeout=120)
-        try:
-            link.exec("f = open('/proto.mpy', 'wb')\nf.close()", timeout=60)
-            for i in range(0, len(mpy), 1024):
-                link.exec("f = open('/proto.mpy', 'ab')\nf.write(%r)\nf.close()"
-                          % mpy[i:i + 1024], timeout=60)
-            display = {"positions": 19200, "dx_um": 5.3}     # the study display's
-            brush = brush_scene(display, 0)["regions"][0]["texture"]["brush"]
-            out = link.exec(ON_BOARD % {"brush": brush, "n": N}, timeout=600)
-        finally:
-            link.close()
-    finally:
-        emu.stop()
-    res: dict[str, Any] = ast.literal_eval(out.strip().splitlines()[-1])
-    res["uf2"] = uf2
+    display = {"positions": 19200, "dx_um": 5.3}     # the study display's
+    brush = brush_scene(display, 0)["regions"][0]["texture"]["brush"]
+    res = literal_on_firmware("brush_parts", uf2, [
+        "f = open('/proto.mpy', 'wb')\nf.close()"] + [
+        "f = open('/proto.mpy', 'ab')\nf.write(%r)\nf.close()" % mpy[i:i + 1024]
+        for i in range(0, len(mpy), 1024)] + [ON_BOARD % {"brush": brush, "n": N}])
     res["calls"] = N
     return res
 
@@ -137,19 +117,8 @@ def table(res: dict[str, Any]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m bench.brush_parts", description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--uf2", help="the texelpad firmware (default: built once into ~/.cache, "
-                    "as bench.firmware does)")
-    ap.add_argument("--json", help="write the figures as JSON here")
-    a = ap.parse_args(argv)
-    from bench.firmware import default_uf2
-    uf2 = a.uf2 or default_uf2(lambda m: print(".. " + m, file=sys.stderr, flush=True))
-    res = measure(uf2)
-    print(table(res))
-    if a.json:
-        Path(a.json).write_text(json.dumps(res, indent=1))
-    return 0
+    from bench.firmware import parts_main
+    return parts_main(argv, "python -m bench.brush_parts", __doc__, measure, table)
 
 
 if __name__ == "__main__":

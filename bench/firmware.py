@@ -795,6 +795,55 @@ def default_uf2(say: Progress) -> str:
     return str(uf2)
 
 
+# --- the smaller benches that run a script on the texelpad firmware -----------------------
+# (bench/request_parts.py, bench/brush_parts.py)
+
+def literal_on_firmware(name: str, uf2: str, codes: list[str]) -> dict[str, Any]:
+    """Boot the emulated Pico on `uf2`, run each of `codes` in turn through
+    the raw REPL, and return the literal the last one printed on its last
+    line (a dict of figures). SystemExit, named `name`, where the emulator
+    cannot run."""
+    from texelpad.link.transport import Link
+    from texelpad.sim.emulated import EmulatedPico, why_not
+    why = why_not()
+    if why:
+        raise SystemExit("%s: %s" % (name, why))
+    emu = EmulatedPico(firmware=uf2)
+    emu.start()
+    try:
+        link = Link(emu.port, timeout=120)
+        try:
+            out = ""
+            for code in codes:
+                out = link.exec(code, timeout=600)
+        finally:
+            link.close()
+    finally:
+        emu.stop()
+    res: dict[str, Any] = ast.literal_eval(out.strip().splitlines()[-1])
+    res["uf2"] = uf2
+    return res
+
+
+def parts_main(argv: list[str] | None, prog: str, doc: str | None,
+               measure: Callable[[str], dict[str, Any]],
+               table: Callable[[dict[str, Any]], str]) -> int:
+    """main() of such a bench: --uf2 (default: default_uf2) and --json; the
+    figures measured on it, printed as `table` writes them."""
+    ap = argparse.ArgumentParser(prog=prog, description=doc,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--uf2", help="the texelpad firmware (default: built once into ~/.cache, "
+                    "as bench.firmware does)")
+    ap.add_argument("--json", help="write the figures as JSON here")
+    a = ap.parse_args(argv)
+    uf2 = a.uf2 or default_uf2(lambda m: print(".. " + m, file=sys.stderr, flush=True))
+    res = measure(uf2)
+    print(table(res))
+    if a.json:
+        Path(a.json).write_text(json.dumps(res, indent=1))
+    return 0
+
+
 def run(uf2: str, stock: bool = False, quick: bool = False, pushes: int | None = None,
         profile: bool = True, progress: Progress | None = None) -> dict[str, Any]:
     say = progress or say_nothing

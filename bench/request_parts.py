@@ -21,9 +21,6 @@ Figures only; never fails on them. ~1 wall minute with the firmware built.
 """
 from __future__ import annotations
 
-import argparse
-import ast
-import json
 import sys
 from typing import Any
 
@@ -86,24 +83,8 @@ print(repr(res))
 
 
 def measure(uf2: str) -> dict[str, Any]:
-    from texelpad.link.transport import Link
-    from texelpad.sim.emulated import EmulatedPico, why_not
-    why = why_not()
-    if why:
-        raise SystemExit("request_parts: %s" % why)
-    emu = EmulatedPico(firmware=uf2)
-    emu.start()
-    try:
-        link = Link(emu.port, timeout=120)
-        try:
-            out = link.exec(ON_BOARD % {"scene": SCENE, "reps": REPS}, timeout=600)
-        finally:
-            link.close()
-    finally:
-        emu.stop()
-    res = ast.literal_eval(out.strip().splitlines()[-1])
-    res["uf2"] = uf2
-    return res
+    from bench.firmware import literal_on_firmware
+    return literal_on_firmware("request_parts", uf2, [ON_BOARD % {"scene": SCENE, "reps": REPS}])
 
 
 def table(res: dict[str, Any]) -> str:
@@ -133,20 +114,8 @@ def table(res: dict[str, Any]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m bench.request_parts", description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--uf2", help="the texelpad firmware (default: built once into ~/.cache, "
-                    "as bench.firmware does)")
-    ap.add_argument("--json", help="write the figures as JSON here")
-    a = ap.parse_args(argv)
-    from bench.firmware import default_uf2
-    uf2 = a.uf2 or default_uf2(lambda m: print(m, file=sys.stderr))
-    res = measure(uf2)
-    print(table(res))
-    if a.json:
-        with open(a.json, "w") as f:
-            json.dump(res, f, indent=1)
-    return 0
+    from bench.firmware import parts_main
+    return parts_main(argv, "python -m bench.request_parts", __doc__, measure, table)
 
 
 if __name__ == "__main__":
