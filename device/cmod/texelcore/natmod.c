@@ -8,9 +8,15 @@
 #define TC_RAISE_BUF(what, have, need) \
     mp_raise_ValueError(MP_ERROR_TEXT("_texelcore: a buffer is too small"))
 #define TC_FREE(ptr, bytes) m_free(ptr)
-// the array type, from the array module (a native module has no &mp_type_array)
-#define TC_ARRAY_TYPE ((const mp_obj_type_t *)MP_OBJ_TO_PTR(mp_load_attr( \
-    mp_import_name(MP_QSTR_array, mp_const_none, MP_OBJ_NEW_SMALL_INT(0)), MP_QSTR_array)))
+// the array type, from the array module (a native module has no &mp_type_array),
+// looked up once by mpy_init: `array` is an extensible built-in, so an import
+// searches every sys.path filesystem for an array.py first - 4-5 ms of each
+// u16() on a stock Pico (38 of them for a full-screen map), and of install()'s
+// check of each region's buffer. A global, not a static: a native module has
+// BSS for globals only (MicroPython's docs/develop/natmod.rst); the type is the
+// firmware's, in flash, so the collector need not see this pointer.
+const mp_obj_type_t *tc_array_type;
+#define TC_ARRAY_TYPE (tc_array_type)
 
 // the dict type, from the runtime's table (a native module has no &mp_type_dict)
 #define TC_DICT_TYPE (mp_fun_table.type_dict)
@@ -29,6 +35,8 @@ void *memcpy(void *dst, const void *src, size_t n) {
 
 mp_obj_t mpy_init(mp_obj_fun_bc_t *self, size_t n_args, size_t n_kw, mp_obj_t *args) {
     MP_DYNRUNTIME_INIT_ENTRY
+    tc_array_type = (const mp_obj_type_t *)MP_OBJ_TO_PTR(mp_load_attr(
+        mp_import_name(MP_QSTR_array, mp_const_none, MP_OBJ_NEW_SMALL_INT(0)), MP_QSTR_array));
     mp_store_global(MP_QSTR_paint, MP_OBJ_FROM_PTR(&tc_paint_obj));
     mp_store_global(MP_QSTR_leak, MP_OBJ_FROM_PTR(&tc_leak_obj));
     mp_store_global(MP_QSTR_texels, MP_OBJ_FROM_PTR(&tc_texels_obj));
