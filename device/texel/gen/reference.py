@@ -339,6 +339,43 @@ def flash_u16(name, length_samples):
     return v
 
 
+def file_u16(name, length_samples, out):
+    """Fill out (a uint16 buffer, or new_chunks' chunks: _parts) with the
+    first length_samples values of the full-screen map ref/<name>.u16 that
+    `texelpad deploy` writes beside this module on a stock RP2040
+    (texelpad.deploy.install.with_reference_maps): littlefs files cannot be
+    played in place as the firmware's ROMFS maps are (flash_u16), but reading
+    38.4 KB into a region's chunks took 1.9 ms on the emulated Pico where
+    rendering a full-screen reference took up to 2.2 s - and the values are
+    the host's binary64 map, the firmware's. True when filled; False (out
+    may be half-written: the caller renders it whole) where there is no such
+    file or it is not whole (a deploy with --no-maps, an older one)."""
+    if name not in STUDY_NAMES or not 1 <= length_samples <= FLASH_SAMPLES:
+        return False
+    try:
+        here = __file__                 # (a frozen module's names no file: flash_u16's case)
+    except NameError:
+        return False
+    cut = max(here.rfind("/"), here.rfind("\\"))
+    try:
+        f = open("%s%s/%s.u16" % (here[:cut + 1], FLASH_DIR, name), "rb")
+    except OSError:
+        return False
+    try:
+        if f.seek(0, 2) != 2 * FLASH_SAMPLES:   # a file cut short is not the map
+            return False
+        f.seek(0)
+        for buf, k in _parts(out, length_samples):
+            # readinto counts bytes: a view of k uint16 values takes 2 k
+            if f.readinto(memoryview(buf)[:k]) != 2 * k:
+                return False
+            if sys.byteorder != "little":       # the file is little-endian
+                _swap16(buf, k)
+    finally:
+        f.close()
+    return True
+
+
 def _swap16(buf, m):
     for i in range(m):
         v = buf[i]

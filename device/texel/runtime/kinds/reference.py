@@ -1,7 +1,8 @@
 # Region kind "reference": one of the lab's nine reference textures (seed 001;
 # gen/reference.py, texel.reference_names()), rendered region-long. In the
 # texelpad firmware its map may already be in flash (gen/reference.py
-# flash_u16): then it plays in place, no RAM, no render; else it is rendered
+# flash_u16): then it plays in place, no RAM, no render; else it is read from
+# the map file `texelpad deploy` writes on a stock RP2040 (file_u16) or rendered
 # into 1 KB chunks (kinds.new_chunks): a stock Pico's heap seldom has the 19.2 or
 # 38.4 KB of a half or full screen in one piece beside a playing scene.
 from ...gen.check import fail, got, qstr, check_keys
@@ -54,8 +55,12 @@ def store(tex, n, engine):
 
 
 def fill(tex, n, chunks, engine, dx_um):
-    from ... import reference_u16
-    reference_u16(tex["name"], n, chunks)   # chunk by chunk (gen/reference.py _parts)
+    # a stock RP2040's deployed map file read into the chunks, where there is one
+    # (gen/reference.py file_u16); else rendered chunk by chunk (_parts)
+    from ...gen.reference import file_u16
+    if not file_u16(tex["name"], n, chunks):
+        from ... import reference_u16
+        reference_u16(tex["name"], n, chunks)
 
 
 def describe(tex):
