@@ -86,6 +86,14 @@ REMOTE_MAIN = "/main.py"
 # [tool.setuptools.package-data] texel = [...] (a test keeps them equal).
 DATA_PATTERNS = ("*.bin",)
 
+# Ports whose deploy also writes the study's nine reference maps
+# (lib/texel/gen/ref/<name>.u16, 345,600 bytes: texelpad.deploy.install
+# with_reference_maps; the firmware's ROMFS holds the same files), read into a
+# region's RAM instead of rendered (texel/gen/reference.py file_u16). A stock
+# RP2040's littlefs has ~1.4 MB; a pyboard's /flash has 112 KB, too little beside
+# the image, and CircuitPython's reading of them is not measured: they render.
+MAP_PORTS = ("rp2",)
+
 # The rp2 backend runs the refresh as a hard machine.Timer IRQ, which rp2
 # MicroPython supports from 1.26; older rp2 firmware is refused up front
 # rather than failing at app.start().

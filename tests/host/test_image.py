@@ -425,6 +425,60 @@ def test_plan_remove_finds_shadowing_leftovers(images):
     assert image.plan_remove(files, remote) == ["/lib/texel/app.py", "/lib/texel/old_module.mpy"]
 
 
+def test_a_stock_rp2040_gets_the_reference_maps_and_no_other_port_does(images):
+    """deploy's with_reference_maps: the nine full-screen maps the firmware's
+    ROMFS holds (the same bytes) beside gen/reference, before /main.py, on rp2
+    alone (image.MAP_PORTS: a pyboard's 112 KB /flash has no room); an image
+    without them (--no-maps) removes any a board holds."""
+    from texel.gen import reference as R
+    from texelpad.deploy.install import with_reference_maps
+    from texelpad.firmware.romfs import reference_maps
+    said: list[str] = []
+    for name in ("rp2", "pyboard", "unix", "circuitpython"):
+        files = images[name]
+        got = with_reference_maps(files, TARGETS[name], said.append)
+        if name not in image.MAP_PORTS:
+            assert got == files, name
+            continue
+        new = [f for f in got if f not in files]
+        want = {"/" + p: d for p, d in reference_maps().items()}
+        assert {f.remote: f.data for f in new} == want
+        assert sorted(want) == ["/lib/texel/gen/%s/%s.u16" % (R.FLASH_DIR, n)
+                                for n in sorted(R.STUDY_NAMES)]
+        assert all(f.sha256 == hashlib.sha256(f.data).hexdigest() for f in new)
+        assert got[-1].remote == "/main.py" and got[:len(files) - 1] == files[:-1]
+        remote = [f.remote for f in got]
+        assert image.plan_remove(files, remote) == sorted(want)      # --no-maps
+        assert image.plan_remove(got, remote) == []
+    assert image.MAP_PORTS == ("rp2",)
+    assert said == ["with the study's 9 reference maps (345,600 bytes; --no-maps renders them "
+                    "on the board)"]
+
+
+def test_deploy_no_maps_reaches_deploy(monkeypatch, capsys):
+    import argparse
+    import contextlib
+    from texelpad.cli import deploy as cli_deploy
+    from texelpad.deploy import install
+    asked = []
+
+    @contextlib.contextmanager
+    def board(args, **kw):
+        yield argparse.Namespace(port="/dev/ttyACM9")
+
+    def deploy(b, **kw):
+        asked.append(kw["maps"])
+        return {"form": "romfs", "board": "pico", "written": 0, "image_bytes": 1,
+                "code_in_romfs": False, "seconds": 0.0, "restarted": None}
+    monkeypatch.setattr(cli_deploy, "connected_board", board)
+    monkeypatch.setattr(install, "deploy", deploy)
+    p = argparse.ArgumentParser()
+    cli_deploy.add_deploy(p)
+    for argv in ([], ["--no-maps"]):
+        assert cli_deploy.cmd_deploy(p.parse_args(argv)) == 0
+    assert asked == [True, False]
+
+
 # --- package.json (mip) ------------------------------------------------------------
 
 def test_committed_package_json_is_current_and_complete():

@@ -70,10 +70,13 @@ def survey(board: Any, files: list[image.ImageFile]) -> tuple[dict, list[str], i
     paths = list(back)
     # One round trip on MicroPython; CircuitPython's heap (with its modules compiled
     # from source and a scene playing) has no block for a 100-path request and its
-    # answer: SURVEY_BATCH paths a request there, the package listed with the last
+    # answer: SURVEY_BATCH paths a request there, the package listed with the last.
+    # A stock Pico playing its power-up scene may have no block for the one request
+    # either (8.3 KB for the 63 files with the reference maps): it is asked again so.
     step = SURVEY_BATCH if board.firmware["implementation"] == "circuitpython" else len(paths)
     hashes, present, free = {}, [], None
-    for i in range(0, len(paths), max(step, 1)):
+    i = 0
+    while i < len(paths):
         last = i + step >= len(paths)
         try:
             h, p, free = board.link.eval(protocol.survey(
@@ -81,12 +84,16 @@ def survey(board: Any, files: list[image.ImageFile]) -> tuple[dict, list[str], i
         except BoardError as e:
             if "MemoryError" not in e.traceback:
                 raise
+            if step > SURVEY_BATCH:
+                step = SURVEY_BATCH
+                continue
             raise image.ImageError(
                 "cannot deploy: %s has too little free memory to survey its files (%s); stop "
                 "its display (texelpad stop --port %s) or reset it, then deploy again; nothing "
                 "was changed" % (board.port, str(e).split(": ", 1)[-1], board.port)) from None
         hashes.update(h)
         present += p
+        i += step
     lead = "" if dev("/x") == "/x" else "/"
     return ({back[p]: h for p, h in hashes.items()}, [lead + p for p in present], free)
 
@@ -184,10 +191,11 @@ class Plan:
 def deploy(board: Any, source: bool = False, include_main: bool = True, dry_run: bool = False,
            progress: Callable[[str], None] | None = None,
            bar: Callable[[int, int, str], None] | None = None,
-           force: bool = False) -> dict[str, Any]:
+           force: bool = False, maps: bool = True) -> dict[str, Any]:
     """Deploy the image to `board` (a Board from connect(port, check=False)).
     progress: one-line messages; bar(done_bytes, total_bytes, file): upload
-    progress. Returns what was done. Raises image.ImageError, before anything
+    progress. maps: with the reference maps where the port takes them
+    (with_reference_maps; False removes any a board holds). Returns what was done. Raises image.ImageError, before anything
     on the board changed, when the image cannot go on this board (too old,
     other .mpy format, does not fit, a path cannot be written); DeployFailed
     when it failed after it changed the board (its text says what state the
@@ -217,6 +225,8 @@ def deploy(board: Any, source: bool = False, include_main: bool = True, dry_run:
     target = image.target_for(fw["implementation"], fw["mpy"], fw["version"], fw["platform"],
                               source=source)
     files = with_native_core(image.build_image(target, include_main=include_main), target, say)
+    if maps:
+        files = with_reference_maps(files, target, say)
     plan = plan_deploy(board, target, files, include_main=include_main, dry_run=dry_run, say=say)
     say_plan(plan, say)
     check_fits(plan)
@@ -254,6 +264,29 @@ def with_native_core(files: list[image.ImageFile], target: image.Target,
     if files and files[-1].remote == image.REMOTE_MAIN:
         k -= 1
     return files[:k] + [nat] + files[k:]
+
+
+def with_reference_maps(files: list[image.ImageFile], target: image.Target,
+                        say: Callable[[str], None]) -> list[image.ImageFile]:
+    """The image plus the study's nine reference maps on a port that takes
+    them (image.MAP_PORTS: a stock RP2040), before /main.py: the full-screen
+    maps as this host renders them (binary64; texelpad.firmware.romfs
+    reference_maps, the firmware's ROMFS files), which a reference region reads
+    into its RAM instead of rendering (texel/gen/reference.py file_u16: 1.9 ms
+    for a full screen on the emulated Pico, rendering took up to 2.2 s).
+    Written once: a later deploy finds their hashes unchanged."""
+    if target.port not in image.MAP_PORTS:
+        return files
+    from ..firmware.romfs import reference_maps
+    src = image.PACKAGE_DIR / "gen" / "reference.py"
+    maps = [image.ImageFile("/" + p, d, hashlib.sha256(d).hexdigest(), src)
+            for p, d in sorted(reference_maps().items())]
+    say("with the study's %d reference maps (%s bytes; --no-maps renders them on the board)"
+        % (len(maps), format(sum(m.size for m in maps), ",")))
+    k = len(files)
+    if files and files[-1].remote == image.REMOTE_MAIN:
+        k -= 1
+    return files[:k] + maps + files[k:]
 
 
 def plan_deploy(board: Any, target: image.Target, files: list[image.ImageFile],
@@ -329,10 +362,13 @@ def check_fits(plan: Plan) -> None:
     """Raise ImageError, before anything changed, when the writes do not fit
     the board's free space (when the board says it)."""
     if plan.free is not None and plan.need > plan.free:
+        maps = any(f.remote.endswith(".u16") for f in plan.todo)
         raise image.ImageError(
             "the image does not fit: writing %d files needs about %d bytes (in %d-byte blocks) "
             "and the board has %d free; delete files from the board (mpremote fs ls :) or "
-            "deploy --no-main" % (len(plan.todo), plan.need, BLOCK, plan.free))
+            "deploy --no-main%s" % (len(plan.todo), plan.need, BLOCK, plan.free,
+                                    " or --no-maps (the reference maps: 345,600 bytes)"
+                                    if maps else ""))
 
 
 def _writable_for_code(board: Any, say: Callable[[str], None]) -> None:
