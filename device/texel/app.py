@@ -465,11 +465,12 @@ MAKE_ROOM = True
 def _build_beside(rt, canonical, disp, idle, checked):
     """The new scene built beside the playing one (sharing what it can), or
     None when it does not fit there and MAKE_ROOM lets _make_room try."""
+    room = MAKE_ROOM and rt.refresh.scene is not None     # a second try in more room
     try:
         return _scene.build(canonical, disp, idle_default=idle, checked=checked,
-                            reuse=rt.refresh.scene)
+                            reuse=rt.refresh.scene, words=not room)
     except _scene.OutOfMemory:
-        if not MAKE_ROOM or rt.refresh.scene is None:
+        if not room:
             raise
     return None
 
@@ -488,6 +489,12 @@ def _make_room(rt, canonical, disp, idle, checked):
         return _scene.build(canonical, disp, idle_default=idle, checked=checked)
     except _scene.OutOfMemory as e:
         why = str(e)
+    if LEAN:
+        # what the failed build loaded (a brush's painter: 22 KB of a stock Pico's
+        # heap) goes before the old scene is built again: with it, a full-screen
+        # reference no longer fitted back after a refused brush (bench/firmware.py
+        # --stock), and the display played idle
+        _forget_builders()
     gc.collect()
     try:
         back = _scene.build(source, disp, idle_default=idle)

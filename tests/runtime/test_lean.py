@@ -278,3 +278,54 @@ def test_tidy_forgets_the_brush_painter_while_no_brush_plays():
     assert out["forgot"] is True and out["gone"] == [True, True]
     assert out["again"] == [2, True]
 
+
+
+REFUSED_SCRIPT = r"""
+import json, sys
+sys.path.insert(0, %(device)r)
+import texel.app as app
+from texel.runtime import scene as S
+app.LEAN = True
+app.FORGET_PAINTER = True       # (a stock Pico's: app.py)
+old = app.full_screen({"kind": "reference", "name": "pink"})
+brush = {"kind": "brush", "brush": {"k": [2.0] * 97, "lam": [0.5] + [0.05] * 96}, "seed": 1}
+app.start("virtual", old, report=False)
+real = S.build
+seen = []
+def build(canonical, *a, **kw):
+    # the brush's build runs out of memory, beside the old scene and in its room
+    # alike (after its painter was imported); what is loaded when the old one is
+    # built again is recorded
+    if canonical["regions"][0]["texture"]["kind"] == "brush":
+        import texel.gen.brush
+        seen.append(["brush", kw.get("words", True)])
+        raise S.OutOfMemory("scene: out of memory while building")
+    seen.append(["old", "texel.gen.brush" in sys.modules])
+    return real(canonical, *a, **kw)
+S.build = build
+out = {}
+try:
+    app.push(app.full_screen(brush))
+except ValueError as e:
+    out["refused"] = str(e)
+out["seen"] = seen
+out["playing"] = app._rt.refresh.scene.source["regions"][0]["texture"]["kind"]
+app.stop()
+print(json.dumps(out))
+"""
+
+
+def test_a_refused_brush_forgets_its_painter_before_the_old_scene_is_built_again():
+    """A brush that fits neither beside the playing scene nor in its room (a
+    stock Pico, bench/firmware.py --stock): the painter its build imported (22
+    KB there) is forgotten before the old scene is built again, which then
+    plays on; the first try, which the room's try follows, does not measure the
+    heap for its message (build's words=False: trial allocations, each failing
+    one a collection, ~0.45 s of a push on a stock Pico)."""
+    p = subprocess.run([sys.executable, "-c", REFUSED_SCRIPT % {"device": str(DEVICE.parent)}],
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    out = json.loads(p.stdout.strip().splitlines()[-1])
+    assert out["seen"] == [["brush", False], ["brush", True], ["old", False]]
+    assert out["refused"].endswith("that scene was built again and plays on")
+    assert out["playing"] == "reference"

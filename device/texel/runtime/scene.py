@@ -311,7 +311,7 @@ class OutOfMemory(ValueError):
 
 
 def build(canonical, display, engine=None, idle_default=0, max_bytes=None, checked=None,
-          reuse=None):
+          reuse=None, words=True):
     """Allocate and render what the scene's regions use and return a Scene.
 
     canonical: a scene (validated again here: build never trusts its input,
@@ -324,7 +324,9 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
     texture and length as one of its regions shares that region's buffer
     instead of rendering it again (buffers are never written after build:
     sharing is safe while both play) - a slider that changes only the right
-    half of a split screen re-renders only the right half.
+    half of a split screen re-renders only the right half. words False: an
+    OutOfMemory says no more (the caller tries again in more room); else it
+    says the heap's free bytes and largest block, measured by allocating.
     Touches no global state: the caller's current scene is unaffected."""
     if checked is not None and checked[0] is canonical:
         c, spans, positions, dx_um = checked
@@ -357,6 +359,11 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
     except MemoryError:
         pass
     if sc is None:
+        if not words:
+            # the caller builds again in more room (texel.app._make_room): the heap's
+            # words are not worth their trial allocations, each failing one a
+            # collection (~25 ms on a stock Pico; ~0.45 s of such a push there)
+            raise OutOfMemory("scene: out of memory while building")
         # whatever was allocated is unreachable now: give it back (memory_words collects)
         from ..compat import memory_words
         need, nbuf, ntab = _need(c, spans, engine)

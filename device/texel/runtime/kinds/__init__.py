@@ -76,20 +76,28 @@ def new_chunks(n, slab=None):
     per = SLAB if slab is None else slab
     out = []
     o = 0
-    while o < n:
-        k = min(n - o, per * size)
-        skip_holes()
-        if k > size:
-            try:
-                mv = memoryview(u16_one_block(k))
-            except MemoryError:
-                per = 1
-                continue
-            for a in range(0, k, size):
-                out.append(mv[a:a + size])
-        else:
-            out.append(u16_one_block(k))
-        o += k
+    try:
+        while o < n:
+            k = min(n - o, per * size)
+            skip_holes()
+            if k > size:
+                try:
+                    mv = memoryview(u16_one_block(k))
+                except MemoryError:
+                    per = 1
+                    continue
+                for a in range(0, k, size):
+                    out.append(mv[a:a + size])
+            else:
+                out.append(u16_one_block(k))
+            o += k
+    except MemoryError:
+        # a stale stack slot naming this list (MicroPython's collector scans the C
+        # stack conservatively) must not keep the chunks made so far alive while the
+        # caller makes room for them (texel.app._make_room)
+        out.clear()
+        mv = None
+        raise
     return tuple(out)
 
 _mods = {}
