@@ -609,6 +609,43 @@ def test_format2_plan_bit_for_bit_on_the_chip_and_a_refused_push_changes_nothing
         assert st2["refreshes"] > n0 and st2["overruns"] == st["overruns"]
 
 
+def test_a_reference_plays_the_hosts_map_from_the_file_deploy_wrote(capsys, port):
+    """On a stock Pico a reference region reads the map file texelpad deploy
+    wrote (lib/texel/gen/ref/3sin.u16: the firmware's ROMFS map, CPython's
+    binary64 render) into its chunks, so it plays the host's values exactly -
+    the float32 render it replaces is within 1 u16 of them - and the file is
+    the image's (deploy's hash check)."""
+    from texel.gen import reference as R
+    n = 9600                                    # half a screen (19.2 KB of chunks)
+    host = R.reference_u16("3sin", n)
+    _playing(port)
+    with texelpad.connect(port, timeout=120) as b:
+        b.push({"regions": [{"start_mm": 0, "end_mm": 101.76,
+                             "texture": {"kind": "constant", "level": 0.5}}]})
+        st = b.push({"regions": [{"start_mm": 0, "end_mm": 50.88,
+                                  "texture": {"kind": "reference", "name": "3sin"}}]})
+        lp = st["last_push"]
+        _say(capsys, "\nhalf-screen reference 3sin on the stock chip: validate %.1f + build "
+             "%.1f + swap %.1f ms (its own clock)" % (lp["validate_us"] / 1e3,
+                                                     lp["build_us"] / 1e3, lp["swap_us"] / 1e3))
+        got = []
+        for k in range(0, 260, 65):
+            out = b.link.exec("import gc, texel.app as _A\ngc.collect()\nprint(repr("
+                              "[_A._rt.refresh.scene.amp(p) for p in range(%d, %d, 37)]))"
+                              % (37 * k, min(n, 37 * (k + 65))), timeout=60)
+            got += ast.literal_eval(out.strip().splitlines()[-1])
+        assert got == [host[p] for p in range(0, n, 37)]
+        # what the board would render instead, at the same places (a 2.4 KB piece)
+        out = b.link.exec("from texel.gen.reference import reference_u16 as _r\n"
+                          "_m = _r('3sin', 1200)\nprint(repr([_m[p] for p in range(1200)]))\n"
+                          "_m = _r = None", timeout=120)
+        mine = ast.literal_eval(out.strip().splitlines()[-1])
+        diff = [abs(a - h) for a, h in zip(mine, host)]
+        _say(capsys, "its float32 render: %d of 1,200 values off the host's, worst %d u16"
+             % (sum(1 for d in diff if d), max(diff)))
+        assert max(diff) <= 1
+
+
 _BRUSH = {"k": [8.0] + [1.5 + 0.1 * (i % 20) for i in range(96)],
           "lam": [0.5] + [0.05 / (1 + 0.04 * i) for i in range(96)], "range": [0.0, 1.0]}
 
@@ -717,3 +754,20 @@ def test_texel_samples_1_is_refused_before_sending_and_the_scene_plays_on(capsys
         st2 = b.status()
     assert st2["scene"] == st["scene"] and st2["pushes"] == st["pushes"]
     assert st2["refreshes"] > st["refreshes"] and st2["faults"] == 0
+
+
+def test_deploy_onto_the_playing_stock_pico_finds_nothing_to_write(capsys, port):
+    """A teacher runs `texelpad deploy` again on a Pico that plays (its power-up
+    scene or the last push): the survey of its 63 files (the reference maps with
+    them) may find no 8 KB block for one request beside the scene - it is asked
+    again in batches - and nothing needs writing: the display plays on."""
+    _playing(port)
+    with texelpad.connect(port, timeout=60) as b:
+        st = b.status()
+    code, out, err = run_cli(capsys, "deploy", "--port", port)
+    assert code == 0, err
+    assert re.search(r"deployed to %s: 0 of (\d+) files written \(0 bytes\), \1 unchanged"
+                     % re.escape(port), out), out
+    with texelpad.connect(port, timeout=60) as b:
+        st2 = b.status()
+    assert st2["running"] and st2["scene"] == st["scene"] and st2["pushes"] == st["pushes"]

@@ -479,6 +479,60 @@ def test_deploy_no_maps_reaches_deploy(monkeypatch, capsys):
     assert asked == [True, False]
 
 
+def test_a_survey_with_no_block_for_one_request_asks_again_in_batches(images, monkeypatch):
+    """install.survey: one request for every path on MicroPython; where the
+    board answers MemoryError (a stock Pico playing a scene: the request for
+    63 files needed 8.3 KB), the same paths again SURVEY_BATCH at a time, the
+    package listed with the last; where even a batch fails, the ImageError
+    saying what to do."""
+    import argparse
+    from texelpad.deploy import install
+    from texelpad.link import protocol
+    from texelpad.link.transport import BoardError
+    files = images["rp2"]
+    asked: list[tuple[int, str]] = []
+
+    class Link:
+        def __init__(self, most: int) -> None:
+            self.most = most                        # the most paths a request may hold
+            self.calls: dict[str, tuple[list[str], str]] = {}
+
+        def eval(self, text: str, timeout: float) -> tuple:
+            paths, package = self.calls[text]
+            asked.append((len(paths), package))
+            if len(paths) > self.most:
+                raise BoardError("the board raised an error: MemoryError: memory allocation "
+                                 "failed, allocating 8344 bytes")
+            return {p: "ab" for p in paths}, ([package + "/app.mpy"] if package else []), 999
+
+    real = protocol.survey
+
+    def survey(paths: list[str], package: str) -> str:
+        text = real(paths, package)            # the request as sent, its paths remembered
+        link.calls[text] = (list(paths), package)
+        return text
+    monkeypatch.setattr(protocol, "survey", survey)
+    for most, ok in ((10 ** 6, True), (install.SURVEY_BATCH, True), (3, False)):
+        link = Link(most)
+        asked.clear()
+        board = argparse.Namespace(link=link, port="/dev/ttyACM9",
+                                   firmware={"implementation": "micropython",
+                                             "platform": "rp2"})
+        if not ok:
+            with pytest.raises(ImageError, match="too little free memory to survey"):
+                install.survey(board, files)
+            continue
+        hashes, present, free = install.survey(board, files)
+        n = 2 * len(files)
+        assert len(hashes) == n and present == ["/lib/texel/app.mpy"] and free == 999
+        sizes = [k for k, _ in asked]
+        if most > n:
+            assert sizes == [n]
+        else:
+            assert sizes[0] == n and sum(sizes[1:]) == n and max(sizes[1:]) == install.SURVEY_BATCH
+            assert [p for _, p in asked[1:]] == [""] * (len(sizes) - 2) + ["/lib/texel"]
+
+
 # --- package.json (mip) ------------------------------------------------------------
 
 def test_committed_package_json_is_current_and_complete():

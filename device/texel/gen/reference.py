@@ -345,9 +345,10 @@ def file_u16(name, length_samples, out):
     `texelpad deploy` writes beside this module on a stock RP2040
     (texelpad.deploy.install.with_reference_maps): littlefs files cannot be
     played in place as the firmware's ROMFS maps are (flash_u16), but reading
-    38.4 KB into a region's chunks took 1.9 ms on the emulated Pico where
-    rendering a full-screen reference took up to 2.2 s - and the values are
-    the host's binary64 map, the firmware's. True when filled; False (out
+    a half screen into a region's chunks took 9.2 ms on the emulated stock
+    Pico (6.1 of it the open) where rendering a full screen took up to 2.2 s
+    (docs/firmware.md) - and the values are the host's binary64 map, the
+    firmware's, where the float32 render is within 1 u16 of them. True when filled; False (out
     may be half-written: the caller renders it whole) where there is no such
     file or it is not whole (a deploy with --no-maps, an older one)."""
     if name not in STUDY_NAMES or not 1 <= length_samples <= FLASH_SAMPLES:
