@@ -129,9 +129,12 @@ def _forget_builders():
 def _plays(kind):
     """Whether a region of the playing scene is of kind `kind`."""
     sc = _rt.refresh.scene if _rt is not None else None
-    if sc is None:
-        return False
-    for r in sc.source["regions"]:
+    return sc is not None and _has(sc.source, kind)
+
+
+def _has(source, kind):
+    """Whether a region of scene `source` is of kind `kind`."""
+    for r in source["regions"]:
         if r["texture"]["kind"] == kind:
             return True
     return False
@@ -489,11 +492,12 @@ def _make_room(rt, canonical, disp, idle, checked):
         return _scene.build(canonical, disp, idle_default=idle, checked=checked)
     except _scene.OutOfMemory as e:
         why = str(e)
-    if LEAN:
+    if LEAN and not _has(source, "brush"):
         # what the failed build loaded (a brush's painter: 22 KB of a stock Pico's
         # heap) goes before the old scene is built again: with it, a full-screen
         # reference no longer fitted back after a refused brush (bench/firmware.py
-        # --stock), and the display played idle
+        # --stock), and the display played idle. (An old brush keeps it: _plays
+        # cannot say so here, the display is idle.)
         _forget_builders()
     gc.collect()
     try:

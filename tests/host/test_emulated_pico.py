@@ -613,8 +613,8 @@ def test_a_reference_plays_the_hosts_map_from_the_file_deploy_wrote(capsys, port
     """On a stock Pico a reference region reads the map file texelpad deploy
     wrote (lib/texel/gen/ref/3sin.u16: the firmware's ROMFS map, CPython's
     binary64 render) into its chunks, so it plays the host's values exactly -
-    the float32 render it replaces is within 1 u16 of them - and the file is
-    the image's (deploy's hash check)."""
+    the float32 render it replaces is within 1 u16 of them (the first 1,200
+    values, rendered on the chip)."""
     from texel.gen import reference as R
     n = 9600                                    # half a screen (19.2 KB of chunks)
     host = R.reference_u16("3sin", n)
@@ -635,7 +635,7 @@ def test_a_reference_plays_the_hosts_map_from_the_file_deploy_wrote(capsys, port
                               % (37 * k, min(n, 37 * (k + 65))), timeout=60)
             got += ast.literal_eval(out.strip().splitlines()[-1])
         assert got == [host[p] for p in range(0, n, 37)]
-        # what the board would render instead, at the same places (a 2.4 KB piece)
+        # what the board would render instead: its first 1,200 values (a 2.4 KB piece)
         out = b.link.exec("from texel.gen.reference import reference_u16 as _r\n"
                           "_m = _r('3sin', 1200)\nprint(repr([_m[p] for p in range(1200)]))\n"
                           "_m = _r = None", timeout=120)

@@ -311,6 +311,24 @@ except ValueError as e:
 out["seen"] = seen
 out["playing"] = app._rt.refresh.scene.source["regions"][0]["texture"]["kind"]
 app.stop()
+# an old brush keeps its painter through a refused push: it is built again with it
+S.build = real
+app.start("virtual", app.full_screen(brush), report=False)
+big = app.full_screen({"kind": "constant", "level": 0.5})
+def build2(canonical, *a, **kw):
+    if canonical is big or canonical["regions"][0]["texture"]["kind"] == "constant":
+        raise S.OutOfMemory("scene: out of memory while building")
+    seen2.append("texel.gen.brush" in sys.modules)
+    return real(canonical, *a, **kw)
+seen2 = []
+S.build = build2
+try:
+    app.push(big)
+except ValueError as e:
+    out["refused2"] = str(e)
+out["old_brush_kept_painter"] = seen2
+out["playing2"] = app._rt.refresh.scene.source["regions"][0]["texture"]["kind"]
+app.stop()
 print(json.dumps(out))
 """
 
@@ -329,3 +347,8 @@ def test_a_refused_brush_forgets_its_painter_before_the_old_scene_is_built_again
     assert out["seen"] == [["brush", False], ["brush", True], ["old", False]]
     assert out["refused"].endswith("that scene was built again and plays on")
     assert out["playing"] == "reference"
+    # an old brush is built again with its painter still loaded (not forgotten, then
+    # loaded again while the display is idle)
+    assert out["old_brush_kept_painter"] == [True]
+    assert out["refused2"].endswith("that scene was built again and plays on")
+    assert out["playing2"] == "brush"

@@ -107,3 +107,53 @@ def test_the_push_line_says_when_the_display_was_idle():
     assert board_push_time(dict(lp, made_room=True)).endswith(
         "; it did not fit beside the scene that played, so the display was idle for the 71.0 "
         "ms of its build")
+
+
+def test_a_first_try_that_room_follows_does_not_measure_the_heap(monkeypatch):
+    """scene.build(words=False) (texel.app._build_beside, when _make_room will
+    try again): its OutOfMemory says no more, and the heap is not measured
+    (compat.memory_words: trial allocations, each failing one a collection on a
+    board); words=True (the try whose message a user reads) measures it."""
+    from texel import compat
+    from texel.runtime import scene as S
+    D = {"positions": 19200, "dx_um": 5.3}
+    scene = {"regions": [{"start_mm": 0, "end_mm": 101.76,
+                          "texture": {"kind": "constant", "level": 0.5}}]}
+    calls = []
+    monkeypatch.setattr(compat, "memory_words", lambda *a: calls.append(a) or "W")
+
+    def full(*a, **kw):
+        raise MemoryError
+    monkeypatch.setattr(S, "_make", full)
+    with pytest.raises(S.OutOfMemory, match=r"^scene: out of memory while building$"):
+        S.build(scene, D, words=False)
+    assert calls == []
+    with pytest.raises(S.OutOfMemory, match=r"\(needs \d+ bytes.*W\)"):
+        S.build(scene, D)
+    assert len(calls) == 1
+
+
+def test_a_failed_new_chunks_holds_none_of_its_chunks(monkeypatch):
+    """kinds.new_chunks empties its list before its MemoryError leaves: a
+    reference to its frame that outlives the call (here the traceback; on a
+    board a stale stack slot the collector scans) keeps no chunk alive."""
+    import weakref
+    from texel import compat
+    from texel.runtime import kinds
+    made = []
+    real = compat.u16_one_block
+
+    def three(n):
+        if len(made) == 3:
+            raise MemoryError
+        a = real(n)
+        made.append(weakref.ref(a))
+        return a
+    monkeypatch.setattr(compat, "u16_one_block", three)
+    monkeypatch.setattr(kinds, "SLAB", 1)
+    try:
+        kinds.new_chunks(5000)
+    except MemoryError as e:
+        tb = e.__traceback__                # holds new_chunks' frame
+    assert tb is not None and len(made) == 3
+    assert [r() for r in made] == [None, None, None]

@@ -354,7 +354,7 @@ def file_u16(name, length_samples, out):
     if name not in STUDY_NAMES or not 1 <= length_samples <= FLASH_SAMPLES:
         return False
     try:
-        here = __file__                 # (a frozen module's names no file: flash_u16's case)
+        here = __file__                 # (a frozen module's is relative: flash_u16's case)
     except NameError:
         return False
     cut = max(here.rfind("/"), here.rfind("\\"))
@@ -370,8 +370,10 @@ def file_u16(name, length_samples, out):
             # readinto counts bytes: a view of k uint16 values takes 2 k
             if f.readinto(memoryview(buf)[:k]) != 2 * k:
                 return False
-            if sys.byteorder != "little":       # the file is little-endian
+            if getattr(sys, "byteorder", "little") != "little":    # the file's order
                 _swap16(buf, k)
+    except OSError:                             # a damaged filesystem: render it
+        return False
     finally:
         f.close()
     return True

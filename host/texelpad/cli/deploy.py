@@ -30,7 +30,8 @@ def add_deploy(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-maps", action="store_true",
                    help="on a stock Pico: leave out the study's nine reference maps (345,600 "
                         "bytes of its filesystem; they are then rendered on the board, up to "
-                        "2.2 s a full screen instead of ~2 ms read) and remove any it holds")
+                        "2.2 s a full screen instead of ~10 ms read for a half one) and "
+                        "remove any it holds")
     p.add_argument("--dry-run", action="store_true", help="only say what would be written")
     p.add_argument("--force", action="store_true",
                    help="on the texelpad firmware: rewrite its ROMFS partition with this "

@@ -272,8 +272,9 @@ def with_reference_maps(files: list[image.ImageFile], target: image.Target,
     them (image.MAP_PORTS: a stock RP2040), before /main.py: the full-screen
     maps as this host renders them (binary64; texelpad.firmware.romfs
     reference_maps, the firmware's ROMFS files), which a reference region reads
-    into its RAM instead of rendering (texel/gen/reference.py file_u16: 1.9 ms
-    for a full screen on the emulated Pico, rendering took up to 2.2 s).
+    into its RAM instead of rendering (texel/gen/reference.py file_u16: 9.2 ms
+    for a half screen on the emulated stock Pico; rendering a full screen took
+    up to 2.2 s).
     Written once: a later deploy finds their hashes unchanged."""
     if target.port not in image.MAP_PORTS:
         return files
