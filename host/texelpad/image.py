@@ -86,13 +86,19 @@ REMOTE_MAIN = "/main.py"
 # [tool.setuptools.package-data] texel = [...] (a test keeps them equal).
 DATA_PATTERNS = ("*.bin",)
 
-# Ports whose deploy also writes the study's nine reference maps
-# (lib/texel/gen/ref/<name>.u16, 345,600 bytes: texelpad.deploy.install
-# with_reference_maps; the firmware's ROMFS holds the same files), read into a
-# region's RAM instead of rendered (texel/gen/reference.py file_u16). A stock
-# RP2040's littlefs has ~1.4 MB; a pyboard's /flash has 112 KB, too little beside
-# the image, and CircuitPython's reading of them is not measured: they render.
+# Ports whose deploy also writes reference maps (lib/texel/gen/ref/<name>.u16,
+# 38,400 bytes each: texelpad.deploy.install with_reference_maps; the firmware's
+# ROMFS holds the same files), read into a region's RAM instead of rendered
+# (texel/gen/reference.py file_u16). A pyboard's /flash has 112 KB, too little
+# beside the image, and CircuitPython's reading of them is not measured: they render.
 MAP_PORTS = ("rp2",)
+# Which: the study references whose full-screen render on a stock Pico takes a
+# second or more (the emulated Pico's clock: square 0.96 s, sawtooth 1.18,
+# triangle 1.59; reading a file ~12 ms). The sums of sines (0.15-0.22 s) and the
+# noise rows (0.29 s) render: all nine files (94 of the filesystem's 352 4-KB
+# blocks) left `mpremote mip install ./package.json` (179 blocks) no room beside
+# the deployed image (docs/host.md's example; 242 blocks free without maps).
+MAP_NAMES = ("square", "triangle", "sawtooth")
 
 # The rp2 backend runs the refresh as a hard machine.Timer IRQ, which rp2
 # MicroPython supports from 1.26; older rp2 firmware is refused up front

@@ -610,24 +610,26 @@ def test_format2_plan_bit_for_bit_on_the_chip_and_a_refused_push_changes_nothing
 
 
 def test_a_reference_plays_the_hosts_map_from_the_file_deploy_wrote(capsys, port):
-    """On a stock Pico a reference region reads the map file texelpad deploy
-    wrote (lib/texel/gen/ref/3sin.u16: the firmware's ROMFS map, CPython's
-    binary64 render) into its chunks, so it plays the host's values exactly -
-    the float32 render it replaces is within 1 u16 of them (the first 1,200
-    values, rendered on the chip)."""
+    """On a stock Pico a triangle reference region reads the map file texelpad
+    deploy wrote (lib/texel/gen/ref/triangle.u16, texelpad.image.MAP_NAMES: the
+    firmware's ROMFS map, CPython's binary64 render) into its chunks: it plays
+    the host's values exactly, at 260 places over half a screen; the render it
+    replaces (its first 600 values, rendered on the chip) is within 1 u16 of them."""
     from texel.gen import reference as R
+    from texelpad import image
+    assert "triangle" in image.MAP_NAMES
     n = 9600                                    # half a screen (19.2 KB of chunks)
-    host = R.reference_u16("3sin", n)
+    host = R.reference_u16("triangle", n)
     _playing(port)
     with texelpad.connect(port, timeout=120) as b:
         b.push({"regions": [{"start_mm": 0, "end_mm": 101.76,
                              "texture": {"kind": "constant", "level": 0.5}}]})
         st = b.push({"regions": [{"start_mm": 0, "end_mm": 50.88,
-                                  "texture": {"kind": "reference", "name": "3sin"}}]})
+                                  "texture": {"kind": "reference", "name": "triangle"}}]})
         lp = st["last_push"]
-        _say(capsys, "\nhalf-screen reference 3sin on the stock chip: validate %.1f + build "
-             "%.1f + swap %.1f ms (its own clock)" % (lp["validate_us"] / 1e3,
-                                                     lp["build_us"] / 1e3, lp["swap_us"] / 1e3))
+        _say(capsys, "\nhalf-screen reference triangle on the stock chip: validate %.1f + "
+             "build %.1f + swap %.1f ms (its own clock)" % (
+                 lp["validate_us"] / 1e3, lp["build_us"] / 1e3, lp["swap_us"] / 1e3))
         got = []
         for k in range(0, 260, 65):
             out = b.link.exec("import gc, texel.app as _A\ngc.collect()\nprint(repr("
@@ -635,15 +637,20 @@ def test_a_reference_plays_the_hosts_map_from_the_file_deploy_wrote(capsys, port
                               % (37 * k, min(n, 37 * (k + 65))), timeout=60)
             got += ast.literal_eval(out.strip().splitlines()[-1])
         assert got == [host[p] for p in range(0, n, 37)]
-        # what the board would render instead: its first 1,200 values (a 2.4 KB piece)
-        out = b.link.exec("from texel.gen.reference import reference_u16 as _r\n"
-                          "_m = _r('3sin', 1200)\nprint(repr([_m[p] for p in range(1200)]))\n"
-                          "_m = _r = None", timeout=120)
-        mine = ast.literal_eval(out.strip().splitlines()[-1])
+        # the file is there and whole (file_u16 reads it), and what the board would
+        # render instead: its first 600 values (1.2 KB pieces)
+        out = b.link.exec("from array import array\nfrom texel.gen.reference import "
+                          "reference_u16 as _r, file_u16 as _f\n_b = array('H', bytes(1200))\n"
+                          "print(_f('triangle', 600, _b))\n_b = None\n"
+                          "_m = _r('triangle', 600)\nprint(repr([_m[p] for p in range(600)]))"
+                          "\n_m = _r = _f = None", timeout=300)
+        read, rendered = out.strip().splitlines()[-2:]
+        assert read == "True", out
+        mine = ast.literal_eval(rendered)
         diff = [abs(a - h) for a, h in zip(mine, host)]
-        _say(capsys, "its float32 render: %d of 1,200 values off the host's, worst %d u16"
+        _say(capsys, "its own render: %d of 600 values off the host's, worst %d u16"
              % (sum(1 for d in diff if d), max(diff)))
-        assert max(diff) <= 1
+        assert len(mine) == 600 and max(diff) <= 1
 
 
 _BRUSH = {"k": [8.0] + [1.5 + 0.1 * (i % 20) for i in range(96)],
@@ -758,9 +765,9 @@ def test_texel_samples_1_is_refused_before_sending_and_the_scene_plays_on(capsys
 
 def test_deploy_onto_the_playing_stock_pico_finds_nothing_to_write(capsys, port):
     """A teacher runs `texelpad deploy` again on a Pico that plays (its power-up
-    scene or the last push): the survey of its 63 files (the reference maps with
-    them) may find no 8 KB block for one request beside the scene - it is asked
-    again in batches - and nothing needs writing: the display plays on."""
+    scene or the last push): the survey of its files may find no block for one
+    request beside the scene (8.3 KB for 63 files, measured) - it is asked again
+    in batches - and nothing needs writing: the display plays on."""
     _playing(port)
     with texelpad.connect(port, timeout=60) as b:
         st = b.status()

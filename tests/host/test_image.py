@@ -426,10 +426,11 @@ def test_plan_remove_finds_shadowing_leftovers(images):
 
 
 def test_a_stock_rp2040_gets_the_reference_maps_and_no_other_port_does(images):
-    """deploy's with_reference_maps: the nine full-screen maps the firmware's
-    ROMFS holds (the same bytes) beside gen/reference, before /main.py, on rp2
-    alone (image.MAP_PORTS: a pyboard's 112 KB /flash has no room); an image
-    without them (--no-maps) removes any a board holds."""
+    """deploy's with_reference_maps: the full-screen maps of the references
+    slow to render (image.MAP_NAMES), the firmware's ROMFS files (the same
+    bytes), beside gen/reference, before /main.py, on rp2 alone
+    (image.MAP_PORTS: a pyboard's 112 KB /flash has no room); an image without
+    them (--no-maps) removes any a board holds."""
     from texel.gen import reference as R
     from texelpad.deploy.install import with_reference_maps
     from texelpad.firmware.romfs import reference_maps
@@ -441,18 +442,17 @@ def test_a_stock_rp2040_gets_the_reference_maps_and_no_other_port_does(images):
             assert got == files, name
             continue
         new = [f for f in got if f not in files]
-        want = {"/" + p: d for p, d in reference_maps().items()}
+        want = {"/lib/texel/gen/%s/%s.u16" % (R.FLASH_DIR, n): reference_maps()[
+            "lib/texel/gen/%s/%s.u16" % (R.FLASH_DIR, n)] for n in image.MAP_NAMES}
         assert {f.remote: f.data for f in new} == want
-        assert sorted(want) == ["/lib/texel/gen/%s/%s.u16" % (R.FLASH_DIR, n)
-                                for n in sorted(R.STUDY_NAMES)]
         assert all(f.sha256 == hashlib.sha256(f.data).hexdigest() for f in new)
         assert got[-1].remote == "/main.py" and got[:len(files) - 1] == files[:-1]
         remote = [f.remote for f in got]
         assert image.plan_remove(files, remote) == sorted(want)      # --no-maps
         assert image.plan_remove(got, remote) == []
-    assert image.MAP_PORTS == ("rp2",)
-    assert said == ["with the study's 9 reference maps (345,600 bytes; --no-maps renders them "
-                    "on the board)"]
+    assert image.MAP_PORTS == ("rp2",) and set(image.MAP_NAMES) <= set(R.STUDY_NAMES)
+    assert said == ["with the reference maps of square, triangle, sawtooth (115,200 bytes; "
+                    "--no-maps renders them on the board)"]
 
 
 def test_deploy_no_maps_reaches_deploy(monkeypatch, capsys):

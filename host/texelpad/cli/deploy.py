@@ -28,9 +28,9 @@ def add_deploy(p: argparse.ArgumentParser) -> None:
                    help="leave /main.py alone (by default it is written: the board then starts "
                         "its default scene at power-up)")
     p.add_argument("--no-maps", action="store_true",
-                   help="on a stock Pico: leave out the study's nine reference maps (345,600 "
-                        "bytes of its filesystem; they are then rendered on the board, up to "
-                        "2.2 s a full screen instead of ~10 ms read for a half one) and "
+                   help="on a stock Pico: leave out the reference maps of square, triangle and "
+                        "sawtooth (115,200 bytes of its filesystem; they are then rendered on "
+                        "the board, about 1-1.6 s a full screen instead of ~12 ms read) and "
                         "remove any it holds")
     p.add_argument("--dry-run", action="store_true", help="only say what would be written")
     p.add_argument("--force", action="store_true",

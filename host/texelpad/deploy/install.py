@@ -268,22 +268,23 @@ def with_native_core(files: list[image.ImageFile], target: image.Target,
 
 def with_reference_maps(files: list[image.ImageFile], target: image.Target,
                         say: Callable[[str], None]) -> list[image.ImageFile]:
-    """The image plus the study's nine reference maps on a port that takes
-    them (image.MAP_PORTS: a stock RP2040), before /main.py: the full-screen
-    maps as this host renders them (binary64; texelpad.firmware.romfs
-    reference_maps, the firmware's ROMFS files), which a reference region reads
-    into its RAM instead of rendering (texel/gen/reference.py file_u16: 9.2 ms
-    for a half screen on the emulated stock Pico; rendering a full screen took
-    up to 2.2 s).
+    """The image plus the reference maps that are slow to render
+    (image.MAP_NAMES) on a port that takes them (image.MAP_PORTS: a stock
+    RP2040), before /main.py: the full-screen maps as this host renders them
+    (binary64; texelpad.firmware.romfs reference_maps, the firmware's ROMFS
+    files), which a reference region reads into its RAM instead of rendering
+    (texel/gen/reference.py file_u16: ~12 ms for a full screen on the emulated
+    stock Pico, where rendering took 0.96-1.59 s).
     Written once: a later deploy finds their hashes unchanged."""
     if target.port not in image.MAP_PORTS:
         return files
     from ..firmware.romfs import reference_maps
     src = image.PACKAGE_DIR / "gen" / "reference.py"
     maps = [image.ImageFile("/" + p, d, hashlib.sha256(d).hexdigest(), src)
-            for p, d in sorted(reference_maps().items())]
-    say("with the study's %d reference maps (%s bytes; --no-maps renders them on the board)"
-        % (len(maps), format(sum(m.size for m in maps), ",")))
+            for p, d in sorted(reference_maps().items())
+            if p.rsplit("/", 1)[-1][:-4] in image.MAP_NAMES]
+    say("with the reference maps of %s (%s bytes; --no-maps renders them on the board)"
+        % (", ".join(image.MAP_NAMES), format(sum(m.size for m in maps), ",")))
     k = len(files)
     if files and files[-1].remote == image.REMOTE_MAIN:
         k -= 1
@@ -363,13 +364,13 @@ def check_fits(plan: Plan) -> None:
     """Raise ImageError, before anything changed, when the writes do not fit
     the board's free space (when the board says it)."""
     if plan.free is not None and plan.need > plan.free:
-        maps = any(f.remote.endswith(".u16") for f in plan.todo)
+        maps = sum(f.size for f in plan.todo if f.remote.endswith(".u16"))
         raise image.ImageError(
             "the image does not fit: writing %d files needs about %d bytes (in %d-byte blocks) "
             "and the board has %d free; delete files from the board (mpremote fs ls :) or "
             "deploy --no-main%s" % (len(plan.todo), plan.need, BLOCK, plan.free,
-                                    " or --no-maps (the reference maps: 345,600 bytes)"
-                                    if maps else ""))
+                                    " or --no-maps (the reference maps: %s bytes)"
+                                    % format(maps, ",") if maps else ""))
 
 
 def _writable_for_code(board: Any, say: Callable[[str], None]) -> None:
