@@ -29,7 +29,8 @@ def maps() -> dict[str, bytes]:
 
 
 def _beside(tmp: Path, files: dict[str, bytes]) -> Path:
-    """A gen/ folder with ref/<name>.u16 files: the module path file_u16 reads beside."""
+    """A gen/ folder with ref/<name>.u16 files: the module path file_u16 reads beside
+    (R.map_files lists them again: the tests' monkeypatch puts its None back)."""
     (tmp / "gen" / R.FLASH_DIR).mkdir(parents=True, exist_ok=True)
     # (the stored rows' noise, read beside the module too, for the renders compared)
     shutil.copyfile(R.noise_path(), tmp / "gen" / R.NOISE_FILE)
@@ -53,6 +54,7 @@ def test_the_files_are_the_host_maps_the_firmware_plays(maps):
 @pytest.mark.parametrize("n", [1, 511, 512, 513, 9600, 19200])
 def test_a_region_reads_the_first_n_values_into_its_chunks(tmp_path, monkeypatch, maps, n):
     monkeypatch.setattr(R, "__file__", str(_beside(tmp_path, maps)))
+    monkeypatch.setattr(R, "_FILES", None)
     for name in R.STUDY_NAMES:
         ch = _chunks(n)
         assert R.file_u16(name, n, ch) is True
@@ -62,6 +64,7 @@ def test_a_region_reads_the_first_n_values_into_its_chunks(tmp_path, monkeypatch
 
 
 def test_no_file_a_cut_file_or_a_map_it_does_not_hold_is_not_read(tmp_path, monkeypatch, maps):
+    monkeypatch.setattr(R, "_FILES", None)
     monkeypatch.setattr(R, "__file__", str(_beside(tmp_path, {"pink": maps["pink"][:-2],
                                                               "blue": maps["blue"] + b"\0\0",
                                                               "2sin": maps["2sin"]})))
@@ -72,6 +75,7 @@ def test_no_file_a_cut_file_or_a_map_it_does_not_hold_is_not_read(tmp_path, monk
 
 
 def _marked(tmp: Path, monkeypatch, maps, **files: bytes) -> None:
+    monkeypatch.setattr(R, "_FILES", None)
     monkeypatch.setattr(R, "__file__", str(_beside(tmp, dict(maps, **files))))
 
 

@@ -339,6 +339,31 @@ def flash_u16(name, length_samples):
     return v
 
 
+_FILES = None                # the names of the map files beside this module (map_files)
+_FILES_DIR = None
+
+
+def map_files():
+    """The references whose map files are beside this module (file_u16),
+    listed once: a region of another then allocates nothing to find out (a
+    failed open's path and exception, at every push, fragmented a small heap
+    between a scene's blocks: tests/runtime/test_scene.py). A deploy resets
+    the board or drops the modules, so the list is new after one."""
+    global _FILES, _FILES_DIR
+    if _FILES is None:
+        names = ()
+        try:
+            here = __file__             # (a frozen module's is relative: flash_u16's case)
+            cut = max(here.rfind("/"), here.rfind("\\"))
+            _FILES_DIR = here[:cut + 1] + FLASH_DIR
+            import os
+            names = tuple(n[:-4] for n in os.listdir(_FILES_DIR) if n.endswith(".u16"))
+        except (NameError, OSError, ImportError):
+            pass
+        _FILES = names
+    return _FILES
+
+
 def file_u16(name, length_samples, out):
     """Fill out (a uint16 buffer, or new_chunks' chunks: _parts) with the
     first length_samples values of the full-screen map ref/<name>.u16 that
@@ -351,15 +376,11 @@ def file_u16(name, length_samples, out):
     firmware's, where the float32 render is within 1 u16 of them. True when filled; False (out
     may be half-written: the caller renders it whole) where there is no such
     file or it is not whole (a deploy with --no-maps, an older one)."""
-    if name not in STUDY_NAMES or not 1 <= length_samples <= FLASH_SAMPLES:
+    if name not in STUDY_NAMES or not 1 <= length_samples <= FLASH_SAMPLES \
+            or name not in map_files():
         return False
     try:
-        here = __file__                 # (a frozen module's is relative: flash_u16's case)
-    except NameError:
-        return False
-    cut = max(here.rfind("/"), here.rfind("\\"))
-    try:
-        f = open("%s%s/%s.u16" % (here[:cut + 1], FLASH_DIR, name), "rb")
+        f = open("%s/%s.u16" % (_FILES_DIR, name), "rb")
     except OSError:
         return False
     try:

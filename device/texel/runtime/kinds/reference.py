@@ -50,6 +50,10 @@ def store(tex, n, engine):
     rom = flash(tex["name"], n)
     if rom is not None:
         return K_BUF, rom, None             # the firmware's map, played in place
+    # which map files there are (fill's file_u16), found out before the chunks are made:
+    # its garbage then leaves no hole between them
+    from ...gen.reference import map_files
+    map_files()
     ch = new_chunks(n)
     return K_CHUNK, ch, ch
 
