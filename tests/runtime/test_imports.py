@@ -28,6 +28,8 @@ ALLOWED = {
                                         # (data_beside keeps it; a reference push called it
                                         # twice a region, 2.0 ms each, before it did)
     ("app.py", "default_board"),        # start() without a board name: once per start
+    ("reference.py", "map_files"),      # the map files beside gen/reference: listed once
+                                        # (a stock Pico's reference region; it keeps the list)
     ("compat.py", "console_reader"),    # texel.app.serve (CircuitPython): once per serve
 }
 
