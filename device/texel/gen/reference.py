@@ -277,14 +277,19 @@ def _fill_wave(name, parts, q16):
 
 
 # --- stored rows -----------------------------------------------------------
+def _here():
+    """This module's folder, with its slash ('' for a bare name); NameError
+    where the module has no __file__."""
+    here = __file__
+    return here[:max(here.rfind("/"), here.rfind("\\")) + 1]
+
+
 def noise_path():
     """Path of reference_noise.bin: next to this module, else texel/gen/ on
     sys.path (frozen modules may have no __file__)."""
     cands = []
     try:
-        here = __file__                 # frozen: the sys.path entries below find /rom/lib
-        cut = max(here.rfind("/"), here.rfind("\\"))
-        cands.append((here[:cut + 1] if cut >= 0 else "") + NOISE_FILE)
+        cands.append(_here() + NOISE_FILE)  # frozen: the sys.path entries below find /rom/lib
     except NameError:
         pass
     for p in sys.path:
@@ -353,9 +358,7 @@ def map_files():
     if _FILES is None:
         names = ()
         try:
-            here = __file__             # (a frozen module's is relative: flash_u16's case)
-            cut = max(here.rfind("/"), here.rfind("\\"))
-            _FILES_DIR = here[:cut + 1] + FLASH_DIR
+            _FILES_DIR = _here() + FLASH_DIR    # (a frozen module's is relative: flash_u16's)
             import os
             names = tuple(n[:-4] for n in os.listdir(_FILES_DIR) if n.endswith(".u16"))
         except (NameError, OSError, ImportError):
@@ -387,16 +390,27 @@ def file_u16(name, length_samples, out):
         if f.seek(0, 2) != 2 * FLASH_SAMPLES:   # a file cut short is not the map
             return False
         f.seek(0)
-        for buf, k in _parts(out, length_samples):
-            # readinto counts bytes: a view of k uint16 values takes 2 k
-            if f.readinto(memoryview(buf)[:k]) != 2 * k:
-                return False
-            if getattr(sys, "byteorder", "little") != "little":    # the file's order
-                _swap16(buf, k)
+        return _read_parts(f, _parts(out, length_samples), length_samples)
     except OSError:                             # a damaged filesystem: render it
         return False
     finally:
         f.close()
+
+
+def _read_parts(f, parts, m):
+    """The next m little-endian uint16 values of file f into parts (_parts'
+    pairs, in order) in the board's byte order; False when f had fewer."""
+    big = getattr(sys, "byteorder", "little") == "big"
+    for out, c in parts:
+        c = c if c < m else m
+        if c <= 0:
+            break
+        # readinto counts bytes: a view of c uint16 values takes 2 c
+        if f.readinto(memoryview(out)[0:c]) != 2 * c:
+            return False
+        if big:
+            _swap16(out, c)
+        m -= c
     return True
 
 
@@ -413,16 +427,8 @@ def _fill_noise(row, n, parts, q16):
         f.seek(row * HALF_SCREEN * 2)
         if q16:
             # straight into the caller's uint16 buffers: no temporary
-            left = m
-            for out, c in parts:
-                c = c if c < left else left
-                if c <= 0:
-                    break
-                if f.readinto(memoryview(out)[0:c]) != 2 * c:
-                    raise OSError("texel: %s is truncated" % NOISE_FILE)
-                if big:
-                    _swap16(out, c)
-                left -= c
+            if not _read_parts(f, parts, m):
+                raise OSError("texel: %s is truncated" % NOISE_FILE)
         else:
             out = parts[0][0]
             chunk = u16_buffer(_CHUNK)

@@ -195,7 +195,8 @@ def deploy(board: Any, source: bool = False, include_main: bool = True, dry_run:
     """Deploy the image to `board` (a Board from connect(port, check=False)).
     progress: one-line messages; bar(done_bytes, total_bytes, file): upload
     progress. maps: with the reference maps where the port takes them
-    (with_reference_maps; False removes any a board holds). Returns what was done. Raises image.ImageError, before anything
+    (with_reference_maps; False removes any a board holds). Returns what was
+    done. Raises image.ImageError, before anything
     on the board changed, when the image cannot go on this board (too old,
     other .mpy format, does not fit, a path cannot be written); DeployFailed
     when it failed after it changed the board (its text says what state the
@@ -260,10 +261,17 @@ def with_native_core(files: list[image.ImageFile], target: image.Target,
     nat = image.ImageFile(natmod.REMOTE, data, hashlib.sha256(data).hexdigest(), f)
     say("with the C core as a native module for %s (%s, %d bytes)"
         % (target.arch, natmod.REMOTE, len(data)))
+    return _before_main(files, [nat])
+
+
+def _before_main(files: list[image.ImageFile],
+                 more: list[image.ImageFile]) -> list[image.ImageFile]:
+    """files with `more` before /main.py (the last file, when it is there: an
+    interrupted deploy never leaves a power-up script without what it needs)."""
     k = len(files)
     if files and files[-1].remote == image.REMOTE_MAIN:
         k -= 1
-    return files[:k] + [nat] + files[k:]
+    return files[:k] + more + files[k:]
 
 
 def with_reference_maps(files: list[image.ImageFile], target: image.Target,
@@ -281,14 +289,10 @@ def with_reference_maps(files: list[image.ImageFile], target: image.Target,
     from ..firmware.romfs import reference_maps
     src = image.PACKAGE_DIR / "gen" / "reference.py"
     maps = [image.ImageFile("/" + p, d, hashlib.sha256(d).hexdigest(), src)
-            for p, d in sorted(reference_maps().items())
-            if p.rsplit("/", 1)[-1][:-4] in image.MAP_NAMES]
+            for p, d in sorted(reference_maps(image.MAP_NAMES).items())]
     say("with the reference maps of %s (%s bytes; --no-maps renders them on the board)"
         % (", ".join(image.MAP_NAMES), format(sum(m.size for m in maps), ",")))
-    k = len(files)
-    if files and files[-1].remote == image.REMOTE_MAIN:
-        k -= 1
-    return files[:k] + maps + files[k:]
+    return _before_main(files, maps)
 
 
 def plan_deploy(board: Any, target: image.Target, files: list[image.ImageFile],

@@ -183,15 +183,16 @@ def const_tables() -> dict[str, bytes]:
     return out
 
 
-def reference_maps() -> dict[str, bytes]:
-    """lib/texel/gen/ref/<name>.u16 for the study's nine references: the
-    full-screen map (texel.gen.reference.FLASH_SAMPLES) as CPython renders it,
-    little-endian; the board plays them in place (gen/reference.flash_u16)."""
+def reference_maps(names: tuple[str, ...] | None = None) -> dict[str, bytes]:
+    """lib/texel/gen/ref/<name>.u16 for the study's nine references (or those
+    of `names`): the full-screen map (texel.gen.reference.FLASH_SAMPLES) as
+    CPython renders it, little-endian; the firmware plays them in place
+    (gen/reference.flash_u16), a stock Pico reads them (file_u16)."""
     import numpy as np
     from texel.gen import reference
     return {"lib/texel/gen/%s/%s.u16" % (reference.FLASH_DIR, n):
             np.asarray(reference.reference_u16(n, reference.FLASH_SAMPLES), dtype="<u2").tobytes()
-            for n in reference.STUDY_NAMES}
+            for n in (reference.STUDY_NAMES if names is None else names)}
 
 
 def _uint(v: int) -> bytes:
