@@ -670,6 +670,9 @@ def stop():
         return
     try:
         rt.hw.stop()
+        # (only once the refresh has stopped: FastRefresh.release zeroes the W it reads)
+        if hasattr(rt.refresh, "release"):
+            rt.refresh.release()
     finally:
         rt.hw.off()
         _rt = None

@@ -252,3 +252,28 @@ def test_a_full_screen_reference_over_another_is_built_in_its_room(board):
     print("\nreference over reference on the twin: made room, building took %.1f ms (the display "
           "idle meanwhile), %s B free after" % (st["last_push"]["build_us"] / 1000.0,
                                                 format(st["mem_free"], ",")))
+
+
+def test_a_slot_naming_the_playing_w_leaves_the_room_to_the_next_reference(board):
+    """A refresh interrupt's frame can leave the playing W (refresh_fast: raw addresses of
+    the scene's buffers) in a stack slot the collector later scans; MicroPython's collector
+    reads every word of a block it reaches, so that one slot kept the old full-screen map
+    alive and the push after it found no room: 1-6 of 60 reference-over-reference pushes on
+    this twin played idle, and a start over a playing full-screen reference did not start.
+    Here the slot is a REPL global holding W through the push and the start: the swap
+    zeroes the dropped W (refresh_fast._wipe), the push is built in the room, and stop()
+    zeroes the last W (FastRefresh.release) before the new start builds."""
+    ref = lambda name: {"regions": [{"start_mm": 0, "end_mm": 101.76,              # noqa: E731
+                                     "texture": {"kind": "reference", "name": name}}]}
+    with _connect(board.port) as b:
+        b.start("pyboard", ref("3sin"))
+        b.link.exec("import texel.runtime.refresh_fast as _rf; _held = [_rf._W]")
+        st = b.push(ref("blue"))
+        held = b.link.eval("print(sum(1 for v in _held[0] if v))")
+        # and a start over the playing map (stop() zeroes the W it leaves: release())
+        b.link.exec("_held = [_rf._W]")
+        again = b.start("pyboard", ref("white"))
+        b.link.exec("del _held")
+    assert st["running"] and st["last_push"].get("made_room") is True, st["last_push"]
+    assert held == 0
+    assert again["running"], again

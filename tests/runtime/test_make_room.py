@@ -157,3 +157,43 @@ def test_a_failed_new_chunks_holds_none_of_its_chunks(monkeypatch):
         tb = e.__traceback__                # holds new_chunks' frame
     assert tb is not None and len(made) == 3
     assert [r() for r in made] == [None, None, None]
+
+
+
+STALE = r"""
+import json, gc
+import texel.app as app
+from texel.runtime import refresh_fast as rf
+try:
+    app.start("virtual", {"regions": [{"start_mm": 0, "end_mm": 101.76,
+                          "texture": {"kind": "reference", "name": "2sin"}}]}, record=64)
+except Exception as e:
+    print(json.dumps({"no_start": repr(e)}))
+    raise SystemExit
+fr = app._rt.refresh
+res = {"fast": isinstance(fr, rf.FastRefresh), "threaded": getattr(fr, "threaded", None)}
+# what a refresh interrupt's frame can leave on a board's stack: the playing W
+stale = [rf._W]
+gc.collect()
+before = gc.mem_free()
+fr.swap(None)
+gc.collect()
+res["freed"] = gc.mem_free() - before
+res["w_words"] = sum(1 for v in stale[0] if v)
+print(json.dumps(res))
+"""
+
+
+def test_a_stale_slot_naming_the_dropped_w_keeps_no_map_alive():
+    """refresh_fast._wipe: the W, table copy and chunk tables of the generation a swap
+    dropped hold raw addresses of its buffers, and MicroPython's collector reads every word
+    of a block it reaches. A slot still naming the old W (on a board: a refresh interrupt's
+    frame; here a list) kept the full-screen map alive - on the emulated pyboard 1-6 of 60
+    reference-over-reference pushes then found no room and played idle. Zeroed, the map goes
+    with its scene. The real unix port and its virtual board (one thread: threaded False).
+    A 64-bit port's W holds its addresses cut to 32 bits, so there the map went anyway: the
+    emulated pyboard (test_firmware_pyboard.py) holds a W through a push and checks it."""
+    res = mpy.run_json(STALE)
+    assert res["fast"] and res["threaded"] is False, res
+    assert res["w_words"] == 0 and res["freed"] >= 38400, res
+

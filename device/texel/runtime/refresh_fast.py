@@ -453,8 +453,23 @@ class FastRefresh(Refresh):
             # Pico). On a port with real threads (the unix port's realtime
             # virtual board) a refresh may still be reading the old scene just
             # after the store: the previous generation stays until the next swap.
+            old = self._prev
             self._prev = None
+            if old is not None:
+                _wipe(old)
         return self._prev
+
+    def release(self):
+        """The refresh has stopped for good (texel.app.stop, after the hardware's
+        stop): its W and the one before are zeroed (_wipe), so that no stale slot
+        naming them keeps the last scene's maps alive into the next start. Not
+        on a threaded port (its refresh thread may still be in a step)."""
+        if self.threaded:
+            return
+        for gen in (self._prev, self._keep):
+            if gen is not None:
+                _wipe(gen)
+        self._prev = self._keep = None
 
     def swap(self, scene):
         old = self.scene
@@ -498,6 +513,34 @@ if (_k.K_CONST, _k.K_BUF, _k.K_PLAN, _k.K_CHUNK, _k.K_TILE, _k.K_STRETCH) != (0,
                       "differ from the literals in refresh_viper.core()")
 if TELEMETRY_SLOTS != _SLOTS:
     raise ImportError("refresh_fast: telemetry ring size differs from refresh.py")
+
+def _wipe(gen):
+    """Zero a dropped generation's W, table copy and chunk tables (gen: what
+    _publish kept). They hold raw addresses of the old scene's buffers, and
+    MicroPython's collector reads every word of a block it reaches as a possible
+    pointer: one stale stack slot still naming the old W (a refresh interrupt's
+    frame) kept a whole full-screen map alive through _publish and the collection
+    after it - texel.app._make_room's build in the old scene's room then failed
+    and the display played idle, in 1-6 of 60 reference-over-reference pushes
+    on the emulated pyboard (tests/firmware/test_firmware_pyboard.py)."""
+    words, _scene, tab, chunked = gen
+    _zero(words)
+    _zero(tab)
+    if chunked is None:                 # the C core's install: one array, or None
+        return
+    if isinstance(chunked, list):       # the Python install: one array per chunked buffer
+        for ct in chunked:
+            _zero(ct)
+    else:
+        _zero(chunked)
+
+
+def _zero(a):
+    # a few words to a few hundred (W: 15 + one per buffer + 5 per plan; a table
+    # copy: 4 per region; a chunk table: one per KB of map)
+    for i in range(len(a)):
+        a[i] = 0
+
 
 # a scene-less table: the sentinel row alone (every position is a gap)
 _EMPTY_TABLE = array("i", [0x3FFFFFFF, 0x3FFFFFFF, 0, 0])
