@@ -115,3 +115,52 @@ def test_the_viper_code_is_the_twin_on_real_interpreters(exe):
         assert (got_map == _twin(name, n)).all(), (exe, name, n)
         if exe == "micropython-ulab-f32":       # reference_u16 renders by it
             assert via_u16, (exe, name, n)
+
+
+MIRROR = r"""
+import json
+from array import array
+from binascii import hexlify
+import texel
+from texel.gen import reference as R
+out = {"copy16": bool(R._copy16()), "maps": {}}
+for name, n, size in %r:
+    if size:                                    # a board's chunks: 1 KB arrays, or slab views
+        if size < 0:
+            slab = memoryview(array("H", bytes(2 * n)))
+            chunks = tuple(slab[a:a + -size] for a in range(0, n, -size))
+        else:
+            chunks = tuple(array("H", bytes(2 * min(size, n - a))) for a in range(0, n, size))
+        texel.reference_u16(name, n, chunks)
+        buf = b"".join(bytes(c) for c in chunks)
+    else:
+        buf = bytes(texel.reference_u16(name, n))
+    out["maps"]["%%s %%d %%d" %% (name, n, size)] = hexlify(buf).decode()
+print(json.dumps(out))
+"""
+
+# (row, length, chunk size: 0 one buffer, < 0 memoryviews of one slab): just past the half
+# screen, the full screen, the mirror's period (19198) and its edges, a second period's
+# reversed run, and chunk sizes that do not divide the half screen
+MIRROR_CASES = [("pink", 9601, 512), ("white", 19200, 512), ("blue", 19200, 0),
+                ("pink", 19198, 0), ("white", 19199, 512), ("blue", 28800, 512),
+                ("pink", 38397, 700), ("white", 40000, -512), ("blue", 19200, 1)]
+
+
+@pytest.mark.parametrize("exe", ["micropython", "micropython-ulab-f32"])
+def test_a_noise_row_mirrored_by_viper_is_the_python_map(exe):
+    """gen/reference.py _mirror: a noise row longer than the half screen repeats it
+    mirrored; with viper (reference_viper.copy16, run by run, chunk by chunk) the maps are
+    CPython's (the per-sample loop) value for value, in one buffer, 1 KB chunks, other
+    chunk sizes and a slab's memoryviews."""
+    from texelpad import toolchain
+    path = toolchain.interpreter(exe)
+    if path is None:
+        pytest.skip("no %s here (../shared/instruments)" % exe)
+    got = mpy.run_json(MIRROR % (MIRROR_CASES,), exe=path, timeout=300, heapsize="8m")
+    assert got["copy16"] is True
+    for name, n, size in MIRROR_CASES:
+        want = np.asarray(texel.reference_u16(name, n), dtype="<u2")
+        have = np.frombuffer(bytes.fromhex(got["maps"]["%s %d %d" % (name, n, size)]),
+                             dtype="<u2")
+        assert (have == want).all(), (exe, name, n, size, np.flatnonzero(have != want)[:5])

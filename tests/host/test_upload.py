@@ -370,9 +370,12 @@ def test_cli_ctrl_c_during_a_big_push_says_what_plays(port, tmp_path):
         assert "Traceback" not in err, err
         with texelpad.connect(port) as b:
             name = b.status()["scene"].get("name")
-        if p.returncode == 0:
-            outcomes.add("completed")
-            assert name == "big"
+        if p.returncode in (0, -signal.SIGINT):
+            # 0: done before the signal; -SIGINT: done, and the signal came while the
+            # interpreter was finishing (it restores the default handler then: seen once
+            # in CI at delay 0.05). Either way the whole push plays
+            outcomes.add("completed" if p.returncode == 0 else "completed, then killed")
+            assert name == "big", (p.returncode, err)
         else:
             assert p.returncode == 130, (p.returncode, err)
             last = err.strip().splitlines()[-1]

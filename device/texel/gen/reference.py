@@ -445,19 +445,64 @@ def _fill_noise(row, n, parts, q16):
                     out[i + j] = chunk[j] * inv
                 i += c
     # longer than the row: mirrored repeats (sources are always < 9600)
-    if n <= HALF_SCREEN:
-        return
-    if len(parts) == 1:
-        out = parts[0][0]
+    if n > HALF_SCREEN:
+        _mirror(n, parts, q16)
+
+
+def _mirror(n, parts, q16):
+    """Values HALF_SCREEN..n-1 of a noise row's map from its first HALF_SCREEN:
+    value i is value k = i mod 19198 (k < 9600) or 19198 - k, a forward or a
+    reversed run. Where the port has viper each run is copied chunk by chunk
+    (reference_viper.copy16): the per-sample loop was ~0.25 s of a full-screen
+    noise reference on a stock Pico (about 0.29 s in all). The same values
+    either way. q16: uint16 parts (else floats: the loop)."""
+    first = parts[0][0]
+    size = len(first)                   # chunks: value i at [i // size][i % size]
+    copy = _copy16() if q16 else False
+    if not copy:
+        if len(parts) == 1:
+            for i in range(HALF_SCREEN, n):
+                k = i % _MIRROR_PERIOD
+                first[i] = first[k if k < HALF_SCREEN else _MIRROR_PERIOD - k]
+            return
         for i in range(HALF_SCREEN, n):
             k = i % _MIRROR_PERIOD
-            out[i] = out[k if k < HALF_SCREEN else _MIRROR_PERIOD - k]
+            k = k if k < HALF_SCREEN else _MIRROR_PERIOD - k
+            parts[i // size][0][i % size] = parts[k // size][0][k % size]
         return
-    size = len(parts[0][0])             # chunks: value i at [i // size][i % size]
-    for i in range(HALF_SCREEN, n):
+    i = HALF_SCREEN
+    while i < n:
         k = i % _MIRROR_PERIOD
-        k = k if k < HALF_SCREEN else _MIRROR_PERIOD - k
-        parts[i // size][0][i % size] = parts[k // size][0][k % size]
+        if k < HALF_SCREEN:             # forward from k
+            s, step, run = k, 1, HALF_SCREEN - k
+        else:                           # backward from 19198 - k
+            s, step, run = _MIRROR_PERIOD - k, -1, _MIRROR_PERIOD - k
+        if run > n - i:
+            run = n - i
+        while run > 0:                  # pieces within one chunk of each
+            so = s % size
+            c = size - i % size
+            room = size - so if step == 1 else so + 1
+            if room < c:
+                c = room
+            if run < c:
+                c = run
+            copy(parts[i // size][0], i % size, parts[s // size][0], so, c, step)
+            i += c
+            s += c * step
+            run -= c
+
+
+_COPY16 = None
+
+
+def _copy16():
+    """reference_viper.copy16, or False where the port has no viper."""
+    global _COPY16
+    if _COPY16 is None:
+        from ..compat import native
+        _COPY16 = native("texel.gen.reference_viper", "copy16") or False
+    return _COPY16
 
 
 # --- band-pass noise ---------------------------------------------------------

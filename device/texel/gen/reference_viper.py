@@ -93,3 +93,15 @@ def steps_of(steps):
         out.append(st * 1024 // TURN)
         out.append(st * 1024 % TURN)
     return out
+
+
+@micropython.viper
+def copy16(dst: ptr16, d: int, src: ptr16, s: int, cnt: int, step: int):
+    # dst[d + t] = src[s + t*step] for t < cnt (step 1 or -1): one piece of a
+    # noise row's mirrored repeats (gen/reference.py _mirror); src and dst may
+    # be one chunk, the values read never overlapping the ones written
+    e = d + cnt
+    while d < e:
+        dst[d] = src[s]
+        d += 1
+        s += step
