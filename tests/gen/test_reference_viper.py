@@ -117,6 +117,22 @@ def test_the_viper_code_is_the_twin_on_real_interpreters(exe):
             assert via_u16, (exe, name, n)
 
 
+@pytest.mark.parametrize("name", NAMES)
+def test_the_c_loop_is_the_twin(name):
+    """texel_core.c tc_sines (the C core's sines: the stock Pico's native module renders
+    2sin/3sin/4sin by it), its CPython build: the twin's integers at every sample of
+    200,000 (the clipped continuation of 3sin/4sin included), in one call and in 7 (the
+    phases carried as between a board's chunks)."""
+    from support import core_c
+    if not core_c.available():
+        pytest.skip("no gcc here")
+    n = 200000
+    want = _twin(name, n)
+    steps, consts = R._SINES[name], _constants(name)
+    assert (np.asarray(core_c.sines(steps, consts, n), dtype=np.int64) == want).all()
+    assert core_c.sines(steps, consts, 40000, parts=7) == want[:40000].tolist()
+
+
 MIRROR = r"""
 import json
 from array import array

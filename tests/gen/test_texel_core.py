@@ -852,3 +852,71 @@ def test_natmod_says_what_is_missing(monkeypatch):
     monkeypatch.setenv("TEXELPAD_CACHE", "/nonexistent-texelpad-cache")
     assert natmod.native_module("armv6m", said.append) is None
     assert said and "viper" in said[-1]
+
+
+SINES_SCRIPT = r"""
+import json
+from array import array
+from texel import compat
+from texel.gen import reference as R, sine_table
+from texel.gen.reference_viper import CONSTANTS, steps_of
+c = compat.core()
+info = {"core": c is not None and c.BUILD, "maps": {}, "via": {}, "errors": []}
+info["int_path"] = "c" if R._int_sines() is c.sines else repr(R._int_sines())
+tab = sine_table.table()
+def args(name):
+    s = R._SINES[name]
+    return array("i", steps_of(s)), array("i", bytes(8 * len(s))), len(s)
+for name in ("2sin", "3sin", "4sin"):
+    n = 40000
+    buf = array("H", bytes(2 * n))
+    st, ph, m = args(name)
+    for a in range(0, n, 7001):                 # parts, the phases carried
+        b = min(n, a + 7001)
+        c.sines(memoryview(buf)[a:b], b - a, st, ph, m, tab, *CONSTANTS[name])
+    info["maps"][name] = bytes(buf).hex()
+    info["via"][name] = bytes(R.reference_u16(name, n)) == bytes(buf)
+st, ph, m = args("4sin")
+a0, ws, rq = CONSTANTS["4sin"]
+for call in ("c.sines(array('H', [0] * 9), 10, st, ph, m, tab, a0, ws, rq)",
+             "c.sines(array('H', [0] * 9), 9, st, ph, 5, tab, a0, ws, rq)",
+             "c.sines(array('H', [0] * 9), 9, st, ph, 0, tab, a0, ws, rq)",
+             "c.sines(array('H', [0] * 9), 9, st, array('i', [1024, 0] * 4), m, tab, a0, ws, rq)",
+             "c.sines(array('H', [0] * 9), 9, array('i', [0, 100000] * 4), ph, m, tab, a0, ws, rq)",
+             "c.sines(array('H', [0] * 9), 9, st, ph, m, tab, a0, ws, rq + 1)",
+             "c.sines(array('H', [0] * 9), 9, st, ph, m, tab, a0, 1, rq)",
+             "c.sines(array('H', [0] * 9), 9, st, ph, m, array('H', [0] * 9), a0, ws, rq)"):
+    try:
+        eval(call)
+        info["errors"].append((call, None))
+    except ValueError as e:
+        info["errors"].append((call, str(e)))
+print(json.dumps(info))
+"""
+
+
+@pytest.mark.parametrize("exe", ["micropython", "micropython-ulab-f32"])
+def test_native_sines_are_the_c_loop_and_render_float32_references(x64_module, exe):
+    """texelcore_api.h sines (texel_core.c tc_sines), the x64 native module on the unix
+    port: 2sin, 3sin and 4sin over 40,000 samples in parts are the CPython build's
+    integers (tests/gen/test_reference_viper.py: those are the viper twin's at every sample
+    of 200,000); a float32 interpreter's reference_u16 renders by it (a stock Pico's
+    native module); bad arguments are refused before the loop touches memory."""
+    from texel.gen import reference as R
+    path = toolchain.interpreter(exe)
+    if path is None:
+        pytest.skip("no %s here (../shared/instruments)" % exe)
+    if not core_c.available():
+        pytest.skip("no gcc here")
+    info = mpy.run_json(SINES_SCRIPT, exe=path, heapsize="8M", timeout=300,
+                        extra_path=str(x64_module))
+    assert info["core"] == "native", info
+    for name, consts in (("2sin", (174760, 1747627, 39321)), ("3sin", (212345, 2721014, 25255)),
+                         ("4sin", (400547, 3393228, 20251))):
+        want = core_c.sines(R._SINES[name], consts, 40000)
+        assert list(array("H", bytes.fromhex(info["maps"][name]))) == want, (exe, name)
+    if exe == "micropython-ulab-f32":
+        assert info["int_path"] == "c" and all(info["via"].values()), info
+    else:                                       # binary64 keeps the float path (the CSV's)
+        assert info["int_path"] == "False", info
+    assert all(why for _call, why in info["errors"]), info["errors"]

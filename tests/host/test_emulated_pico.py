@@ -653,6 +653,34 @@ def test_a_reference_plays_the_hosts_map_from_the_file_deploy_wrote(capsys, port
         assert len(mine) == 600 and max(diff) <= 1
 
 
+def test_a_sum_of_sines_renders_by_the_native_module_as_the_c_core_does_on_the_host(
+        capsys, port):
+    """A stock Pico (float32) renders 2sin/3sin/4sin in integers, by the C core's sines
+    where deploy installed the native module (texel_core.c tc_sines, armv6m): its 4sin is
+    the CPython build of the same C (tests/support/core_c.py) value for value - which is
+    reference_viper.fill's twin at every sample (tests/gen/test_reference_viper.py)."""
+    from support import core_c
+    from texel.gen import reference as R
+    if not core_c.available():
+        pytest.skip("no gcc here")
+    _playing(port)
+    n = 2000
+    with texelpad.connect(port, timeout=120) as b:
+        out = b.link.exec("from texel import compat\nfrom texel.gen import reference as _R\n"
+                          "from texel.gen.reference_viper import CONSTANTS as _C\n"
+                          "import time\nprint(_R._int_sines() is compat.core().sines)\n"
+                          "print(repr(_C['4sin']))\n_t = time.ticks_us()\n"
+                          "_m = _R.reference_u16('4sin', %d)\n"
+                          "print(time.ticks_diff(time.ticks_us(), _t))\n"
+                          "print(repr(list(_m)))\n_m = _R = _C = None" % n, timeout=300)
+    by_c, consts, us, vals = out.strip().splitlines()[-4:]
+    assert by_c == "True", out
+    got = ast.literal_eval(vals)
+    assert got == core_c.sines(R._SINES["4sin"], ast.literal_eval(consts), n)
+    _say(capsys, "\n4sin's first %d values on the stock chip by the native module: %.1f ms "
+         "(its own clock)" % (n, int(us) / 1e3))
+
+
 _BRUSH = {"k": [8.0] + [1.5 + 0.1 * (i % 20) for i in range(96)],
           "lam": [0.5] + [0.05 / (1 + 0.04 * i) for i in range(96)], "range": [0.0, 1.0]}
 

@@ -143,6 +143,25 @@ def samples(vals: list[int], fit: str, n: int, chunk_bits: int = 9) -> list[int]
     return [x for c in chunks for x in c]
 
 
+def sines(steps: tuple, consts: tuple, n: int, parts: int = 1) -> list[int]:
+    """gen/reference_viper.py fill by the C loop (tc_sines): the first n values of the sum
+    of sines of these phase steps (gen/reference.py _SINES) with fill's constants (a0, ws,
+    rq) as uint16, in `parts` calls (the phases carry from one to the next)."""
+    from texel.gen import sine_table
+    st = array("i", [x for s in steps for x in divmod(s * 1024, 100000)])   # steps_of
+    ph = array("i", bytes(8 * len(steps)))
+    tab = sine_table.table()
+    a0, ws, rq = consts
+    out = array("H", bytes(2 * n))
+    cuts = [n * k // parts for k in range(parts + 1)]
+    i32 = ctypes.c_int32
+    for a, b in zip(cuts, cuts[1:]):
+        lib().tc_sines(ctypes.c_void_p(_ptr(out) + 2 * a), i32(b - a), ctypes.c_void_p(_ptr(st)),
+                       ctypes.c_void_p(_ptr(ph)), i32(len(steps)), ctypes.c_void_p(_ptr(tab)),
+                       i32(a0), i32(ws), i32(rq))
+    return list(out)
+
+
 def options(plan, ys: array, dmin: int, flags: int, tries: int) -> tuple[int, int, int]:
     """tc_options on a plan the loop made (plan_int.PlanInt without its
     options; t28, d28 and ys changed in place): (redrawn, at_min, above)."""

@@ -22,6 +22,7 @@ static const mp_rom_map_elem_t texelcore_globals_table[] = {
     { MP_ROM_QSTR(MP_QSTR_render), MP_ROM_PTR(&tc_render_obj) },
     { MP_ROM_QSTR(MP_QSTR_u16), MP_ROM_PTR(&tc_u16_obj) },
     { MP_ROM_QSTR(MP_QSTR_samples), MP_ROM_PTR(&tc_samples_obj) },
+    { MP_ROM_QSTR(MP_QSTR_sines), MP_ROM_PTR(&tc_sines_obj) },
     { MP_ROM_QSTR(MP_QSTR_options), MP_ROM_PTR(&tc_options_obj) },
     { MP_ROM_QSTR(MP_QSTR_refresh), MP_ROM_PTR(&tc_refresh_obj) },
     { MP_ROM_QSTR(MP_QSTR_refresh_entry), MP_ROM_PTR(&tc_refresh_entry_obj) },

@@ -427,3 +427,47 @@ void tc_plan_options(uint32_t seed, int32_t min_mc, int32_t reset, int32_t count
                d28, out);
 }
 #endif  // TC_NO_FLOAT
+
+
+void tc_sines(uint16_t *out, int32_t n, const int32_t *steps, int32_t *ph, int32_t m,
+              const uint16_t *tab, int32_t a0, int32_t ws, int32_t rq) {
+    int32_t m2 = 2 * m, hw = ws >> 1;
+    for (int32_t i = 0; i < n; i++) {
+        int32_t a = 0;
+        for (int32_t j = 0; j < m2; j += 2) {
+            int32_t k = ph[j], r = ph[j + 1];
+            int32_t y0 = tab[k];
+            // fq = r*4096/100000 (0..4095, by a multiply: 99999*21475 < 2^31)
+            a += (y0 << 4) + (((tab[k + 1] - y0) * ((r * 21475) >> 19)) >> 8);
+            r += steps[j + 1];
+            k += steps[j];
+            if (r >= 100000) {
+                r -= 100000;
+                k += 1;
+            }
+            if (k >= 1024) {
+                k -= 1024;
+            }
+            ph[j] = k;
+            ph[j + 1] = r;
+        }
+        int32_t x = a - a0;
+        if (x <= 0) {
+            out[i] = 0;
+        } else if (x >= ws) {           // beyond 65535 (a longer map): clipped
+            out[i] = 65535;
+        } else {
+            int32_t u = ((x >> 6) * rq) >> 14;
+            int64_t e = ((int64_t)x << 16) - (int64_t)u * ws;
+            while (e >= hw) {
+                u += 1;
+                e -= ws;
+            }
+            while (e < hw - ws) {
+                u -= 1;
+                e += ws;
+            }
+            out[i] = (uint16_t)(u < 65535 ? u : 65535);
+        }
+    }
+}

@@ -72,4 +72,13 @@ void tc_render(uint16_t *out, int32_t n, int32_t L, int32_t count, const int32_t
 void tc_samples(uint16_t **chunks, int32_t bits, int32_t n, const uint16_t *vals, int32_t m,
                 int32_t stretch);
 
+// gen/reference_viper.py fill, statement for statement: n values of a sum of
+// m sines (the references 2sin, 3sin, 4sin) into out as uint16. ph: 2m words,
+// sine j's table step and remainder, carried to the next call; steps: 2m
+// words, what a sample adds to them; tab = sine_table.table(); a0, ws, rq:
+// reference_viper.CONSTANTS. The remainder e = x*2^16 - u*ws in int64 (viper's
+// 32-bit words wrap there and its difference is exact: the same integer).
+void tc_sines(uint16_t *out, int32_t n, const int32_t *steps, int32_t *ph, int32_t m,
+              const uint16_t *tab, int32_t a0, int32_t ws, int32_t rq);
+
 #endif

@@ -192,6 +192,43 @@ static mp_obj_t tc_samples_fn(size_t n_args, const mp_obj_t *args) {
 }
 static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_samples_obj, 6, 6, tc_samples_fn);
 
+// sines(out, n, steps, ph, m, tab, a0, ws, rq): gen/reference_viper.py fill in C
+// (tc_sines): n values of reference 2sin, 3sin or 4sin into out, the phases in ph
+// carried to the next call. gen/reference.py uses it where the core has it: a
+// full-screen 4sin took 220 ms of viper on a stock Pico
+#define TC_SINES_MAX 4              // reference_viper.CONSTANTS: up to four sines
+static mp_obj_t tc_sines_fn(size_t n_args, const mp_obj_t *args) {
+    (void)n_args;
+    int32_t n = mp_obj_get_int(args[1]);
+    int32_t m = mp_obj_get_int(args[4]);
+    if (n < 0 || m < 1 || m > TC_SINES_MAX) {
+        mp_raise_ValueError(MP_ERROR_TEXT("sines: n or m out of range"));
+    }
+    uint16_t *out = tc_buf(args[0], 2 * (size_t)n, MP_BUFFER_WRITE, "out");
+    const int32_t *steps = tc_buf(args[2], 8 * (size_t)m, MP_BUFFER_READ, "steps");
+    int32_t *ph = tc_buf(args[3], 8 * (size_t)m, MP_BUFFER_RW, "ph");
+    for (int32_t j = 0; j < 2 * m; j += 2) {
+        // table steps 0..1023 and remainders 0..99999: the loop's bounds (a
+        // wrong array would read outside the table)
+        if ((uint32_t)ph[j] > 1023 || (uint32_t)ph[j + 1] > 99999 ||
+            (uint32_t)steps[j] > 1023 || (uint32_t)steps[j + 1] > 99999) {
+            mp_raise_ValueError(MP_ERROR_TEXT("sines: a phase or step out of range"));
+        }
+    }
+    const uint16_t *tab = tc_buf(args[5], 2 * TC_SINE_U16, MP_BUFFER_READ, "tab");
+    int32_t a0 = mp_obj_get_int(args[6]), ws = mp_obj_get_int(args[7]);
+    int32_t rq = mp_obj_get_int(args[8]);
+    // reference_viper.CONSTANTS' kind (ws ~2^21, rq = 2^36 // ws): every product then
+    // stays below 2^31, and the remainder's loops take a few steps
+    if (a0 < 0 || a0 >= (1 << 24) || ws < (1 << 16) || ws >= (1 << 23) ||
+        rq != (int32_t)(((int64_t)1 << 36) / ws)) {
+        mp_raise_ValueError(MP_ERROR_TEXT("sines: a0, ws, rq are not a reference's"));
+    }
+    tc_sines(out, n, steps, ph, m, tab, a0, ws, rq);
+    return mp_const_none;
+}
+static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_sines_obj, 9, 9, tc_sines_fn);
+
 // refresh(W): one refresh on texel.runtime.refresh_viper's word array W (an
 // array('I') whose words are addresses FastRefresh resolved: trusted, as
 // core() trusts them); what the tests compare with core()

@@ -205,9 +205,14 @@ _INT_SINES = None
 def _int_sines():
     global _INT_SINES
     if _INT_SINES is None:
-        from ..compat import FLOAT_BITS, native
-        _INT_SINES = (native("texel.gen.reference_viper", "fill") if FLOAT_BITS <= 24
-                      else None) or False
+        from ..compat import FLOAT_BITS, core, native
+        f = None
+        if FLOAT_BITS <= 24:
+            # the C core's twin first (texel_core.c tc_sines, the same integers): a
+            # full-screen 4sin took 220 ms of viper on a stock Pico
+            c = core()
+            f = (c and getattr(c, "sines", None)) or native("texel.gen.reference_viper", "fill")
+        _INT_SINES = f or False
     return _INT_SINES
 
 
