@@ -535,11 +535,29 @@ def _wipe(gen):
         _zero(chunked)
 
 
+_ZEROS = array("I", bytes(4 * 64))
+
+
 def _zero(a):
     # a few words to a few hundred (W: 15 + one per buffer + 5 per plan; a table
-    # copy: 4 per region; a chunk table: one per KB of map)
-    for i in range(len(a)):
+    # copy: 4 per region; a chunk table: one per KB of map). By slice stores of
+    # 64 zero words ('i' and 'I' alike: the same item size): 70-95 us for 20-128
+    # words on the emulated stock Pico, where the loop took 7 us a word (0.5 ms
+    # of a full-screen push's swap)
+    n = len(a)
+    i = 0
+    try:
+        while n - i >= 64:
+            a[i:i + 64] = _ZEROS
+            i += 64
+        if i < n:
+            a[i:n] = memoryview(_ZEROS)[:n - i]
+            i = n
+    except (TypeError, ValueError, NotImplementedError):
+        pass                            # a port without array slice stores
+    while i < n:
         a[i] = 0
+        i += 1
 
 
 # a scene-less table: the sentinel row alone (every position is a gap)
