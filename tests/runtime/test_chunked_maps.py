@@ -230,3 +230,47 @@ def test_slabs_through_the_fast_refresh_on_the_unix_port(with_c, x64_core):
     assert got["views"] == ["memoryview"] and got["same"] is True
     assert got["mism"] == 0 and got["positions"] > 10
     assert got["c"] is with_c
+
+
+BLOCK = r"""
+import gc, json
+from texel.runtime import kinds
+out = {}
+gc.collect()
+# garbage until no 8 KB block is free without a collection (the collector held off)
+gc.disable()
+junk = [None] * 400
+try:
+    for i in range(400):
+        junk[i] = bytearray(400)
+except MemoryError:
+    pass
+junk = None
+gc.enable()
+out["none_while_garbage"] = kinds._block(4096) is None
+out["still_enabled"] = gc.isenabled()
+ch = kinds.new_chunks(4096)                 # 1 KB chunks instead, collecting as they need
+out["chunks"] = [type(c).__name__ for c in ch]
+ch = None
+gc.collect()
+b = kinds._block(4096)
+out["block_after_collect"] = b is not None and len(b) == 4096
+b = None
+gc.disable()                                # a user's choice stays
+kinds._block(4096)
+out["user_disable_kept"] = not gc.isenabled()
+gc.enable()
+print(json.dumps(out))
+"""
+
+
+def test_a_block_is_tried_without_a_collection():
+    """kinds._block (new_chunks' 8-chunk blocks, kinds.SLAB): on the real unix port, a
+    heap whose free room is garbage gives no block (the allocator's collection is held
+    off for the try: on a stock Pico a failed try collected first, ~24 ms), new_chunks'
+    1 KB chunks follow, the collector is on again after, a block comes once the garbage
+    is collected, and a program's own gc.disable() is left as it was."""
+    got = mpy.run_json(BLOCK, heapsize="96k")
+    assert got == {"none_while_garbage": True, "still_enabled": True,
+                   "chunks": ["array"] * 8, "block_after_collect": True,
+                   "user_disable_kept": True}, got

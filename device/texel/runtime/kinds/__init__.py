@@ -24,7 +24,6 @@
 #   FIELDS (optional)             the editor's form: (key, "number"|"int"|"word",
 #                                 lo or words, hi, default, label) per key
 #
-from ...compat import ROM as _ROM       # (SLAB below)
 
 # The registry is this tuple: a board's frozen package cannot be listed, so
 # the names are written out; tests/runtime/test_kinds.py checks that it and the
@@ -48,14 +47,15 @@ CHUNK_BITS = 9          # 512 values (1 KB) per chunk (upload.py and refresh_vip
 CHUNK_MASK = 511
 
 
-# Chunks per block where the heap has room (the texelpad firmware: compat.ROM),
-# each chunk a memoryview of its block: a full screen is 5 allocations instead of
-# 38. Every allocation above one 16-byte block scans MicroPython's allocation
-# table from its lowest free block past the heap's small holes: ~0.34 ms a chunk
-# on the emulated RP2040 playing a scene, 12.9 of the shipped gradient's 25.6 ms
-# build (docs/firmware.md). 1 elsewhere (stock boards, CircuitPython: a 1 KB chunk
-# is what their fragmented heaps have room for; an upload's chunks always).
-SLAB = 8 if _ROM else 1
+# Chunks per block where the heap has room, each chunk a memoryview of its
+# block: a full screen is 5 allocations instead of 38. Every allocation above one
+# 16-byte block scans MicroPython's allocation table from its lowest free block
+# past the heap's small holes: ~0.34 ms a chunk on the emulated RP2040 playing a
+# scene, 12.9 of the shipped gradient's 25.6 ms build (docs/firmware.md); on a
+# stock Pico 38 chunks took 34.8 ms, 5 blocks 8.2. A block is tried only where
+# the heap has one without a collection (_block): a stock heap often has none,
+# and a failed try collected first (~24 ms there). An upload's chunks are 1 KB.
+SLAB = 8
 
 
 def new_chunks(n, slab=None):
@@ -63,7 +63,7 @@ def new_chunks(n, slab=None):
     last shorter): array('H') each, or memoryviews of SLAB-chunk blocks - a map
     with no block above 1 KB where SLAB is 1 (upload.Chunks holds one; samples
     and RAM references play from them). A block the heap has no room for (one
-    MemoryError, and MicroPython's collection inside it) turns the rest of the
+    MemoryError without a collection: _block) turns the rest of the
     map into 1 KB chunks.
 
     Before each block the allocator's search starts above the chunks made
@@ -81,9 +81,8 @@ def new_chunks(n, slab=None):
             k = min(n - o, per * size)
             skip_holes()
             if k > size:
-                try:
-                    mv = memoryview(u16_one_block(k))
-                except MemoryError:
+                mv = _block(k)
+                if mv is None:
                     per = 1
                     continue
                 for a in range(0, k, size):
@@ -99,6 +98,25 @@ def new_chunks(n, slab=None):
         mv = None
         raise
     return tuple(out)
+
+
+def _block(k):
+    """A memoryview of a new block of k uint16 values, or None where the heap
+    has no such block without a collection: the allocator's own collection is
+    held off for the try (a failed one then costs nothing, and the caller's
+    1 KB chunks follow, collecting as they need)."""
+    import gc
+    from ...compat import u16_one_block
+    on = gc.isenabled() if hasattr(gc, "isenabled") else True
+    if on:
+        gc.disable()
+    try:
+        return memoryview(u16_one_block(k))
+    except MemoryError:
+        return None
+    finally:
+        if on:
+            gc.enable()
 
 _mods = {}
 
