@@ -40,21 +40,31 @@ except ImportError:
 #   loop_hz    the most refreshes a second its paced loop ("loop" mode) can be
 #              asked for: 1000 where that loop is paced in milliseconds
 #              (PACE_CLOCK, CircuitPython), else None (runtime/boards.py's bound)
+#   holes      allocations start above the heap's small holes (skip_holes, where the
+#              C core has heap_hint): speed where maps play from flash and the heap is
+#              large (the Pico firmware: 230 KB). Not where maps are rendered into a
+#              ~100 KB heap (the pyboard): the hint stays up until a collection, so the
+#              small objects after it took the runs a map's blocks need - 42-57 of the
+#              100 mixed pushes of bench/stm32.py were refused for memory (8 runs), 22-47
+#              with the hint before a map's blocks only, 17 in each of 8 runs without.
 # Everything else (which pins, which timer) is the board file's (runtime/boards.py).
 PORT_TABLE = {
     "rp2": {"platform": "rp2", "backend": ("rp2", "Hw"), "probe": "machine.freq", "arch": "armv6m",
             "board": "pico", "modes": ("timer_irq", "core1_viper", "loop"), "rom": True,
-            "chip": "an RP2040 (MicroPython rp2 port)", "loop_hz": None, "lean": False},
+            "chip": "an RP2040 (MicroPython rp2 port)", "loop_hz": None, "lean": False,
+            "holes": True},
     "stm32": {"platform": "pyboard", "backend": ("stm32", "Hw"), "probe": "pyb",
               "arch": "armv7emsp", "board": "pyboard", "modes": ("timer_irq", "loop"),
               "rom": True, "chip": "an STM32 (MicroPython stm32 port, sys.platform 'pyboard')",
-              "loop_hz": None, "lean": False},
+              "loop_hz": None, "lean": False, "holes": False},
     "circuitpython": {"platform": None, "backend": ("cpy", "Hw"), "probe": "pwmio", "arch": None,
                       "board": "pico_cpy", "modes": ("loop",), "rom": False,
-                      "chip": "CircuitPython", "loop_hz": 1000, "lean": True},
+                      "chip": "CircuitPython", "loop_hz": 1000, "lean": True,
+                      "holes": False},
     "virtual": {"platform": None, "backend": ("virtual", "VirtualHw"), "probe": None,
                 "arch": "x64", "board": "virtual", "modes": ("stepped",), "rom": False,
-                "chip": "any firmware (the virtual board)", "loop_hz": None, "lean": False},
+                "chip": "any firmware (the virtual board)", "loop_hz": None, "lean": False,
+                "holes": False},
 }
 PORTS = ("rp2", "stm32", "circuitpython", "virtual")     # PORT_TABLE's keys, in this order
 # sys.platform of the MicroPython unix port (where the virtual board runs): no
@@ -244,10 +254,12 @@ def skip_holes(blocks=64):
     """Start the allocator's search for free memory above the heap's small
     holes: at the first run of `blocks` free blocks (the firmware's C core,
     texelcore_fw.h heap_hint: every allocation of more than 16 bytes walked
-    the holes first). No-op elsewhere. A push calls it before it allocates."""
+    the holes first). Only on a port whose PORT_TABLE "holes" says so; a no-op
+    elsewhere. A push calls it before it allocates, a map before each block."""
     global _hint
     if _hint is None:
-        _hint = getattr(core(), "heap_hint", None) or False
+        _hint = (PORT is not None and PORT_TABLE[PORT]["holes"]
+                 and getattr(core(), "heap_hint", None)) or False
     if _hint:
         _hint(blocks)
 

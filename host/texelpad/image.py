@@ -94,10 +94,13 @@ DATA_PATTERNS = ("*.bin",)
 MAP_PORTS = ("rp2",)
 # Which: the study references whose full-screen render on a stock Pico takes a
 # second or more (the emulated Pico's clock: square 0.96 s, sawtooth 1.18,
-# triangle 1.59; reading a file ~12 ms). The sums of sines (0.15-0.22 s) and the
-# noise rows (0.29 s) render: all nine files (94 of the filesystem's 352 4-KB
+# triangle 1.59; reading a file ~12 ms). The sums of sines (C core: 57-81 ms) and
+# the noise rows (25 ms) render: all nine files (94 of the filesystem's 352 4-KB
 # blocks) left `mpremote mip install ./package.json` (179 blocks) no room beside
 # the deployed image (docs/host.md's example; 242 blocks free without maps).
+# The pyboard's firmware carries the same three in its ROMFS partition
+# (firmware/build_stm32.py: 115 KB of its 256; the nine would not fit), where
+# they play in place: 266-290 ms renders into 38.4 KB of its ~100 KB heap before.
 MAP_NAMES = ("square", "triangle", "sawtooth")
 
 # The rp2 backend runs the refresh as a hard machine.Timer IRQ, which rp2

@@ -67,6 +67,7 @@ def test_the_pyboard_image_builds_as_a_dfu_with_its_romfs():
     """`texelpad firmware --board pyboard`: the .dfu holds the firmware's two blocks and the
     ROMFS partition where the linker script puts them; the DfuSe writer is the stm32
     port's own byte for byte; the partition holds the board file and firmware.json."""
+    from texelpad import image
     from texelpad.firmware import build_stm32, dfuse, romfs
     fw = built("pyboard")
     lay = build_stm32.flash_layout(ROOT / "boards" / "pyboard")
@@ -81,7 +82,11 @@ def test_the_pyboard_image_builds_as_a_dfu_with_its_romfs():
     info = json.loads(files["firmware.json"])
     assert info["board"] == "pyboard" and info["code_in_romfs"] is False
     assert files["lib/texel/boards.d/pyboard.json"] == (ROOT / "boards/pyboard/board.json").read_bytes()
-    assert not any(k.startswith(("lib/texel/gen/ref/", "lib/texel_ram/")) for k in files)
+    # the three slowest references' maps (image.MAP_NAMES), not all nine; no RAM modules
+    maps = {k for k in files if k.startswith("lib/texel/gen/ref/")}
+    assert maps == {"lib/texel/gen/ref/%s.u16" % n for n in image.MAP_NAMES}
+    assert all(files[k] == v for k, v in romfs.reference_maps(image.MAP_NAMES).items())
+    assert not any(k.startswith("lib/texel_ram/") for k in files)
     nm = subprocess.run(["arm-none-eabi-nm", str(fw.elf)], capture_output=True, text=True).stdout
     assert "mp_module_usb" in nm or "pyb_usb_vcp_type" in nm          # the real board: USB
     assert "texelcore_module" in nm                                   # the C core
@@ -236,9 +241,10 @@ def test_deploy_refuses_the_frozen_firmware_and_changes_nothing(board, capsys):
 
 
 def test_a_full_screen_reference_over_another_is_built_in_its_room(board):
-    """The pyboard's partition has no reference maps: a full-screen reference is 38.4 KB of
-    RAM, and a second one does not fit beside the first on the F405's heap. texel.app builds
-    it in the playing scene's room (MAKE_ROOM): both pushes play, the second says made_room."""
+    """2sin and pink have no map in the pyboard's partition (only image.MAP_NAMES do): a
+    full-screen one is 38.4 KB of RAM, and a second does not fit beside the first on the
+    F405's heap. texel.app builds it in the playing scene's room (MAKE_ROOM): both pushes
+    play, the second says made_room."""
     ref = lambda name: {"regions": [{"start_mm": 0, "end_mm": 101.76,              # noqa: E731
                                      "texture": {"kind": "reference", "name": name}}]}
     with _connect(board.port) as b:
@@ -277,3 +283,30 @@ def test_a_slot_naming_the_playing_w_leaves_the_room_to_the_next_reference(board
     assert st["running"] and st["last_push"].get("made_room") is True, st["last_push"]
     assert held == 0
     assert again["running"], again
+
+
+def test_the_slowest_references_play_from_the_partition(board):
+    """square, triangle and sawtooth (image.MAP_NAMES) play in place from the partition's
+    maps: no RAM for their samples, the same values as the host's map, and one pushed over
+    another needs no room made (a render took 266-290 ms of a split screen and 38.4 KB of
+    the heap before)."""
+    from texelpad import image
+    from texelpad.firmware import romfs
+    full = lambda name: {"regions": [{"start_mm": 0, "end_mm": 101.76,             # noqa: E731
+                                      "texture": {"kind": "reference", "name": name}}]}
+    host = {n: np.frombuffer(m, dtype="<u2")
+            for n, m in romfs.reference_maps(image.MAP_NAMES).items()}
+    with _connect(board.port) as b:
+        b.push({"regions": [{"start_mm": 0, "end_mm": 101.76,
+                             "texture": {"kind": "constant", "level": 0.5}}]})
+        for name in image.MAP_NAMES:
+            st = b.push(full(name))
+            lp = st["last_push"]
+            assert st["running"] and "made_room" not in lp, lp
+            assert lp["scene_bytes"] < 1024, lp             # the region table alone
+            got = b.link.eval("import texel.app as _A\nprint(repr([_A._rt.refresh.scene.amp(p) "
+                              "for p in range(0, 19200, 97)]))")
+            want = host["lib/texel/gen/ref/%s.u16" % name]
+            assert got == [int(want[p]) for p in range(0, 19200, 97)], name
+            print("\n%s from the partition: build %.2f ms" % (name, lp["build_us"] / 1000.0))
+

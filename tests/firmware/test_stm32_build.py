@@ -115,11 +115,15 @@ def test_the_staged_folder_keeps_unchanged_files_times(tmp_path):
     assert "QEMU" not in h.read_text() and not (st / "board_init.c").exists()
 
 
-def test_the_pyboards_partition_holds_data_not_code_nor_maps():
+def test_the_pyboards_partition_holds_data_and_three_maps_not_code():
+    from texelpad import image
     files, img = build_stm32.payload("pyboard", (PYBOARD / "board.json").read_bytes())
     assert romfs.read_romfs(img) == files
     assert not any(k.endswith(".mpy") for k in files)
-    assert not any("/ref/" in k or "texel_ram" in k for k in files)
+    assert not any("texel_ram" in k for k in files)
+    # the maps of the three slowest references (image.MAP_NAMES), not all nine
+    assert sorted(k for k in files if "/ref/" in k) == sorted(
+        "lib/texel/gen/ref/%s.u16" % n for n in image.MAP_NAMES)
     assert {"lib/texel/gen/reference_noise.bin", "lib/texel/gen/sine_table.u16",
             "lib/texel/boards.d/pyboard.json", "firmware.json"} <= set(files)
     info = json.loads(files["firmware.json"])

@@ -27,9 +27,10 @@ The board folder holds a MicroPython stm32 board definition (mpconfigboard.h, mp
 pins.csv, stm32f4xx_hal_conf.h, a linker script with a FLASH_ROMFS region, manifest.py) and
 texelpad's board file (board.json); qemu/ in it holds the emulated twin's differences, copied
 over the definition for --qemu (docs/firmware.md lists them). The partition holds texelpad's
-data: board files, the generator's tables, the references' noise rows - not the nine reference
-maps of the Pico's partition (345 KB, 418 KB with the data: more than the F405's 1 MB leaves
-beside the firmware; a reference is rendered on the board at push time, into 1 KB chunks).
+data: board files, the generator's tables, the references' noise rows, and the maps of the
+three references slowest to render (texelpad.image.MAP_NAMES: 115 KB, played in place) - not
+all nine of the Pico's partition (345 KB, 418 KB with the data: more than the F405's 1 MB
+leaves beside the firmware; the other six are rendered at push time, into 1 KB chunks).
 """
 from __future__ import annotations
 
@@ -111,9 +112,10 @@ def check_stm32_dir(board_dir: Path) -> None:
 
 def payload(name: str, board_json: bytes, frozen_code: str | None = None
             ) -> tuple[dict[str, bytes], bytes]:
-    """(files, image) of an STM32 firmware's ROMFS partition: texelpad's data (no code, no
-    reference maps, no rp2 RAM modules), the board file, firmware.json."""
-    files = romfs.romfs_files(TARGET, code=False, maps=False, ram=False)
+    """(files, image) of an STM32 firmware's ROMFS partition: texelpad's data (no code, the
+    reference maps of image.MAP_NAMES only, no rp2 RAM modules), the board file,
+    firmware.json."""
+    files = romfs.romfs_files(TARGET, code=False, maps=image.MAP_NAMES, ram=False)
     return common.finish_payload(name, board_json, files, frozen_code or romfs.code_digest(TARGET),
                                 False)
 

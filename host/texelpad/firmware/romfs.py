@@ -50,14 +50,15 @@ def code_files(target: image.Target | None = None) -> dict[str, bytes]:
     return out
 
 
-def romfs_files(target: image.Target | None = None, code: bool = True, maps: bool = True,
-                ram: bool = True) -> dict[str, bytes]:
+def romfs_files(target: image.Target | None = None, code: bool = True,
+                maps: bool | tuple[str, ...] = True, ram: bool = True) -> dict[str, bytes]:
     """The partition's files: texelpad's package data (the shipped boards of
-    the port, reference_noise.bin), the references' flash maps (maps) and the
-    generator's tables under lib/texel/, the rp2 RAM modules (ram); with code,
-    code_files() too. The firmware freezes the code and carries the data
-    only; `texelpad deploy` adds the code when this host's differs. The
-    STM32 firmware's partition has neither maps nor RAM modules (build_stm32)."""
+    the port, reference_noise.bin), the references' flash maps (maps: all
+    nine, or those named) and the generator's tables under lib/texel/, the
+    rp2 RAM modules (ram); with code, code_files() too. The firmware freezes
+    the code and carries the data only; `texelpad deploy` adds the code when
+    this host's differs. The STM32 firmware's partition has the maps of
+    image.MAP_NAMES and no RAM modules (build_stm32)."""
     target = target or image.TARGETS["rp2"]
     out = {f.remote.lstrip("/"): f.data for f in image.build_image(target, include_main=False)
            if not f.remote.endswith(CODE_SUFFIX)}
@@ -66,7 +67,7 @@ def romfs_files(target: image.Target | None = None, code: bool = True, maps: boo
     if ram:
         out.update(ram_modules())
     if maps:
-        out.update(reference_maps())
+        out.update(reference_maps(None if isinstance(maps, bool) else maps))
     out.update(const_tables())
     return out
 
