@@ -12,8 +12,9 @@ everything with the board's own clock (time.ticks_us: SysTick under icount):
 - heap free (gc.collect; gc.mem_free) playing the power-up scene, then playing a full-screen
   texel pushed as the docs write it (no "v": format 2);
 - push -> playing: app.push() call to return for a full-screen texel (no "v"), 16 texel
-  regions, a full-screen reference (rendered on the board: the pyboard's partition has no
-  reference maps) and the shipped scenes, with status()'s last_push breakdown;
+  regions, a full-screen reference (2sin, rendered on the board: the pyboard's partition has
+  the maps of square, triangle and sawtooth only) and the shipped scenes, with status()'s
+  last_push breakdown;
 - 100 mixed pushes in a row (the shipped scenes, a full-screen texel, a full-screen reference,
   16 regions): how many were refused, the least heap free after any of them;
 - one refresh, IRQ entry and exit included, per region kind: a viper busy loop timed with the
