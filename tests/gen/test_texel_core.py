@@ -258,6 +258,19 @@ def x64_module(tmp_path_factory):
     return d
 
 
+# the end of the native-module scripts below: each of their CALLS made, and what it raised
+# (a refusal is a ValueError with its words; None: it was not refused)
+_REFUSALS = r"""
+for call in CALLS:
+    try:
+        eval(call)
+        info["errors"].append((call, None))
+    except ValueError as e:
+        info["errors"].append((call, str(e)))
+print(json.dumps(info))
+"""
+
+
 NATIVE_SCRIPT = r"""
 import json
 import texel
@@ -299,7 +312,7 @@ for vals, fit, n in ((tuple(range(0, 65536, 97)), "stretch", 19200), ((1, 2, 3),
     KS.fill_chunks(vals, fit, n, d.chunks)
     info["samples"].append(bytes(b"".join(bytes(x) for x in d.chunks)).hex())
 tab = E.sine_table.table()
-for call in ("c.fill(bytearray(4), 0, 10, 0, 0, tab, 1)",
+CALLS = ("c.fill(bytearray(4), 0, 10, 0, 0, tab, 1)",
              "c.fill(bytearray(40), 0, 10, 0, 0, bytearray(8), 1)",
              "c.texels(P.seeded(1), 50, 1, 0, 0, 0, 0, P.table(), array('i', [0]), array('i', [0] * 50), array('i', [0]), array('i', [0]), 0)",
              "c.texels(P.seeded(1), 5, 0, 0, 0, 0, 0, P.table(), array('i', [0] * 5), array('i', [0] * 5), array('i', [0]), array('i', [0]), 0)",
@@ -307,14 +320,8 @@ for call in ("c.fill(bytearray(4), 0, 10, 0, 0, tab, 1)",
              "c.u16(-1)", "c.u16(1048577)",
              "c.samples((array('H', [0] * 512),), 9, 600, array('H', [1, 2]), 2, 1)",
              "c.samples((array('H', [0] * 512),), 9, 500, array('H', [1]), 2, 1)",
-             "c.samples((bytearray(10),), 9, 500, array('H', [1]), 1, 0)"):
-    try:
-        eval(call)
-        info["errors"].append((call, None))
-    except ValueError as e:
-        info["errors"].append((call, str(e)))
-print(json.dumps(info))
-"""
+             "c.samples((bytearray(10),), 9, 500, array('H', [1]), 1, 0)")
+""" + _REFUSALS
 
 _BRUSH = {"k": [8.0] + [1.5 + 0.1 * (i % 20) for i in range(96)],
           "lam": [0.5] + [0.05 / (1 + 0.04 * i) for i in range(96)], "range": [0.0, 1.0]}
@@ -878,21 +885,15 @@ for name in ("2sin", "3sin", "4sin"):
     info["via"][name] = bytes(R.reference_u16(name, n)) == bytes(buf)
 st, ph, m = args("4sin")
 a0, ws, rq = CONSTANTS["4sin"]
-for call in ("c.sines(array('H', [0] * 9), 10, st, ph, m, tab, a0, ws, rq)",
+CALLS = ("c.sines(array('H', [0] * 9), 10, st, ph, m, tab, a0, ws, rq)",
              "c.sines(array('H', [0] * 9), 9, st, ph, 5, tab, a0, ws, rq)",
              "c.sines(array('H', [0] * 9), 9, st, ph, 0, tab, a0, ws, rq)",
              "c.sines(array('H', [0] * 9), 9, st, array('i', [1024, 0] * 4), m, tab, a0, ws, rq)",
              "c.sines(array('H', [0] * 9), 9, array('i', [0, 100000] * 4), ph, m, tab, a0, ws, rq)",
              "c.sines(array('H', [0] * 9), 9, st, ph, m, tab, a0, ws, rq + 1)",
              "c.sines(array('H', [0] * 9), 9, st, ph, m, tab, a0, 1, rq)",
-             "c.sines(array('H', [0] * 9), 9, st, ph, m, array('H', [0] * 9), a0, ws, rq)"):
-    try:
-        eval(call)
-        info["errors"].append((call, None))
-    except ValueError as e:
-        info["errors"].append((call, str(e)))
-print(json.dumps(info))
-"""
+             "c.sines(array('H', [0] * 9), 9, st, ph, m, array('H', [0] * 9), a0, ws, rq)")
+""" + _REFUSALS
 
 
 @pytest.mark.parametrize("exe", ["micropython", "micropython-ulab-f32"])
