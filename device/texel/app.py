@@ -321,6 +321,7 @@ def _start(board, canonical, realtime, fast, hw_opts):
     mode = board["refresh"]["mode"]
     hw = _make_hw(board, hw_opts)
     hw.off()
+    rt = None
     try:
         rt = _Runtime()
         rt.board = board
@@ -365,9 +366,13 @@ def _start(board, canonical, realtime, fast, hw_opts):
     except BaseException:
         # also KeyboardInterrupt (Ctrl-C inside the first build, or a host that
         # gave up and interrupts): no half-started runtime that says "running"
-        # but never refreshes, no tick left armed; the display is off
+        # but never refreshes, no tick left armed; the display is off - and the
+        # refresh's W zeroed once it has stopped (stop(): a stale slot naming it
+        # would keep the scene's maps from start()'s try again)
         try:
             hw.stop()
+            if rt is not None and hasattr(getattr(rt, "refresh", None), "release"):
+                rt.refresh.release()
         finally:
             hw.off()
             _rt = None

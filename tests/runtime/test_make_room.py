@@ -191,8 +191,9 @@ def test_a_stale_slot_naming_the_dropped_w_keeps_no_map_alive():
     frame; here a list) kept the full-screen map alive - on the emulated pyboard 1-6 of 60
     reference-over-reference pushes then found no room and played idle. Zeroed, the map goes
     with its scene. The real unix port and its virtual board (one thread: threaded False).
-    A 64-bit port's W holds its addresses cut to 32 bits, so there the map went anyway: the
-    emulated pyboard (test_firmware_pyboard.py) holds a W through a push and checks it."""
+    A 64-bit port's W holds its buffers as 32-bit offsets from a base (refresh_fast W_BASE),
+    not pointers, so there the map went anyway: the emulated pyboard
+    (test_firmware_pyboard.py) holds a W through a push and a start and checks the room."""
     res = mpy.run_json(STALE)
     assert res["fast"] and res["threaded"] is False, res
     assert res["w_words"] == 0 and res["freed"] >= 38400, res

@@ -278,6 +278,7 @@ class FastRefresh(Refresh):
         self._c, self._vcore = _engine()
         self._keep = None
         self._prev = None
+        self._drop = None           # the generation _publish dropped, zeroed by _let_go
         self._fixed = None          # _fixed_words() for the C core's install
         self._fixed_regs = None     # the _regs they were made with
         self._fixed_fine = None     # and the duty law's table
@@ -328,6 +329,7 @@ class FastRefresh(Refresh):
         self._S[S_ADC12] = 1
         self._regs = (timer_addr, adc_addr, cc_addr, mul)
         self._install(self.scene)
+        self._let_go()
 
     def use_stm32_registers(self, clock_addr, adc_addr, ccr_addr):
         """Let hw/stm32_irq.py drive the hardware directly (an STM32F4):
@@ -338,6 +340,7 @@ class FastRefresh(Refresh):
         self._S[S_ADC12] = 1
         self._regs = (clock_addr, adc_addr, ccr_addr, 1)
         self._install(self.scene)
+        self._let_go()
 
     def _fixed_words(self):
         """W's first W_FIXED words on a 32-bit board (W_BASE 0): the addresses
@@ -428,10 +431,10 @@ class FastRefresh(Refresh):
         """Make keep's W (keep[0]) the one every refresh reads."""
         global _W, _WA, _S
         words = keep[0]
-        # The previous generation stays referenced until the next swap: the
-        # viper refresh holds raw addresses the GC cannot see, and on a port
-        # with real threads (the unix port's realtime virtual board) a refresh
-        # may still be reading the old scene just after this store.
+        # The previous generation stays referenced past the store: the viper
+        # refresh holds raw addresses the GC cannot see, and on a port with real
+        # threads (the unix port's realtime virtual board) a refresh may still be
+        # reading the old scene just after it - there until the next swap.
         self._prev = self._keep
         self._keep = keep               # referenced before the refresh can see them
         # the swap: one store each (step() reads _W or _WA; the RP2040
@@ -453,11 +456,18 @@ class FastRefresh(Refresh):
             # Pico). On a port with real threads (the unix port's realtime
             # virtual board) a refresh may still be reading the old scene just
             # after the store: the previous generation stays until the next swap.
-            old = self._prev
+            # Zeroed by _let_go (_wipe) once the caller's state is whole: a
+            # MemoryError or a Ctrl-C in the zeroing then leaves nothing half done.
+            self._drop = self._prev
             self._prev = None
-            if old is not None:
-                _wipe(old)
         return self._prev
+
+    def _let_go(self):
+        """Zero the generation the last publish dropped (_wipe), if any."""
+        old = self._drop
+        self._drop = None
+        if old is not None:
+            _wipe(old)
 
     def release(self):
         """The refresh has stopped for good (texel.app.stop, after the hardware's
@@ -466,15 +476,16 @@ class FastRefresh(Refresh):
         on a threaded port (its refresh thread may still be in a step)."""
         if self.threaded:
             return
-        for gen in (self._prev, self._keep):
+        for gen in (self._drop, self._prev, self._keep):
             if gen is not None:
                 _wipe(gen)
-        self._prev = self._keep = None
+        self._drop = self._prev = self._keep = None
 
     def swap(self, scene):
         old = self.scene
         self._install(scene)
         self.scene = scene
+        self._let_go()
         return old
 
     def step(self, _timer=None):
@@ -553,8 +564,8 @@ def _zero(a):
         if i < n:
             a[i:n] = memoryview(_ZEROS)[:n - i]
             i = n
-    except (TypeError, ValueError, NotImplementedError):
-        pass                            # a port without array slice stores
+    except (TypeError, ValueError, NotImplementedError, MemoryError):
+        pass                            # a port without array slice stores; no room for a view
     while i < n:
         a[i] = 0
         i += 1

@@ -30,7 +30,7 @@ over the definition for --qemu (docs/firmware.md lists them). The partition hold
 data: board files, the generator's tables, the references' noise rows, and the maps of the
 three references slowest to render (texelpad.image.MAP_NAMES: 115 KB, played in place) - not
 all nine of the Pico's partition (345 KB, 418 KB with the data: more than the F405's 1 MB
-leaves beside the firmware; the other six are rendered at push time, into 1 KB chunks).
+leaves beside the firmware; the other six are rendered at push time, into RAM).
 """
 from __future__ import annotations
 

@@ -60,14 +60,13 @@ SLAB = 8
 
 def new_chunks(n, slab=None):
     """n uint16 values as a tuple of chunks of 2^CHUNK_BITS values each (the
-    last shorter): array('H') each, or memoryviews of SLAB-chunk blocks - a map
-    with no block above 1 KB where SLAB is 1 (upload.Chunks holds one; samples
-    and RAM references play from them). A block the heap has no room for (one
-    MemoryError without a collection: _block) turns the rest of the
-    map into 1 KB chunks.
+    last shorter): array('H') each, or memoryviews of SLAB-chunk blocks (slab
+    1: no block above 1 KB - upload.Chunks holds one; samples and RAM references
+    play from them). A block the heap has no room for (one MemoryError without
+    a collection: _block) turns the rest of the map into 1 KB chunks.
 
     Before each block the allocator's search starts above the chunks made
-    so far (compat.skip_holes, the firmware's; a no-op elsewhere): else each
+    so far (compat.skip_holes: the Pico firmware's; a no-op elsewhere): else each
     chunk's search walked the ones before it, from the hint or from the first
     free block - 38 chunks took 14.1 ms (9.3 with one hint first) on the
     emulated Pico's firmware, 2.7 ms so."""
@@ -108,9 +107,9 @@ def _block(k):
     import gc
     from ...compat import u16_one_block
     on = gc.isenabled() if hasattr(gc, "isenabled") else True
-    if on:
-        gc.disable()
     try:
+        if on:
+            gc.disable()
         return memoryview(u16_one_block(k))
     except MemoryError:
         return None
