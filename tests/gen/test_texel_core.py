@@ -299,6 +299,11 @@ for name in sorted(cases):
 br = B.validate(%(brush)r)
 info["brush_same"] = list(B.paint(br, 3, 3000, how="c")) == list(B.paint(br, 3, 3000, how="viper"))
 from array import array
+from texel.runtime import refresh_fast as RF
+z = [array("I", [1, 2, 0xFFFFFFFF]), array("i", range(-70, 70)), array("H", [7] * 5)]
+for a in z:
+    RF._zero(a)                 # refresh_fast's dropped generation: the C core's memset
+info["zero"] = [RF._ZERO_C is c.zero] + [list(a) for a in z]
 u = c.u16(19200)
 u[19199] = 65535
 info["u16"] = [isinstance(u, array), len(u), sum(u), len(bytes(u)), len(c.u16(0)),
@@ -335,6 +340,7 @@ def test_native_module_on_the_unix_port_is_cpythons_plan_and_map(x64_module, tmp
     code = NATIVE_SCRIPT % {"out": str(tmp_path), "cases": cases, "brush": _BRUSH}
     info = mpy.run_json(code, exe=toolchain.require_micropython(), heapsize="8M", timeout=300,
                         extra_path=str(x64_module))
+    assert info["zero"] == [True, [0, 0, 0], [0] * 140, [0] * 5], info["zero"]
     assert info["core"] == "native" and info["plan"] == "c" and info["engine"] == "c"
     for name, p in cases.items():
         pl = P.PlanInt(texel.validate(p))

@@ -21,6 +21,7 @@ static const mp_rom_map_elem_t texelcore_globals_table[] = {
     { MP_ROM_QSTR(MP_QSTR_fill), MP_ROM_PTR(&tc_fill_obj) },
     { MP_ROM_QSTR(MP_QSTR_render), MP_ROM_PTR(&tc_render_obj) },
     { MP_ROM_QSTR(MP_QSTR_u16), MP_ROM_PTR(&tc_u16_obj) },
+    { MP_ROM_QSTR(MP_QSTR_zero), MP_ROM_PTR(&tc_zero_obj) },
     { MP_ROM_QSTR(MP_QSTR_samples), MP_ROM_PTR(&tc_samples_obj) },
     { MP_ROM_QSTR(MP_QSTR_sines), MP_ROM_PTR(&tc_sines_obj) },
     { MP_ROM_QSTR(MP_QSTR_options), MP_ROM_PTR(&tc_options_obj) },

@@ -43,6 +43,7 @@ mp_obj_t mpy_init(mp_obj_fun_bc_t *self, size_t n_args, size_t n_kw, mp_obj_t *a
     mp_store_global(MP_QSTR_fill, MP_OBJ_FROM_PTR(&tc_fill_obj));
     mp_store_global(MP_QSTR_render, MP_OBJ_FROM_PTR(&tc_render_obj));
     mp_store_global(MP_QSTR_u16, MP_OBJ_FROM_PTR(&tc_u16_obj));
+    mp_store_global(MP_QSTR_zero, MP_OBJ_FROM_PTR(&tc_zero_obj));
     mp_store_global(MP_QSTR_samples, MP_OBJ_FROM_PTR(&tc_samples_obj));
     mp_store_global(MP_QSTR_sines, MP_OBJ_FROM_PTR(&tc_sines_obj));
     mp_store_global(MP_QSTR_options, MP_OBJ_FROM_PTR(&tc_options_obj));

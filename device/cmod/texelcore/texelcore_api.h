@@ -430,6 +430,18 @@ static mp_obj_t tc_u16_fn(mp_obj_t n_in) {
 }
 static MP_DEFINE_CONST_FUN_OBJ_1(tc_u16_obj, tc_u16_fn);
 
+// zero(buf): every byte of a writable buffer 0. texel.runtime.refresh_fast
+// _zero: the W, table copy and chunk tables a swap dropped hold raw addresses
+// of the old scene's maps (the collector reads them as pointers); Python's
+// slice stores took 70-95 us a buffer on a stock Pico, two to four a swap
+static mp_obj_t tc_zero_fn(mp_obj_t buf) {
+    mp_buffer_info_t b;
+    mp_get_buffer_raise(buf, &b, MP_BUFFER_WRITE);
+    memset(b.buf, 0, b.len);
+    return mp_const_none;
+}
+static MP_DEFINE_CONST_FUN_OBJ_1(tc_zero_obj, tc_zero_fn);
+
 // The checks and the plan below do float arithmetic in the runtime's float.
 // A native module for a core without a float unit (armv6m: a stock RP2040)
 // would carry libgcc's soft-float routines in RAM beside them (7 KB: its .mpy

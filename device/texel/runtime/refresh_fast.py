@@ -547,14 +547,23 @@ def _wipe(gen):
 
 
 _ZEROS = array("I", bytes(4 * 64))
+_ZERO_C = None          # the C core's zero (texelcore_api.h), False where there is none
 
 
 def _zero(a):
     # a few words to a few hundred (W: 15 + one per buffer + 5 per plan; a table
-    # copy: 4 per region; a chunk table: one per KB of map). By slice stores of
-    # 64 zero words ('i' and 'I' alike: the same item size): 70-95 us for 20-128
-    # words on the emulated stock Pico, where the loop took 7 us a word (0.5 ms
-    # of a full-screen push's swap)
+    # copy: 4 per region; a chunk table: one per KB of map). The C core's memset
+    # where it is; else slice stores of 64 zero words ('i' and 'I' alike: the same
+    # item size): 70-95 us for 20-128 words on the emulated stock Pico, where the
+    # loop took 7 us a word (0.5 ms of a full-screen push's swap)
+    global _ZERO_C
+    if _ZERO_C is None:
+        from ..compat import core as _core
+        c = _core()
+        _ZERO_C = (c is not None and getattr(c, "zero", None)) or False
+    if _ZERO_C:
+        _ZERO_C(a)
+        return
     n = len(a)
     i = 0
     try:
