@@ -370,9 +370,7 @@ def _start(board, canonical, realtime, fast, hw_opts):
         # refresh's W zeroed once it has stopped (stop(): a stale slot naming it
         # would keep the scene's maps from start()'s try again)
         try:
-            hw.stop()
-            if rt is not None and hasattr(getattr(rt, "refresh", None), "release"):
-                rt.refresh.release()
+            _halt(hw, rt)
         finally:
             hw.off()
             _rt = None
@@ -674,14 +672,21 @@ def stop():
                 pass
         return
     try:
-        rt.hw.stop()
-        # (only once the refresh has stopped: FastRefresh.release zeroes the W it reads)
-        if hasattr(rt.refresh, "release"):
-            rt.refresh.release()
+        _halt(rt.hw, rt)
     finally:
         rt.hw.off()
         _rt = None
         gc.collect()
+
+
+def _halt(hw, rt):
+    """Stop the refresh's hardware, then zero the W the refresh read
+    (FastRefresh.release: only once it has stopped; rt None or without a
+    refresh yet: a start that failed early)."""
+    hw.stop()
+    release = getattr(getattr(rt, "refresh", None), "release", None)
+    if release is not None:
+        release()
 
 
 def run_loop(seconds=None):

@@ -546,38 +546,16 @@ def _wipe(gen):
         _zero(chunked)
 
 
-_ZEROS = array("I", bytes(4 * 64))
-_ZERO_C = None          # the C core's zero (texelcore_api.h), False where there is none
+_ZEROS = array("I", bytes(4 * 64))    # compat.zeroed's run for W's 4-byte words
 
 
 def _zero(a):
     # a few words to a few hundred (W: 15 + one per buffer + 5 per plan; a table
-    # copy: 4 per region; a chunk table: one per KB of map). The C core's memset
-    # where it is; else slice stores of 64 zero words ('i' and 'I' alike: the same
-    # item size): 70-95 us for 20-128 words on the emulated stock Pico, where the
-    # loop took 7 us a word (0.5 ms of a full-screen push's swap)
-    global _ZERO_C
-    if _ZERO_C is None:
-        from ..compat import core as _core
-        c = _core()
-        _ZERO_C = (c is not None and getattr(c, "zero", None)) or False
-    if _ZERO_C:
-        _ZERO_C(a)
-        return
-    n = len(a)
-    i = 0
-    try:
-        while n - i >= 64:
-            a[i:i + 64] = _ZEROS
-            i += 64
-        if i < n:
-            a[i:n] = memoryview(_ZEROS)[:n - i]
-            i = n
-    except (TypeError, ValueError, NotImplementedError, MemoryError):
-        pass                            # a port without array slice stores; no room for a view
-    while i < n:
-        a[i] = 0
-        i += 1
+    # copy: 4 per region; a chunk table: one per KB of map): the C core's memset,
+    # else slice stores (the loop took 0.5 ms of a full-screen push's swap on a
+    # stock Pico)
+    from ..compat import zeroed
+    zeroed(a, _ZEROS)
 
 
 # a scene-less table: the sentinel row alone (every position is a gap)
