@@ -546,16 +546,25 @@ def _wipe(gen):
         _zero(chunked)
 
 
-_ZEROS = array("I", bytes(4 * 64))    # compat.zeroed's run for W's 4-byte words
+# compat.zeroed's run for W's 4-byte words, and compat.zeroed once _zero has imported it
+_ZEROS = [array("I", bytes(4 * 64)), None]
 
 
 def _zero(a):
     # a few words to a few hundred (W: 15 + one per buffer + 5 per plan; a table
     # copy: 4 per region; a chunk table: one per KB of map): the C core's memset,
     # else slice stores (the loop took 0.5 ms of a full-screen push's swap on a
-    # stock Pico)
-    from ..compat import zeroed
-    zeroed(a, _ZEROS)
+    # stock Pico). zeroed is imported once and kept in _ZEROS: an import statement
+    # at each of a swap's 3-40 calls took 70-120 us each on the emulated Pico's
+    # firmware (+0.29 ms a swap), 1.5-3.6 ms a swap on a stock Pico (bench/firmware.py,
+    # swap_us). Not a global of its own: the STM32's refresh interrupt looks W up in
+    # this module's globals at every refresh (hw/stm32_irq.py), and one more name
+    # there made that refresh 6.21 -> 8.06 us on the emulated pyboard (bench/stm32.py)
+    z = _ZEROS
+    if z[1] is None:
+        from ..compat import zeroed
+        z[1] = zeroed
+    z[1](a, z[0])
 
 
 # a scene-less table: the sentinel row alone (every position is a gap)
