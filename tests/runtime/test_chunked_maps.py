@@ -173,8 +173,7 @@ def test_a_map_in_slabs_plays_what_its_1_kb_chunks_play(monkeypatch):
     assert views and all(type(c) is memoryview and len(c) <= 512 for c in views)
     assert [slab.amp(p) for p in range(D["positions"])] == \
         [one.amp(p) for p in range(D["positions"])]
-    from texel import compat
-    real = compat.u16_one_block
+    real = kinds.u16_one_block          # compat's, imported at kinds' top
     asked = []
 
     def tight(n):
@@ -182,7 +181,7 @@ def test_a_map_in_slabs_plays_what_its_1_kb_chunks_play(monkeypatch):
         if n > 512:
             raise MemoryError
         return real(n)
-    monkeypatch.setattr(compat, "u16_one_block", tight)
+    monkeypatch.setattr(kinds, "u16_one_block", tight)
     ch = kinds.new_chunks(3000)
     assert [len(c) for c in ch] == [512] * 5 + [440] and all(type(c) is array for c in ch)
     assert asked[0] == 3000 and max(asked[1:]) == 512

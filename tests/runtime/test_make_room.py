@@ -138,10 +138,9 @@ def test_a_failed_new_chunks_holds_none_of_its_chunks(monkeypatch):
     reference to its frame that outlives the call (here the traceback; on a
     board a stale stack slot the collector scans) keeps no chunk alive."""
     import weakref
-    from texel import compat
     from texel.runtime import kinds
     made = []
-    real = compat.u16_one_block
+    real = kinds.u16_one_block          # compat's, imported at kinds' top
 
     def three(n):
         if len(made) == 3:
@@ -149,7 +148,7 @@ def test_a_failed_new_chunks_holds_none_of_its_chunks(monkeypatch):
         a = real(n)
         made.append(weakref.ref(a))
         return a
-    monkeypatch.setattr(compat, "u16_one_block", three)
+    monkeypatch.setattr(kinds, "u16_one_block", three)
     monkeypatch.setattr(kinds, "SLAB", 1)
     try:
         kinds.new_chunks(5000)

@@ -73,6 +73,18 @@ OPTION_KEYS = ("min_cpmm", "phase")         # checked after KEYS, in this order
 NONE_OK = ("band_limit_cpmm", "min_cpmm")
 
 
+_TO_GRID = []
+
+
+def _to_grid():
+    # gen/grid.py's to_grid, imported at the first format-2 texture and kept: an
+    # import statement at every texel region's check took ~1 ms each on a stock Pico
+    if not _TO_GRID:
+        from .grid import to_grid
+        _TO_GRID.append(to_grid)
+    return _TO_GRID[0]
+
+
 def _words():
     """gen/check.py, imported at the first refusal: the generator alone
     (import texel: a full map on a Pico-sized heap) never holds it."""
@@ -163,8 +175,7 @@ def validate(params):
     if out["v"] == 2:
         # format 2's grid (gen/grid.py: imported only here, so format 1 on a
         # Pico-sized heap carries none of it)
-        from .grid import to_grid
-        to_grid(out, _range_of)
+        _to_grid()(out, _range_of)
     lo_b = out.get("min_cpmm")
     if lo_b is not None and out["band_limit_cpmm"] is not None and lo_b >= out["band_limit_cpmm"]:
         # (compared on format 2's grid where the plan will use them)

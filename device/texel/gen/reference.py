@@ -216,13 +216,26 @@ def _int_sines():
     return _INT_SINES
 
 
+_SINES_PARTS = None
+
+
+def _sines_parts():
+    # (sine_table, reference_viper.CONSTANTS, steps_of), imported at the first render
+    # and kept: two import statements took ~1.9 ms of every sines render on a stock Pico
+    global _SINES_PARTS
+    if _SINES_PARTS is None:
+        from . import sine_table
+        from .reference_viper import CONSTANTS, steps_of
+        _SINES_PARTS = (sine_table, CONSTANTS, steps_of)
+    return _SINES_PARTS
+
+
 def _fill_sines(name, parts, q16):
     # parts: _parts(); the phases carry from one part to the next
     steps = _SINES[name]
     fill = _int_sines() if q16 else False
     if fill:
-        from . import sine_table
-        from .reference_viper import CONSTANTS, steps_of
+        sine_table, CONSTANTS, steps_of = _sines_parts()
         a0, ws, rq = CONSTANTS[name]
         st = array("i", steps_of(steps))
         ph = array("i", bytes(8 * len(steps)))

@@ -24,6 +24,11 @@
 #   FIELDS (optional)             the editor's form: (key, "number"|"int"|"word",
 #                                 lo or words, hi, default, label) per key
 #
+# Imported here, not in the functions that use them: an import statement runs at every
+# call, and one took 70-120 us on the emulated Pico's firmware, 0.4-1 ms on a stock Pico
+# (new_chunks and _block: 2-7 of them a reference push, 3-9 ms there)
+import gc
+from ...compat import u16_one_block, skip_holes
 
 # The registry is this tuple: a board's frozen package cannot be listed, so
 # the names are written out; tests/runtime/test_kinds.py checks that it and the
@@ -70,7 +75,6 @@ def new_chunks(n, slab=None):
     chunk's search walked the ones before it, from the hint or from the first
     free block - 38 chunks took 14.1 ms (9.3 with one hint first) on the
     emulated Pico's firmware, 2.7 ms so."""
-    from ...compat import u16_one_block, skip_holes
     size = 1 << CHUNK_BITS
     per = SLAB if slab is None else slab
     out = []
@@ -104,8 +108,6 @@ def _block(k):
     has no such block without a collection: the allocator's own collection is
     held off for the try (a failed one then costs nothing, and the caller's
     1 KB chunks follow, collecting as they need)."""
-    import gc
-    from ...compat import u16_one_block
     on = gc.isenabled() if hasattr(gc, "isenabled") else True
     try:
         if on:

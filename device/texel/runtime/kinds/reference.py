@@ -6,6 +6,9 @@
 # into 1 KB chunks (kinds.new_chunks): a stock Pico's heap seldom has the 19.2 or
 # 38.4 KB of a half or full screen in one piece beside a playing scene.
 from ...gen.check import fail, got, qstr, check_keys
+# at the top, as kinds/__init__.py's: a reference push ran 6-8 import statements here
+# and in texel's reference functions, 0.6-1 ms each on a stock Pico
+from ...gen.reference import flash_u16 as flash, map_files, file_u16, names, reference_u16
 from . import K_BUF, K_CHUNK, CHUNK_BITS, new_chunks
 
 NAME = "reference"
@@ -13,29 +16,17 @@ KEYS = ("kind", "name")
 OPTIONS = ()
 SHARED = True               # its map depends on the name and the length alone
 
-_flash_u16 = None           # gen.reference.flash_u16, imported at the first reference region
-
 
 def check(path, tex, n):
-    from ... import reference_names
     check_keys(path, tex, KEYS)
     if "name" not in tex:
-        fail(path, "missing required key 'name' (one of: %s)" % ", ".join(reference_names()))
+        fail(path, "missing required key 'name' (one of: %s)" % ", ".join(names()))
     name = tex["name"]
-    known = reference_names()
+    known = names()
     if not isinstance(name, str) or name not in known:
         fail(path + ".name", "unknown reference texture %s (known: %s)"
              % (qstr(name) if isinstance(name, str) else got(name), ", ".join(known)))
     return {"kind": "reference", "name": name}
-
-
-def flash(name, n):
-    """The reference's map in flash (texelpad firmware), or None."""
-    global _flash_u16
-    if _flash_u16 is None:
-        from ...gen.reference import flash_u16
-        _flash_u16 = flash_u16
-    return _flash_u16(name, n)
 
 
 def need(tex, n, engine):
@@ -52,7 +43,6 @@ def store(tex, n, engine):
         return K_BUF, rom, None             # the firmware's map, played in place
     # which map files there are (fill's file_u16), found out before the chunks are made:
     # its garbage then leaves no hole between them
-    from ...gen.reference import map_files
     map_files()
     ch = new_chunks(n)
     return K_CHUNK, ch, ch
@@ -61,9 +51,7 @@ def store(tex, n, engine):
 def fill(tex, n, chunks, engine, dx_um):
     # a stock RP2040's deployed map file read into the chunks, where there is one
     # (gen/reference.py file_u16); else rendered chunk by chunk (_parts)
-    from ...gen.reference import file_u16
     if not file_u16(tex["name"], n, chunks):
-        from ... import reference_u16
         reference_u16(tex["name"], n, chunks)
 
 
