@@ -17,6 +17,8 @@ everything with the board's own clock (time.ticks_us: SysTick under icount):
   last_push breakdown;
 - 100 mixed pushes in a row (the shipped scenes, a full-screen texel, a full-screen reference,
   16 regions): how many were refused, the least heap free after any of them;
+- the same scenes in ORDERS other orders (a seeded shuffle), 60 pushes each: how many were
+  refused (one order's count turns on a few holes of the heap's layout);
 - one refresh, IRQ entry and exit included, per region kind: a viper busy loop timed with the
   refresh interrupt running and again with it stopped, (on - off) / refreshes (the method of
   host/texelpad/bench/chip.py);
@@ -38,6 +40,7 @@ from pathlib import Path
 from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
+ORDERS = 8          # the mixed scenes' other orders (DEVICE: in_order)
 GOALS = {"heap_full_screen_b": (">=", 60 * 1024), "push_texel_ms": ("<=", 20.0),
          "refresh_us": ("<=", 10.0), "refused": ("==", 0)}
 
@@ -146,6 +149,31 @@ R["mixed"] = mixed(True)
 st = app.status()
 R["status"] = (st["rate_hz"], st["refresh_hz"], st["faults"], st["refresh"])
 print("RESULT", repr(R))
+# then the same scenes in ORDERS other orders, 60 pushes each, one after another: one
+# order's count turns on a few holes (a change anywhere moves the heap's layout), these
+# less so. Printed on a line of their own, after RESULT: at their end the heap may have
+# no block for RESULT's text
+_x = [12345]
+def _rnd():
+    _x[0] = (_x[0] * 1103515245 + 12345) & 0x7FFFFFFF     # an LCG: stm32emu has no RNG
+    return _x[0] >> 8
+def in_order(order):
+    refused = 0
+    for k in range(60):
+        try:
+            app.push(mix[order[k % len(order)]])
+        except Exception:
+            refused += 1
+    return refused
+orders = []
+for _ in range(ORDERS):
+    o = list(range(len(mix)))
+    for j in range(len(o) - 1, 0, -1):
+        r = _rnd() % (j + 1)
+        o[j], o[r] = o[r], o[j]
+    orders.append(o)
+R = None
+print("ORDERS", repr([in_order(o) for o in orders]))
 '''
 
 
@@ -171,7 +199,7 @@ def run_on_chip(twin, say=print) -> dict[str, Any]:
     env, extra = twin_args(twin)
     with tempfile.TemporaryDirectory() as d:
         script = Path(d) / "bench.py"
-        script.write_text("SHIPPED = %r\n" % (_shipped(),) + DEVICE)
+        script.write_text("SHIPPED = %r\nORDERS = %d\n" % (_shipped(), ORDERS) + DEVICE)
         say(".. running the bench script on the emulated STM32F405 (--icount 3)")
         t0 = time.monotonic()
         p = subprocess.run([str(stm32emu_dir() / "run.sh"), "--icount", "3", "--adc",
@@ -180,11 +208,13 @@ def run_on_chip(twin, say=print) -> dict[str, Any]:
                            capture_output=True, text=True, env=env, timeout=1000)
         wall = time.monotonic() - t0
     line = [ln for ln in p.stdout.splitlines() if ln.startswith("RESULT ")]
+    orders = [ln for ln in p.stdout.splitlines() if ln.startswith("ORDERS ")]
     if not line:
         raise SystemExit("stm32 bench: no result (exit %d):\n%s\n%s"
                          % (p.returncode, p.stdout[-3000:], p.stderr[-2000:]))
     import ast
     res = ast.literal_eval(line[-1][len("RESULT "):])
+    res["orders"] = ast.literal_eval(orders[-1][len("ORDERS "):]) if orders else None
     res["wall_s"] = round(wall, 1)
     return res
 
@@ -220,6 +250,7 @@ def summarize(res: dict[str, Any], twin) -> dict[str, Any]:
         "refresh_us_by_kind": costs,
         "refresh_us": max(v for v in costs.values() if v is not None),
         "refused": refused, "least_heap_mixed_b": least, "refused_examples": errs,
+        "refused_other_orders": res["orders"],
         "made_room": room, "refused_without_make_room": res["mixed_refuse"][0],
         "worst_us_mixed": worst, "overruns_mixed": overruns,
         "rate_hz": res["status"][0], "refresh_hz": res["status"][1], "faults": res["status"][2],
@@ -232,6 +263,13 @@ def _met(key: str, v: Any) -> str:
     op, goal = GOALS[key]
     ok = {">=": v >= goal, "<=": v <= goal, "==": v == goal}[op]
     return "%s %s: %s" % (op, goal, "met" if ok else "NOT met")
+
+
+def _orders_line(counts: list[int] | None) -> str:
+    if counts is None:
+        return "the same scenes in %d other orders: no figure (the board printed none)" % ORDERS
+    return ("the same scenes in %d other orders, 60 pushes each: %d refused of %d (%s)"
+            % (len(counts), sum(counts), 60 * len(counts), " ".join(str(v) for v in counts)))
 
 
 def report(s: dict[str, Any]) -> list[str]:
@@ -258,6 +296,7 @@ def report(s: dict[str, Any]) -> list[str]:
            "%d us, %d overruns" % (s["refused"], _met("refused", s["refused"]), s["made_room"],
                                    s["refused_without_make_room"], n(s["least_heap_mixed_b"]),
                                    s["worst_us_mixed"], s["overruns_mixed"]),
+           _orders_line(s["refused_other_orders"]),
            "one refresh incl. IRQ entry/exit, by region kind (max of 3 windows): " + "; ".join(
                "%s %.2f us" % kv for kv in s["refresh_us_by_kind"].items()),
            "one refresh, worst kind: %.2f us   (goal %s)"
