@@ -188,12 +188,21 @@ def ulab_numpy():
         return None
 
 
+_ULAB = []      # ulab_version()'s answer, found once: it cannot change while the board runs
+
+
 def ulab_version():
-    try:
-        import ulab
-        return getattr(ulab, "__version__", "?")
-    except ImportError:
-        return None
+    """ulab's version, "?" where it has none, or None without ulab - looked up
+    once: status() asks at every push (app.push returns it), and an import
+    statement runs at every call (80-120 us on the emulated Pico's firmware;
+    where there is no ulab, a failed one searches the filesystem)."""
+    if not _ULAB:
+        try:
+            import ulab
+            _ULAB.append(getattr(ulab, "__version__", "?"))
+        except ImportError:
+            _ULAB.append(None)
+    return _ULAB[0]
 
 
 # viper: compiled integer code (MicroPython with a native emitter). Probe by

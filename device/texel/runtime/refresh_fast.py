@@ -546,25 +546,33 @@ def _wipe(gen):
         _zero(chunked)
 
 
-# compat.zeroed's run for W's 4-byte words, and compat.zeroed once _zero has imported it
-_ZEROS = [array("I", bytes(4 * 64)), None]
+# _zero's: the run of zeros for compat.zeroed (W's 4-byte words), then the C core's
+# zero (a memset) or False, then compat.zeroed: looked up at the first swap
+_ZEROS = [array("I", bytes(4 * 64)), None, None]
 
 
 def _zero(a):
     # a few words to a few hundred (W: 15 + one per buffer + 5 per plan; a table
     # copy: 4 per region; a chunk table: one per KB of map): the C core's memset,
-    # else slice stores (the loop took 0.5 ms of a full-screen push's swap on a
-    # stock Pico). zeroed is imported once and kept in _ZEROS: an import statement
-    # at each of a swap's 3-40 calls took 70-120 us each on the emulated Pico's
-    # firmware (+0.29 ms a swap), 1.5-3.6 ms a swap on a stock Pico (bench/firmware.py,
-    # swap_us). Not a global of its own: the STM32's refresh interrupt looks W up in
-    # this module's globals at every refresh (hw/stm32_irq.py), and one more name
-    # there made that refresh 6.21 -> 8.06 us on the emulated pyboard (bench/stm32.py)
+    # else compat.zeroed's slice stores (the loop took 0.5 ms of a full-screen push's
+    # swap on a stock Pico). Both are looked up once and kept in _ZEROS: an import
+    # statement at each of a swap's 3-40 calls took 80-120 us each on the emulated
+    # Pico's firmware (+0.29 ms a swap), 1.5-3.6 ms a swap on a stock Pico
+    # (bench/firmware.py, swap_us; bench/import_cost.py). Kept in _ZEROS, not as globals
+    # of their own: the STM32's refresh interrupt looks W up in this module's globals at
+    # every refresh (hw/stm32_irq.py), and with one more name here the emulated
+    # pyboard's refresh measured 8.06 us, not 6.21 (bench/stm32.py) - though one more
+    # global in compat, which the interrupt never reads, did the same: docs/firmware.md
     z = _ZEROS
-    if z[1] is None:
-        from ..compat import zeroed
-        z[1] = zeroed
-    z[1](a, z[0])
+    c = z[1]
+    if c is None:
+        from ..compat import core, zeroed
+        c = z[1] = getattr(core(), "zero", None) or False
+        z[2] = zeroed
+    if c:
+        c(a)
+    else:
+        z[2](a, z[0])
 
 
 # a scene-less table: the sentinel row alone (every position is a gap)
