@@ -5,48 +5,12 @@ on a stock Pico (bench/import_cost.py). One inside refresh_fast._zero, run for e
 (bench/firmware.py, swap_us); a reference region's check/store/fill, the chunk helpers,
 format 2's grid and status()'s ulab version ran 1-25 more a push. The MicroPython unix port
 playing the virtual board, every import statement counted through builtins.__import__."""
+
 from __future__ import annotations
 
 from support import mpy
 
 SCRIPT = r"""
-import json, builtins
-import texel.app as app
-from texel.runtime import refresh_fast
-A = {"regions": [{"start_mm": 0, "end_mm": 50.88, "texture": {"kind": "constant", "level": 0.25}},
-                 {"start_mm": 50.88, "end_mm": 101.76, "texture": {"kind": "texel",
-                  "pitch_db": 6.3, "irregularity_db": -12.9, "seed": 7}}]}
-B = {"regions": [{"start_mm": 0, "end_mm": 101.76, "texture": {"kind": "reference",
-                  "name": "2sin"}}]}
-app.start("virtual", A, record=64)
-app.push(B)
-app.push(A)                     # every module a swap needs is loaded, _zero's helper too
-seen = []
-_imp = builtins.__import__
-def count(name, g=None, *rest):
-    if g is not None and g.get("__name__") == refresh_fast.__name__:
-        seen.append(name)
-    return _imp(name, g, *rest)
-builtins.__import__ = count
-swaps = 0
-try:
-    for s in (B, A, B, A):
-        app.push(s)
-        swaps += 1
-finally:
-    builtins.__import__ = _imp
-print(json.dumps({"swaps": swaps, "fast": app._rt.mode, "imports": seen}))
-"""
-
-
-def test_a_swap_runs_no_import_statement_in_the_refresh():
-    res = mpy.run_json(SCRIPT)
-    assert res["swaps"] == 4
-    assert res["fast"].startswith("viper"), res      # the fused refresh: refresh_fast swaps
-    assert res["imports"] == [], res
-
-
-PUSHES = r"""
 import json, builtins
 import texel.app as app
 A = {"regions": [{"start_mm": 0, "end_mm": 50.88, "texture": {"kind": "constant", "level": 0.25}},
@@ -68,17 +32,35 @@ def count(name, g=None, *rest):
     seen.append([name, g.get("__name__") if g is not None else None])
     return _imp(name, g, *rest)
 builtins.__import__ = count
+pushes = 0
 try:
     for s in (B, C, D, A):
         app.push(s)
+        pushes += 1
 finally:
     builtins.__import__ = _imp
-print(json.dumps({"imports": seen}))
+print(json.dumps({"pushes": pushes, "mode": app._rt.mode, "imports": seen}))
 """
+
+_RES: list = []
+
+
+def _res() -> dict:
+    if not _RES:
+        _RES.append(mpy.run_json(SCRIPT))
+    return _RES[0]
+
+
+def test_a_swap_runs_no_import_statement_in_the_refresh():
+    res = _res()
+    assert res["pushes"] == 4
+    assert res["mode"].startswith("viper"), res      # the fused refresh: refresh_fast swaps
+    assert [m for _name, m in res["imports"] if m == "texel.runtime.refresh_fast"] == [], res
 
 
 def test_pushes_of_loaded_kinds_run_no_import_statement():
     # a reference, 16 texel regions (format 2's grid), a reference beside samples, a
     # constant beside a texel: app.push's own status() included
-    res = mpy.run_json(PUSHES)
+    res = _res()
+    assert res["pushes"] == 4
     assert res["imports"] == [], res
