@@ -303,7 +303,7 @@ from texel.runtime import refresh_fast as RF
 z = [array("I", [1, 2, 0xFFFFFFFF]), array("i", range(-70, 70)), array("H", [7] * 5)]
 for a in z:
     RF._zero(a)                 # refresh_fast's dropped generation: the C core's memset
-info["zero"] = [compat._ZERO_C is c.zero] + [list(a) for a in z]
+info["zero"] = [RF._ZEROS[1] is c.zero] + [list(a) for a in z]   # _zero calls it directly
 u = c.u16(19200)
 u[19199] = 65535
 info["u16"] = [isinstance(u, array), len(u), sum(u), len(bytes(u)), len(c.u16(0)),
