@@ -2,6 +2,7 @@ import importlib.util
 import json
 import os
 import shutil
+import signal
 import sys
 import tempfile
 from pathlib import Path
@@ -9,6 +10,14 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+
+# Ctrl-C as a user's terminal gives it. A shell without job control starts a background job
+# (`bash .ci/run &`, nohup) with SIGINT ignored, and an ignored signal stays ignored across
+# exec: the commands the tests start (`texelpad virtual`, the lab) then never saw the
+# SIGINT a test sends to stop them, and tests/host/test_cli_board.py waited out its 20 s. A
+# signal with a handler goes back to its default in a new program, so one here is enough.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 sys.path.insert(0, str(Path(__file__).resolve().parent))     # support (tests/support)
 # the research benchmarks (bench/: not in the installed package; they run as
 # `python -m bench.NAME` from the repository root) for the tests that import them
