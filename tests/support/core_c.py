@@ -82,6 +82,40 @@ def paint(brush: dict, seed: int, n: int, chunk_bits: int = 9) -> list[int]:
     return [v for c in chunks for v in c]
 
 
+class PaintParts:
+    """_texelcore's paint_part and skip (texelcore_api.h) over this library:
+    what texel.gen.brush_parts.Painting calls, for tests that run that class on
+    CPython against the C loops (its other builds: tests/gen/test_texel_core.py)."""
+
+    def __init__(self) -> None:
+        self.calls: list[tuple[int, int, int]] = []     # (w_from, w_to, lo_emit)
+
+    def leak(self, q: array, a: array, n: int, sweeps: int, c: array) -> None:
+        leak(q, a, n, sweeps, c)
+
+    def zero(self, a: array) -> None:
+        a[:] = array(a.typecode, bytes(a.itemsize * len(a)))
+
+    def skip(self, st: array, steps: int) -> None:
+        lib().tb_skip(ctypes.c_void_p(_ptr(st)), ctypes.c_int32(steps))
+
+    def paint_part(self, st, invk, ll, sign, off, n, chunks, bits, tab, log2t, phase, tw,
+                   hann, pos, ring, w_from, w_to, lo_emit, work) -> None:
+        assert len(ring) >= B.WINDOW and len(work) >= 4 * B.K + 3 * B.WINDOW
+        assert 0 <= w_from <= w_to <= B.windows(n) and not (w_from | w_to) & 1
+        keep = (tab, log2t, phase, tw, hann, pos)
+        t = Tables(*(_ptr(a) for a in keep))
+        ptrs = (ctypes.c_void_p * len(chunks))(*(_ptr(c) for c in chunks))
+        self.calls.append((w_from, w_to, lo_emit))
+        lib().tb_paint_range(ctypes.c_void_p(_ptr(st)), ctypes.c_void_p(_ptr(invk)),
+                             ctypes.c_void_p(_ptr(ll)), ctypes.c_int32(sign),
+                             ctypes.c_int32(off), ctypes.byref(t), ctypes.c_int32(n), ptrs,
+                             ctypes.c_int32(bits), ctypes.c_void_p(_ptr(work)),
+                             ctypes.c_void_p(_ptr(ring)), ctypes.c_int32(w_from),
+                             ctypes.c_int32(w_to), ctypes.c_int32(lo_emit))
+        del keep
+
+
 def leak(q: array, a: array, n: int, sweeps: int, c: array) -> None:
     lib().tb_leak(ctypes.c_void_p(_ptr(q)), ctypes.c_void_p(_ptr(a)), ctypes.c_int32(n),
                   ctypes.c_int32(sweeps), ctypes.c_void_p(_ptr(c)))

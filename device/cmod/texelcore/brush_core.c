@@ -272,22 +272,55 @@ void tb_frames(const int32_t *ma, const int32_t *pa, const int32_t *mb, const in
     }
 }
 
+void tb_skip(uint16_t st[8], int32_t steps) {
+    // tb_draws' generator steps without their draws: the state a window
+    // further on starts from (TB_K steps a window)
+    uint32_t a = ((uint32_t)st[0] << 16) | st[1], b = ((uint32_t)st[2] << 16) | st[3];
+    uint32_t c = ((uint32_t)st[4] << 16) | st[5], d = ((uint32_t)st[6] << 16) | st[7];
+    for (int32_t k = 0; k < steps; k++) {
+        uint32_t u = b << 9;
+        c ^= a;
+        d ^= b;
+        b ^= c;
+        a ^= d;
+        c ^= u;
+        d = (d << 11) | (d >> 21);
+    }
+    st[0] = a >> 16; st[1] = a & 0xFFFF; st[2] = b >> 16; st[3] = b & 0xFFFF;
+    st[4] = c >> 16; st[5] = c & 0xFFFF; st[6] = d >> 16; st[7] = d & 0xFFFF;
+}
+
+int32_t tb_windows(int32_t n) {
+    int32_t w = (n + TB_HOP - 1) / TB_HOP + 3;
+    return w + (w & 1);
+}
+
 void tb_paint(uint16_t st[8], const int32_t *invk, const int32_t *ll, int32_t sign,
               int32_t off, const tb_tables *t, int32_t n, uint16_t *const *chunks,
               int32_t chunk_bits, int32_t *work) {
     // the work arrays in the caller's buffer (TB_WORK values): 3.8 KB would be
     // half a Pico's 8 KB stack, which MicroPython's stack check does not see
-    int32_t *ma = work, *pa = ma + TB_K, *mb = pa + TB_K, *pb = mb + TB_K;
-    int32_t *z = pb + TB_K, *ring = z + 2 * TB_WINDOW;
-    int32_t mask = (1 << chunk_bits) - 1;
+    int32_t *ring = work + 4 * TB_K + 2 * TB_WINDOW;
     for (int i = 0; i < TB_WINDOW; i++) {
         ring[i] = 0;
     }
-    int32_t w = (n + TB_HOP - 1) / TB_HOP + 3;
-    w += w & 1;
-    int32_t start = -3 * TB_HOP;
-    int32_t r0 = TB_WINDOW - 3 * TB_HOP;       // start mod WINDOW
-    for (int32_t pair = 0; pair < w / 2; pair++) {
+    tb_paint_range(st, invk, ll, sign, off, t, n, chunks, chunk_bits, work, ring, 0,
+                   tb_windows(n), 0);
+}
+
+void tb_paint_range(uint16_t st[8], const int32_t *invk, const int32_t *ll, int32_t sign,
+                    int32_t off, const tb_tables *t, int32_t n, uint16_t *const *chunks,
+                    int32_t chunk_bits, int32_t *work, int32_t *ring, int32_t w_from,
+                    int32_t w_to, int32_t lo_emit) {
+    int32_t *ma = work, *pa = ma + TB_K, *mb = pa + TB_K, *pb = mb + TB_K;
+    int32_t *z = pb + TB_K;
+    int32_t mask = (1 << chunk_bits) - 1;
+    int32_t start = TB_HOP * w_from - 3 * TB_HOP;
+    int32_t r0 = start % TB_WINDOW;             // start mod WINDOW, in 0 .. WINDOW - 1
+    if (r0 < 0) {
+        r0 += TB_WINDOW;
+    }
+    for (int32_t pair = w_from; pair < w_to; pair += 2) {
         tb_draws(st, invk, ll, sign, off, t, ma, pa);
         tb_draws(st, invk, ll, sign, off, t, mb, pb);
         tb_frames(ma, pa, mb, pb, t, z);
@@ -303,8 +336,10 @@ void tb_paint(uint16_t st[8], const int32_t *invk, const int32_t *ll, int32_t si
             for (; i < TB_WINDOW; i++) {
                 rg[i] += (fr[2 * i] * hann[i]) >> 10;
             }
-            // the HOP samples from start that are inside 0 .. n - 1
-            int32_t lo = start < 0 ? -start : 0, hi = n - start < TB_HOP ? n - start : TB_HOP;
+            // the HOP samples from start that are inside lo_emit .. n - 1 (below
+            // lo_emit a fresh ring lacks the windows before w_from)
+            int32_t lo = start < lo_emit ? lo_emit - start : 0;
+            int32_t hi = n - start < TB_HOP ? n - start : TB_HOP;
             rg = ring + r0;
             for (i = lo; i < hi; i++) {
                 int32_t p = start + i;

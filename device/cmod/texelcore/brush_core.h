@@ -42,6 +42,25 @@ void tb_paint(uint16_t st[8], const int32_t *invk, const int32_t *ll, int32_t si
               int32_t off, const tb_tables *t, int32_t n, uint16_t *const *chunks,
               int32_t chunk_bits, int32_t *work);
 
+// brush.windows(n): how many windows (an even count) paint n samples
+int32_t tb_windows(int32_t n);
+
+// TB_K * windows generator steps, their draws dropped (brush_parts.Painting): st
+// becomes the state that many windows on
+void tb_skip(uint16_t st[8], int32_t steps);
+
+// tb_paint's loop over windows w_from .. w_to - 1 (both even; st: the
+// state at window w_from, updated), onto ring (TB_WINDOW partial sums: zeros
+// for a fresh start, or what the call before that ended at w_from left) and
+// into the samples from lo_emit on (48 w_from for a fresh start past window 0:
+// below it the ring lacks the windows before w_from). work: TB_WORK values,
+// of which the ring part is not used. The same integers as tb_paint in any
+// order of such calls (brush_parts.Painting; tests/brush/test_paint_parts.py).
+void tb_paint_range(uint16_t st[8], const int32_t *invk, const int32_t *ll, int32_t sign,
+                    int32_t off, const tb_tables *t, int32_t n, uint16_t *const *chunks,
+                    int32_t chunk_bits, int32_t *work, int32_t *ring, int32_t w_from,
+                    int32_t w_to, int32_t lo_emit);
+
 // brush.leakage's sweeps over a padded array (3 values each side): a[i] =
 // max(0, q[i] - C1 (a[i-1] + a[i+1]) - C2 (..) - C3 (..)), Q14 coefficients.
 void tb_leak(const int32_t *q, int32_t *a, int32_t n, int32_t sweeps, const int32_t *c);

@@ -16,6 +16,8 @@
 static const mp_rom_map_elem_t texelcore_globals_table[] = {
     { MP_ROM_QSTR(MP_QSTR___name__), MP_ROM_QSTR(MP_QSTR__texelcore) },
     { MP_ROM_QSTR(MP_QSTR_paint), MP_ROM_PTR(&tc_paint_obj) },
+    { MP_ROM_QSTR(MP_QSTR_paint_part), MP_ROM_PTR(&tc_paint_part_obj) },
+    { MP_ROM_QSTR(MP_QSTR_skip), MP_ROM_PTR(&tc_skip_obj) },
     { MP_ROM_QSTR(MP_QSTR_leak), MP_ROM_PTR(&tc_leak_obj) },
     { MP_ROM_QSTR(MP_QSTR_texels), MP_ROM_PTR(&tc_texels_obj) },
     { MP_ROM_QSTR(MP_QSTR_fill), MP_ROM_PTR(&tc_fill_obj) },

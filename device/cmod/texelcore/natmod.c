@@ -38,6 +38,8 @@ mp_obj_t mpy_init(mp_obj_fun_bc_t *self, size_t n_args, size_t n_kw, mp_obj_t *a
     tc_array_type = (const mp_obj_type_t *)MP_OBJ_TO_PTR(mp_load_attr(
         mp_import_name(MP_QSTR_array, mp_const_none, MP_OBJ_NEW_SMALL_INT(0)), MP_QSTR_array));
     mp_store_global(MP_QSTR_paint, MP_OBJ_FROM_PTR(&tc_paint_obj));
+    mp_store_global(MP_QSTR_paint_part, MP_OBJ_FROM_PTR(&tc_paint_part_obj));
+    mp_store_global(MP_QSTR_skip, MP_OBJ_FROM_PTR(&tc_skip_obj));
     mp_store_global(MP_QSTR_leak, MP_OBJ_FROM_PTR(&tc_leak_obj));
     mp_store_global(MP_QSTR_texels, MP_OBJ_FROM_PTR(&tc_texels_obj));
     mp_store_global(MP_QSTR_fill, MP_OBJ_FROM_PTR(&tc_fill_obj));

@@ -36,14 +36,21 @@ static void *tc_buf(mp_obj_t o, size_t want, int flags, const char *what) {
     return b.buf;
 }
 
-// paint(st, invk, ll, sign, off, n, chunks, chunk_bits, tab, log2t, phase, tw, hann, pos):
-// texel.gen.brush._paint_c
-static mp_obj_t tc_paint_fn(size_t n_args, const mp_obj_t *args) {
-    uint16_t *st = tc_buf(args[0], 16, MP_BUFFER_RW, "st");
-    const int32_t *invk = tc_buf(args[1], 4 * TB_K, MP_BUFFER_READ, "invk");
-    const int32_t *ll = tc_buf(args[2], 4 * TB_K, MP_BUFFER_READ, "ll");
-    int32_t sign = mp_obj_get_int(args[3]);
-    int32_t off = mp_obj_get_int(args[4]);
+// paint's and paint_part's first 14 arguments, checked
+typedef struct {
+    uint16_t *st;
+    const int32_t *invk, *ll;
+    int32_t sign, off, n, bits;
+    uint16_t *chunks[MAX_CHUNKS];
+    tb_tables t;
+} tc_paint_args;
+
+static void tc_paint_read(const mp_obj_t *args, tc_paint_args *a) {
+    a->st = tc_buf(args[0], 16, MP_BUFFER_RW, "st");
+    a->invk = tc_buf(args[1], 4 * TB_K, MP_BUFFER_READ, "invk");
+    a->ll = tc_buf(args[2], 4 * TB_K, MP_BUFFER_READ, "ll");
+    a->sign = mp_obj_get_int(args[3]);
+    a->off = mp_obj_get_int(args[4]);
     int32_t n = mp_obj_get_int(args[5]);
     size_t nch;
     mp_obj_t *items;
@@ -53,26 +60,68 @@ static mp_obj_t tc_paint_fn(size_t n_args, const mp_obj_t *args) {
         (size_t)((n + (1 << bits) - 1) >> bits) > nch) {
         mp_raise_ValueError(MP_ERROR_TEXT("paint: n, chunks and chunk_bits disagree"));
     }
-    uint16_t *chunks[MAX_CHUNKS];
     for (size_t i = 0; i < nch; i++) {
         int32_t left = n - ((int32_t)i << bits);
         int32_t need = left < (1 << bits) ? left : (1 << bits);
-        chunks[i] = tc_buf(items[i], 2 * (size_t)(need > 0 ? need : 0), MP_BUFFER_WRITE, "chunk");
+        a->chunks[i] = tc_buf(items[i], 2 * (size_t)(need > 0 ? need : 0), MP_BUFFER_WRITE,
+                              "chunk");
     }
-    tb_tables t = {
-        tc_buf(args[8], 4 * 512, MP_BUFFER_READ, "tab"),
-        tc_buf(args[9], 4 * 257, MP_BUFFER_READ, "log2t"),
-        tc_buf(args[10], 2 * 256, MP_BUFFER_READ, "phase"),
-        tc_buf(args[11], 2 * TB_WINDOW, MP_BUFFER_READ, "tw"),
-        tc_buf(args[12], 4 * TB_WINDOW, MP_BUFFER_READ, "hann"),
-        tc_buf(args[13], 4 * TB_WINDOW, MP_BUFFER_READ, "pos"),
-    };
+    a->n = n;
+    a->bits = bits;
+    a->t.exp_tab = tc_buf(args[8], 4 * 512, MP_BUFFER_READ, "tab");
+    a->t.log2t = tc_buf(args[9], 4 * 257, MP_BUFFER_READ, "log2t");
+    a->t.phase = tc_buf(args[10], 2 * 256, MP_BUFFER_READ, "phase");
+    a->t.tw = tc_buf(args[11], 2 * TB_WINDOW, MP_BUFFER_READ, "tw");
+    a->t.hann = tc_buf(args[12], 4 * TB_WINDOW, MP_BUFFER_READ, "hann");
+    a->t.pos = tc_buf(args[13], 4 * TB_WINDOW, MP_BUFFER_READ, "pos");
+}
+
+// paint(st, invk, ll, sign, off, n, chunks, chunk_bits, tab, log2t, phase, tw, hann, pos):
+// texel.gen.brush._paint_c
+static mp_obj_t tc_paint_fn(size_t n_args, const mp_obj_t *args) {
+    tc_paint_args a;
+    tc_paint_read(args, &a);
     int32_t *work = (int32_t *)m_malloc(4 * TB_WORK);  // on the heap, not the 8 KB stack
-    tb_paint(st, invk, ll, sign, off, &t, n, chunks, bits, work);
+    tb_paint(a.st, a.invk, a.ll, a.sign, a.off, &a.t, a.n, a.chunks, a.bits, work);
     TC_FREE(work, 4 * TB_WORK);
     return mp_const_none;
 }
 static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_paint_obj, 14, 14, tc_paint_fn);
+
+// paint_part(st, ..., pos (paint's 14), ring, w_from, w_to, lo_emit, work):
+// texel.gen.brush_parts.Painting - windows w_from .. w_to - 1 onto ring (int32,
+// WINDOW values) from the state st is at window w_from (brush_core.h
+// tb_paint_range); work: the caller's int32 array of TB_WORK values (kept
+// between the calls of one painting: no allocation here)
+static mp_obj_t tc_paint_part_fn(size_t n_args, const mp_obj_t *args) {
+    tc_paint_args a;
+    tc_paint_read(args, &a);
+    int32_t *ring = tc_buf(args[14], 4 * TB_WINDOW, MP_BUFFER_RW, "ring");
+    int32_t w_from = mp_obj_get_int(args[15]);
+    int32_t w_to = mp_obj_get_int(args[16]);
+    int32_t lo_emit = mp_obj_get_int(args[17]);
+    int32_t *work = tc_buf(args[18], 4 * TB_WORK, MP_BUFFER_RW, "work");
+    if (w_from < 0 || w_from > w_to || w_to > tb_windows(a.n) || (w_from | w_to) & 1 ||
+        lo_emit < 0) {
+        mp_raise_ValueError(MP_ERROR_TEXT("paint_part: windows or lo_emit out of range"));
+    }
+    tb_paint_range(a.st, a.invk, a.ll, a.sign, a.off, &a.t, a.n, a.chunks, a.bits, work, ring,
+                   w_from, w_to, lo_emit);
+    return mp_const_none;
+}
+static MP_DEFINE_CONST_FUN_OBJ_VAR_BETWEEN(tc_paint_part_obj, 19, 19, tc_paint_part_fn);
+
+// skip(st, steps): brush_parts.Painting - the generator's state steps on (tb_skip)
+static mp_obj_t tc_skip_fn(mp_obj_t st_in, mp_obj_t steps_in) {
+    uint16_t *st = tc_buf(st_in, 16, MP_BUFFER_RW, "st");
+    mp_int_t steps = mp_obj_get_int(steps_in);
+    if (steps < 0 || steps > (1 << 24)) {
+        mp_raise_ValueError(MP_ERROR_TEXT("skip: steps out of range"));
+    }
+    tb_skip(st, (int32_t)steps);
+    return mp_const_none;
+}
+static MP_DEFINE_CONST_FUN_OBJ_2(tc_skip_obj, tc_skip_fn);
 
 // leak(q, a, n, sweeps, c): texel.gen.brush.leakage's sweeps
 static mp_obj_t tc_leak_fn(size_t n_args, const mp_obj_t *args) {
