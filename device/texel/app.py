@@ -108,7 +108,7 @@ LEAN = compat.LEAN
 # again: loading .mpy. Not on CircuitPython, which would compile its 48 KB source
 # again at each such push (forgetting the generator there: docs/runtime.md "The
 # heap"); not measured there.
-_PAINTER = ("texel.gen.brush", "texel.gen.brush_viper")
+_PAINTER = ("texel.gen.brush", "texel.gen.brush_viper", "texel.gen.brush_parts")
 FORGET_PAINTER = LEAN and compat.IMPL != "circuitpython"
 
 
@@ -433,12 +433,13 @@ def _install(canonical, validate_us=0, checked=None):
     clock = getattr(rt.hw, "cost_ticks", rt.ticks)
     t0 = clock()
     silent = None
-    sc = _build_beside(rt, canonical, disp, idle, checked)
+    focus = _focus(rt)
+    sc = _build_beside(rt, canonical, disp, idle, checked, focus)
     if sc is None:
         # (outside the failed build's frame: MicroPython's collector scans the stack
         # conservatively, and a slot there still naming the playing scene kept its
         # 20-38 KB alive through _make_room - measured on the unix port)
-        sc = _make_room(rt, canonical, disp, idle, checked)
+        sc = _make_room(rt, canonical, disp, idle, checked, focus)
         silent = True
     t1 = clock()
     old = rt.refresh.swap(sc)
@@ -468,13 +469,45 @@ def _install(canonical, validate_us=0, checked=None):
 MAKE_ROOM = True
 
 
-def _build_beside(rt, canonical, disp, idle, checked):
+# A brush under the finger is painted from the finger outward (gen/brush_parts.py Painting,
+# where the C painter has paint_part): the push swaps its scene in once the part
+# around the finger is painted - what plays under the finger is the new brush then -
+# and paints the rest part by part after the answer (tidy(); push() before it returns),
+# each part on the side the finger is nearer: on the emulated Pico's firmware no sampled
+# refresh under a finger sweeping at up to 228 mm/s read an unpainted sample
+# (bench/brush_chase.py; docs/firmware.md). The unpainted rest plays amplitude 0
+# meanwhile. False: every map whole before the swap.
+PAINT_NEAR_FINGER = True
+
+
+def _focus(rt):
+    """scene.build's focus: _finger, or None (PAINT_NEAR_FINGER off)."""
+    return _finger if PAINT_NEAR_FINGER else None
+
+
+def _finger():
+    """The display position under the finger now, -1 lifted."""
+    return _rt.refresh.pos if _rt is not None else -1
+
+
+def _paint_rest():
+    """Finish what the playing scene's build left to paint (scene.build's
+    focus): after a push's answer (tidy()), before push() returns, and before
+    the next push builds (it may share the playing scene's maps)."""
+    sc = _rt.refresh.scene if _rt is not None else None
+    todo = getattr(sc, "painting", None)
+    while todo:
+        todo[0].finish()
+        todo.pop(0)
+
+
+def _build_beside(rt, canonical, disp, idle, checked, focus=None):
     """The new scene built beside the playing one (sharing what it can), or
     None when it does not fit there and MAKE_ROOM lets _make_room try."""
     room = MAKE_ROOM and rt.refresh.scene is not None     # a second try in more room
     try:
         return _scene.build(canonical, disp, idle_default=idle, checked=checked,
-                            reuse=rt.refresh.scene, words=not room)
+                            reuse=rt.refresh.scene, words=not room, focus=focus)
     except _scene.OutOfMemory:
         if not room:
             raise
@@ -488,11 +521,11 @@ def _drop_playing(rt):
     return rt.refresh.swap(None).source
 
 
-def _make_room(rt, canonical, disp, idle, checked):
+def _make_room(rt, canonical, disp, idle, checked, focus=None):
     source = _drop_playing(rt)
     gc.collect()
     try:
-        return _scene.build(canonical, disp, idle_default=idle, checked=checked)
+        return _scene.build(canonical, disp, idle_default=idle, checked=checked, focus=focus)
     except _scene.OutOfMemory as e:
         why = str(e)
     if LEAN and not _has(source, "brush"):
@@ -519,6 +552,7 @@ def push(scene):
     swap in between two refreshes. Any error raises ValueError and the
     current scene keeps playing untouched."""
     _push(scene)
+    _paint_rest()
     # no collection before the answer (tidy()); and no heap figure in it: gc.mem_free()
     # walks the whole allocation table, 9 ms on an RP2040 (status() measures it)
     return status(collect=False)
@@ -526,6 +560,7 @@ def push(scene):
 
 def _push(scene):
     rt = _running()
+    _paint_rest()
     compat.skip_holes()
     clock = getattr(rt.hw, "cost_ticks", rt.ticks)
     t0 = clock()
@@ -551,11 +586,13 @@ def pushed(scene):
 
 
 def tidy():
-    """Collect what the last push left (the old scene's buffers), if it
-    left anything, and forget what LEAN says (_forget_builders):
+    """Paint what the last push left to paint (_paint_rest), collect what
+    it left (the old scene's buffers), if it left anything, and forget what
+    LEAN says (_forget_builders):
     texel.wire.reply runs this after the host has its answer, and status()
     collects anyway. Returns True when it collected."""
     rt = _rt
+    _paint_rest()
     lean = LEAN and _forget_builders()
     if not lean and (rt is None or not rt.collect_due):
         return False

@@ -927,3 +927,61 @@ def test_native_sines_are_the_c_loop_and_render_float32_references(x64_module, e
     else:                                       # binary64 keeps the float path (the CSV's)
         assert info["int_path"] == "False", info
     assert all(why for _call, why in info["errors"]), info["errors"]
+
+
+PARTS_SCRIPT = r"""
+import json
+import texel.app as app
+from texel.gen import brush as B, brush_parts as BP
+from texel.runtime.upload import Chunks
+br = B.validate(%(brush)r)
+out = {"build": B._native_c().BUILD, "parts": []}
+for n, at in ((19200, 0), (19200, 19199), (19200, 7777), (1000, 500), (50, 10)):
+    ch = Chunks(n)
+    BP.Painting(br, 9, n, ch, at).finish()
+    whole = B.paint(br, 9, n, how="c")
+    out["parts"].append(b"".join(bytes(c) for c in ch.chunks) == bytes(whole))
+# a push of a full-screen brush with the finger at position 12000: the scene plays
+# (swapped in) with the samples there painted and the rest to come; tidy() paints it
+S = {"regions": [{"start_mm": 0, "end_mm": 101.76, "texture": {"kind": "brush",
+      "brush": %(brush)r, "seed": 4}}]}
+app.start("virtual")
+app._focus = lambda rt: (lambda: 12000)
+app._push(S)
+sc = app._rt.refresh.scene
+ch = sc._bufs[0]
+got = b"".join(bytes(c) for c in ch)
+whole = bytes(B.paint(br, 4, 19200, how="c"))
+out["pending"] = len(sc.painting)
+out["near"] = got[2 * 11800:2 * 12200] == whole[2 * 11800:2 * 12200]
+out["far_zero"] = got[:2 * 2000] == bytes(4000)
+app.tidy()
+out["after"] = [len(sc.painting), b"".join(bytes(c) for c in ch) == whole]
+# app.push() returns with all painted; the next push shares the painted map
+app._focus = lambda rt: (lambda: 100)
+app.push(S)
+sc = app._rt.refresh.scene
+out["push"] = [len(sc.painting), b"".join(bytes(c) for c in sc._bufs[0]) == whole]
+app._focus = lambda rt: (lambda: -1)
+app.push({"regions": [{"start_mm": 0, "end_mm": 101.76, "texture": {"kind": "brush",
+          "brush": %(brush)r, "seed": 5}}]})
+sc = app._rt.refresh.scene
+out["lifted"] = [len(sc.painting), b"".join(bytes(c) for c in sc._bufs[0]) ==
+                 bytes(B.paint(br, 5, 19200, how="c"))]
+print(json.dumps(out))
+"""
+
+
+def test_native_painting_in_parts_is_the_whole_painting(x64_module):
+    """brush_parts.Painting through the x64 native module (paint_part, skip) on the
+    unix port: the map paint() paints whole, from any finger position; a push
+    with the finger on the display swaps its scene in with the samples under
+    the finger painted and the rest painted by tidy() (texel.wire runs it after
+    the answer), push() returns with it all painted, and a lifted finger paints
+    it whole before the swap."""
+    info = mpy.run_json(PARTS_SCRIPT % {"brush": _BRUSH}, exe=toolchain.require_micropython(),
+                        heapsize="8M", timeout=300, extra_path=str(x64_module))
+    assert info["build"] == "native" and info["parts"] == [True] * 5, info
+    assert info["pending"] == 1 and info["near"] and info["far_zero"], info
+    assert info["after"] == [0, True] and info["push"] == [0, True], info
+    assert info["lifted"] == [0, True], info

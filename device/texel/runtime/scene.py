@@ -311,7 +311,7 @@ class OutOfMemory(ValueError):
 
 
 def build(canonical, display, engine=None, idle_default=0, max_bytes=None, checked=None,
-          reuse=None, words=True):
+          reuse=None, words=True, focus=None):
     """Allocate and render what the scene's regions use and return a Scene.
 
     canonical: a scene (validated again here: build never trusts its input,
@@ -327,6 +327,11 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
     half of a split screen re-renders only the right half. words False: an
     OutOfMemory says no more (the caller tries again in more room); else it
     says the heap's free bytes and largest block, measured by allocating.
+    focus: a function giving the display position under the finger (-1:
+    lifted), or None: a region under it that can paint in parts (its kind's
+    fill_near: a brush on a board with the C painter) paints around it first
+    and the Scene's `painting` holds the rest, which the caller finishes once
+    the scene plays, following the finger (texel.app._paint_rest).
     Touches no global state: the caller's current scene is unaffected."""
     if checked is not None and checked[0] is canonical:
         c, spans, positions, dx_um = checked
@@ -355,7 +360,7 @@ def build(canonical, display, engine=None, idle_default=0, max_bytes=None, check
                 break
     sc = None
     try:
-        sc = _make(c, spans, positions, dx_um, idle, engine, reuse)
+        sc = _make(c, spans, positions, dx_um, idle, engine, reuse, focus)
     except MemoryError:
         pass
     if sc is None:
@@ -393,7 +398,7 @@ def _shared(reuse, tex, n):
     return None
 
 
-def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
+def _make(c, spans, positions, dx_um, idle, engine, reuse=None, focus=None):
     regions = c["regions"]
     count = len(regions)
     table = array("i", [0] * (STRIDE * (count + 1)))
@@ -428,13 +433,29 @@ def _make(c, spans, positions, dx_um, idle, engine, reuse=None):
         if target is not None:
             todo.append((k, m, target))
     # 2. write into them: what paints into chunks first (a brush: the board got
-    # ~200 numbers, paints here, with the tables store() prepared), then the rest
+    # ~200 numbers, paints here, with the tables store() prepared), then the rest;
+    # a region under the finger that can paint in parts, around it (the rest later)
+    painting = None
+    at = None                               # the finger, read once a region could use it
     for first in (True, False):
         for k, m, target in todo:
             if (table[STRIDE * k + 2] == K_CHUNK) == first:
                 s, e = spans[k]
-                m.fill(regions[k]["texture"], e - s, target, engine, dx_um)
-    return Scene(table, tuple(bufs), idle, c, spans, positions, dx_um, tuple(plans))
+                tex = regions[k]["texture"]
+                # (a kind paints in parts into chunks only: no hasattr on the others)
+                near = first and focus is not None and hasattr(m, "fill_near")
+                if near and at is None:
+                    at = focus()
+                if near and s <= at < e:
+                    p = m.fill_near(tex, e - s, target, focus, s)
+                    if p is not None:
+                        painting = (painting or []) + [p]
+                else:
+                    m.fill(tex, e - s, target, engine, dx_um)
+    sc = Scene(table, tuple(bufs), idle, c, spans, positions, dx_um, tuple(plans))
+    if painting:
+        sc.painting = painting
+    return sc
 
 
 # status()'s word for how a region plays, by its table kind
@@ -444,6 +465,11 @@ _PLANNED = (K_PLAN, K_TILE, K_STRETCH)      # rows whose value indexes the plans
 
 class Scene:
     """A built scene. amp(pos) is the only thing the refresh calls."""
+
+    # what is left to paint (build's focus): a list of gen/brush_parts.py Painting on the
+    # scene that has any (a class attribute: as one more instance attribute it cost
+    # every build 63 us, median over bench/firmware.py's pushes on the emulated Pico)
+    painting = ()
 
     def __init__(self, table, bufs, idle, source, spans, positions, dx_um, plans=()):
         self._t = table                 # array('i'): (start, end, kind, value) per region + sentinel

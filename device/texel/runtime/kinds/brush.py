@@ -41,6 +41,21 @@ def fill(tex, n, ch, engine, dx_um):
     paint(tex["brush"], tex["seed"], len(ch), ch)
 
 
+def fill_near(tex, n, ch, where, offset):
+    """fill() with the samples around the finger painted first (where(): its
+    display position now, -1 lifted; offset: the region's first position):
+    the rest as a gen/brush_parts.py Painting to finish after the swap, following
+    the finger (app._paint_rest), or None where this board's C painter
+    cannot paint in parts (the whole painted here then)."""
+    from ...gen.brush import _native_c
+    c = _native_c()
+    if c is None or not hasattr(c, "paint_part"):
+        fill(tex, n, ch, None, 0)
+        return None
+    from ...gen.brush_parts import Painting
+    return Painting(tex["brush"], tex["seed"], len(ch), ch, where, offset=offset)
+
+
 def describe(tex):
     return {"seed": tex["seed"]}
 
