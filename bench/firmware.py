@@ -582,6 +582,12 @@ def summarize(res: dict[str, Any]) -> dict[str, Any]:
         "reference_answers_ms": cat("reference", "answer_us"),
         "brush_to_playing_ms": cat("brush", "playing_us"),
         "brush_answers_ms": cat("brush", "answer_us"),
+        # its scene plays once the part under the finger is painted (texel.app
+        # PAINT_NEAR_FINGER); the rest is painted after the answer (tidy_us, with the
+        # collection): the map whole by then
+        "brush_painted_ms": _ms(max(r["playing_us"] + (r.get("tidy_us") or 0) for r in ok
+                                    if r["category"] == "brush"))
+        if any(r["category"] == "brush" for r in ok) else None,
         "first_push_to_playing_ms": _ms(first.get("playing_us")),
         "first_push_answers_ms": _ms(first.get("answer_us")),
         "first_push_scene": first.get("name"),
@@ -619,7 +625,7 @@ ROWS = [  # (key, label, unit); the goal and its verdict from GOALS
     ("scene_answers_ms", "shipped + study scenes: board answers (max)", "ms"),
     ("regions16_to_playing_ms", "16 texel regions: -> playing (max)", "ms"),
     ("reference_to_playing_ms", "full-screen reference: -> playing (max of 9)", "ms"),
-    ("brush_to_playing_ms", "full-screen brush: -> playing (max)", "ms"),
+    ("brush_to_playing_ms", "full-screen brush: -> playing under the finger (max)", "ms"),
     ("first_push_answers_ms", "first push after boot: answers", "ms"),
     ("refresh_us", "one refresh incl. IRQ, worst region kind (stock: <= 10)", "us"),
     ("overruns", "refresh overruns while pushing", ""),
@@ -654,12 +660,14 @@ def _fmt(v: Any, unit: str) -> str:
 # the table's rows below the goals: (key, label, unit)
 EXTRA_ROWS = [("scene_to_playing_ms_median", "  scenes: -> playing, median", "ms"),
               ("scene_answers_ms_median", "  scenes: answers, median", "ms"),
-              ("tidy_after_answer_ms", "  after the answer: the old scene's collection, max",
-               "ms"),
+              ("tidy_after_answer_ms", "  after the answer: the old scene's collection (a brush:"
+               " its painting's rest too), max", "ms"),
               ("tidy_after_answer_ms_median", "  after the answer: the collection, median", "ms"),
               ("regions16_answers_ms", "  16 texel regions: answers (max)", "ms"),
               ("reference_answers_ms", "  full-screen reference: answers (max)", "ms"),
               ("brush_answers_ms", "  full-screen brush: answers (max)", "ms"),
+              ("brush_painted_ms", "  full-screen brush: painted whole (+ the collection), max",
+               "ms"),
               ("first_push_to_playing_ms", "  first push after boot: -> playing", "ms"),
               ("refresh_us_with_exception", "  refresh + 30 exception cycles not emulated", "us"),
               ("worst_refresh_body_us", "  refresh body worst (its own clock) while pushing",
