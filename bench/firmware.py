@@ -833,6 +833,23 @@ def literal_on_firmware(name: str, uf2: str, codes: list[str]) -> dict[str, Any]
     return res
 
 
+def stderr_say(m: str) -> None:
+    print(m, file=sys.stderr, flush=True)
+
+
+def bench_uf2(arg: str | None) -> Path:
+    """A bench's --uf2, or default_uf2 (its progress on stderr)."""
+    return Path(arg or default_uf2(lambda m: stderr_say(".. " + m)))
+
+
+def print_and_save(lines: list[str], res: dict[str, Any], json_path: str | None) -> int:
+    """A bench's figures printed, and written as JSON where --json says."""
+    print("\n".join(lines))
+    if json_path:
+        Path(json_path).write_text(json.dumps(res, indent=1) + "\n")
+    return 0
+
+
 def parts_main(argv: list[str] | None, prog: str, doc: str | None,
                measure: Callable[[str], dict[str, Any]],
                table: Callable[[dict[str, Any]], str]) -> int:

@@ -18,7 +18,6 @@ Figures only; never fails on them. ~1 wall minute (+ ~2 with --stock).
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -153,16 +152,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", metavar="PATH", help="also write the figures as JSON")
     a = ap.parse_args(argv)
     sys.path.insert(0, str(ROOT))
-    say = lambda m: print(m, file=sys.stderr, flush=True)      # noqa: E731
-    from bench.firmware import default_uf2
-    uf2 = Path(a.uf2 or default_uf2(lambda m: say(".. " + m)))
+    from bench.firmware import bench_uf2, print_and_save, stderr_say as say
+    uf2 = bench_uf2(a.uf2)
     res = {"firmware": on_firmware(uf2, say)}
     if a.stock:
         res["stock"] = on_stock(say)
-    print("\n".join(report(res)))
-    if a.json:
-        Path(a.json).write_text(json.dumps(res, indent=1) + "\n")
-    return 0
+    return print_and_save(report(res), res, a.json)
 
 
 if __name__ == "__main__":

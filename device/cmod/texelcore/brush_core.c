@@ -4,6 +4,18 @@
 
 #define LL_NONE (-(3 << 29))
 
+// xoshiro128++'s state update (gen/rng.py), for tb_draws and tb_skip
+#define TB_XO_STEP(a, b, c, d)                  \
+    do {                                        \
+        uint32_t u_ = (b) << 9;                 \
+        (c) ^= (a);                             \
+        (d) ^= (b);                             \
+        (b) ^= (c);                             \
+        (a) ^= (d);                             \
+        (c) ^= u_;                              \
+        (d) = ((d) << 11) | ((d) >> 21);        \
+    } while (0)
+
 // brush.log2_q24 in two halves: the caller finds v's top bit n and shifts v
 // up to M = v << (31 - n) (bit 31 set; brush.log2_q24's m = v << (29 - n) is
 // M >> 2, exactly: v < 2^30), then log2n looks LOG2 up. The top bit by
@@ -96,13 +108,7 @@ void tb_draws(uint16_t st[8], const int32_t *invk, const int32_t *ll, int32_t si
         // xoshiro128++ (gen/rng.py): rotl(a + d, 7) + a
         uint32_t x = a + d;
         x = ((x << 7) | (x >> 25)) + a;
-        uint32_t u = b << 9;
-        c ^= a;
-        d ^= b;
-        b ^= c;
-        a ^= d;
-        c ^= u;
-        d = (d << 11) | (d >> 21);
+        TB_XO_STEP(a, b, c, d);
         ph[k] = (int32_t)(x & 0xFF);
         mag[k] = (int32_t)x;
     }
@@ -278,13 +284,7 @@ void tb_skip(uint16_t st[8], int32_t steps) {
     uint32_t a = ((uint32_t)st[0] << 16) | st[1], b = ((uint32_t)st[2] << 16) | st[3];
     uint32_t c = ((uint32_t)st[4] << 16) | st[5], d = ((uint32_t)st[6] << 16) | st[7];
     for (int32_t k = 0; k < steps; k++) {
-        uint32_t u = b << 9;
-        c ^= a;
-        d ^= b;
-        b ^= c;
-        a ^= d;
-        c ^= u;
-        d = (d << 11) | (d >> 21);
+        TB_XO_STEP(a, b, c, d);
     }
     st[0] = a >> 16; st[1] = a & 0xFFFF; st[2] = b >> 16; st[3] = b & 0xFFFF;
     st[4] = c >> 16; st[5] = c & 0xFFFF; st[6] = d >> 16; st[7] = d & 0xFFFF;
