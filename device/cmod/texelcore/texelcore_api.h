@@ -102,7 +102,7 @@ static mp_obj_t tc_paint_part_fn(size_t n_args, const mp_obj_t *args) {
     int32_t lo_emit = mp_obj_get_int(args[17]);
     int32_t *work = tc_buf(args[18], 4 * TB_WORK, MP_BUFFER_RW, "work");
     if (w_from < 0 || w_from > w_to || w_to > tb_windows(a.n) || (w_from | w_to) & 1 ||
-        lo_emit < 0) {
+        lo_emit < 0 || lo_emit > a.n) {         // (lo_emit - start must not overflow)
         mp_raise_ValueError(MP_ERROR_TEXT("paint_part: windows or lo_emit out of range"));
     }
     tb_paint_range(a.st, a.invk, a.ll, a.sign, a.off, &a.t, a.n, a.chunks, a.bits, work, ring,
