@@ -9,11 +9,9 @@ from __future__ import annotations
 
 from array import array
 
-import numpy as np
 import pytest
 
 from texel.gen import brush as B, brush_parts as P
-from texel.gen.rng import Rng
 from texel.runtime.upload import Chunks
 
 from support import core_c
@@ -131,8 +129,9 @@ def test_the_parts_follow_a_moving_finger(c_painter, speed):
 
 def test_an_interrupted_finish_paints_it_all_again(c_painter, monkeypatch):
     """A Ctrl-C between two parts (any exception in finish()): the next
-    finish() paints the whole map again, from the generator's start - not
-    the parts left, whose states the stopped part may have stepped on."""
+    finish() paints the whole map again, from the generator's start, in the
+    work array it has - not the parts left, whose states the stopped part may
+    have stepped on. A finish() after that does nothing."""
     b = B.validate(brushes()[1])
     n = 6000
     ref = whole(b, 11, n)
@@ -151,13 +150,13 @@ def test_an_interrupted_finish_paints_it_all_again(c_painter, monkeypatch):
         p.finish()
     assert not p.done
     monkeypatch.setattr(c_painter, "paint_part", real)
-    whole_c = []
-    monkeypatch.setattr(B, "paint", lambda *a: whole_c.append(a) or
-                        B._paint_numpy(np, Rng(a[1]), B.compensated(a[0]), B.table(), a[2],
-                                       a[3]))
+    monkeypatch.setattr(B, "paint", lambda *a: pytest.fail("paint() allocates its own work"))
+    c_painter.calls.clear()
     p.finish()
-    assert len(whole_c) == 1 and whole_c[0][4] == "c"
+    assert c_painter.calls == [(0, B.windows(n), 0)]
     assert [v for c in ch.chunks for v in c] == ref and p.done
+    p.finish()
+    assert c_painter.calls == [(0, B.windows(n), 0)]
 
 
 def test_bad_parts_are_refused(c_painter):
@@ -188,3 +187,15 @@ def test_the_first_part_leads_a_moving_finger(c_painter, monkeypatch):
     centre = 10140 + 140 * P.LEAD_US // 7000
     assert w_to - w_from == P.FIRST_WINDOWS and abs(lo + 504 - centre) <= 96, (lo, centre)
     p.finish()
+
+
+@pytest.mark.parametrize("reads,times", [((-1, 10140), (0, 7000)),     # touched down meanwhile
+                                         ((10000, 10140), (0, 500))])  # readings too close
+def test_no_lead_without_two_readings_far_enough_apart(c_painter, monkeypatch, reads, times):
+    clock = iter(times)
+    monkeypatch.setattr(P, "ticks_us", lambda: next(clock))
+    it = iter(reads)
+    b = B.validate(brushes()[0])
+    P.Painting(b, 1, 19200, Chunks(19200), lambda: next(it, 10140))
+    w_from, w_to, lo = c_painter.calls[0]
+    assert abs(lo + 504 - 10140) <= 96, lo

@@ -941,33 +941,71 @@ for n, at in ((19200, 0), (19200, 19199), (19200, 7777), (1000, 500), (50, 10)):
     BP.Painting(br, 9, n, ch, at).finish()
     whole = B.paint(br, 9, n, how="c")
     out["parts"].append(b"".join(bytes(c) for c in ch.chunks) == bytes(whole))
-# a push of a full-screen brush with the finger at position 12000: the scene plays
-# (swapped in) with the samples there painted and the rest to come; tidy() paints it
+# a push of a full-screen brush with the (virtual board's scripted) finger at 63.6 mm,
+# position 12000: the scene plays (swapped in) with the samples there painted and the
+# rest to come; tidy() paints it
+import texel.wire as W
+from array import array
 S = {"regions": [{"start_mm": 0, "end_mm": 101.76, "texture": {"kind": "brush",
       "brush": %(brush)r, "seed": 4}}]}
 app.start("virtual")
-app._focus = lambda rt: (lambda: 12000)
+W.finger([(0, 63.6)])
+W.advance(200)
+out["pos"] = app._rt.refresh.pos
 app._push(S)
 sc = app._rt.refresh.scene
 ch = sc._bufs[0]
 got = b"".join(bytes(c) for c in ch)
 whole = bytes(B.paint(br, 4, 19200, how="c"))
 out["pending"] = len(sc.painting)
-out["near"] = got[2 * 11800:2 * 12200] == whole[2 * 11800:2 * 12200]
+out["near"] = got[2 * 11900:2 * 12100] == whole[2 * 11900:2 * 12100]
 out["far_zero"] = got[:2 * 2000] == bytes(4000)
 app.tidy()
 out["after"] = [len(sc.painting), b"".join(bytes(c) for c in ch) == whole]
-# app.push() returns with all painted; the next push shares the painted map
-app._focus = lambda rt: (lambda: 100)
-app.push(S)
+# app.push() of another brush returns with it all painted in parts
+made = []
+_init = BP.Painting.__init__
+def init(self, *a, **k):
+    made.append(1)
+    _init(self, *a, **k)
+BP.Painting.__init__ = init
+W.finger([(0, 0.53)])
+W.advance(200)
+S6 = {"regions": [{"start_mm": 0, "end_mm": 101.76, "texture": {"kind": "brush",
+      "brush": %(brush)r, "seed": 6}}]}
+app.push(S6)
 sc = app._rt.refresh.scene
-out["push"] = [len(sc.painting), b"".join(bytes(c) for c in sc._bufs[0]) == whole]
-app._focus = lambda rt: (lambda: -1)
+out["push"] = [len(made), len(sc.painting), b"".join(bytes(c) for c in sc._bufs[0]) ==
+               bytes(B.paint(br, 6, 19200, how="c"))]
+W.finger([(0, None)])
+W.advance(200)
 app.push({"regions": [{"start_mm": 0, "end_mm": 101.76, "texture": {"kind": "brush",
           "brush": %(brush)r, "seed": 5}}]})
 sc = app._rt.refresh.scene
-out["lifted"] = [len(sc.painting), b"".join(bytes(c) for c in sc._bufs[0]) ==
+out["lifted"] = [len(made), len(sc.painting), b"".join(bytes(c) for c in sc._bufs[0]) ==
                  bytes(B.paint(br, 5, 19200, how="c"))]
+# paint_part and skip refuse what would write out of their buffers
+c = B._native_c()
+invk, ll, sign, off, tab, t = BP.comp_tables(br)
+u = array("H", bytes(2000))
+ring = array("i", bytes(4 * 192))
+work = array("i", bytes(4 * (4 * 97 + 3 * 192)))
+from texel.gen.rng import Rng
+st = B.state(Rng(1))
+def part(w_from, w_to, lo, r=ring, wk=work):
+    c.paint_part(st, invk, ll, sign, off, 1000, (u,), 30, tab, t[4], t[1], t[2], t[3], t[5],
+                 r, w_from, w_to, lo, wk)
+CALLS = ("part(1, 4, 0)", "part(0, 30, 0)", "part(4, 2, 0)", "part(-2, 2, 0)",
+         "part(0, 2, 1001)", "part(0, 2, 2147483647)", "part(0, 2, -1)",
+         "part(0, 2, 0, r=array('i', [0] * 100))", "part(0, 2, 0, wk=array('i', [0] * 100))",
+         "c.skip(st, -1)", "c.skip(bytearray(4), 1)")
+out["refused"] = []
+for call in CALLS:
+    try:
+        eval(call)
+        out["refused"].append([call, None])
+    except ValueError as e:
+        out["refused"].append([call, str(e)])
 print(json.dumps(out))
 """
 
@@ -978,10 +1016,13 @@ def test_native_painting_in_parts_is_the_whole_painting(x64_module):
     with the finger on the display swaps its scene in with the samples under
     the finger painted and the rest painted by tidy() (texel.wire runs it after
     the answer), push() returns with it all painted, and a lifted finger paints
-    it whole before the swap."""
+    it whole before the swap - the finger the virtual board's, scripted; and
+    paint_part and skip refuse windows, lo_emit and buffers out of range."""
     info = mpy.run_json(PARTS_SCRIPT % {"brush": _BRUSH}, exe=toolchain.require_micropython(),
                         heapsize="8M", timeout=300, extra_path=str(x64_module))
     assert info["build"] == "native" and info["parts"] == [True] * 5, info
+    assert abs(info["pos"] - 12000) <= 20, info["pos"]
     assert info["pending"] == 1 and info["near"] and info["far_zero"], info
-    assert info["after"] == [0, True] and info["push"] == [0, True], info
-    assert info["lifted"] == [0, True], info
+    assert info["after"] == [0, True] and info["push"] == [1, 0, True], info
+    assert info["lifted"] == [1, 0, True], info
+    assert [why for _, why in info["refused"] if why is None] == [], info["refused"]

@@ -14,6 +14,7 @@ from ..compat import ticks_us, ticks_diff
 FIRST_WINDOWS = 24          # the first part: 24 windows, 1,008 samples (5.3 mm of the Pico's
                             # display) centred where the finger will be (LEAD_US)
 PART_WINDOWS = 8            # each later part: 8 windows (~3.5 ms on an RP2040's firmware)
+LEAD_MIN_US = 2000          # no lead from readings closer than this
 LEAD_US = 20000             # the first part is centred where the finger, moving as it moved
                             # while the painting's setup ran, will be this much later: the
                             # 20-23 ms from that reading to the first later part on the
@@ -53,7 +54,7 @@ class Painting:
         self._where, self._offset = (at, offset) if callable(at) else (None, 0)
         self._at = at if self._where is None else 0
         self.n = n
-        p1, t1 = self.at(), ticks_us()
+        p1, t1 = self._raw(), ticks_us()
         chunks = getattr(out, "chunks", None)
         self._args = ([chunks if chunks is not None else (out,), B._chunk_bits(chunks)],
                       comp_tables(brush))
@@ -63,10 +64,13 @@ class Painting:
         self.work = B.array_i(4 * B.K + 3 * B.WINDOW)
         nw = B.windows(n)
         self.nw = nw
+        p2 = self._raw()
         at = self.at()
         dt = ticks_diff(ticks_us(), t1)
-        if dt > 0 and at != p1:
-            at += (at - p1) * LEAD_US // dt
+        # (a finger on the display at both readings, and a setup long enough that the
+        # sensor's jitter is not taken for a speed: ~7 ms on an RP2040)
+        if p1 >= 0 and p2 >= 0 and dt >= LEAD_MIN_US and p2 != p1:
+            at += (p2 - p1) * LEAD_US // dt
             at = 0 if at < 0 else (n - 1 if at >= n else at)
         # the first part's samples centred there
         a0 = (at - (first * B.HOP - 3 * B.HOP) // 2) // B.HOP
@@ -76,7 +80,7 @@ class Painting:
         # from a0 where that is more (4 of them the samples before it: a part
         # starting afresh writes from its 4th window), so that far from the
         # finger the parts grow and their 4 windows' overhead stays small
-        # (~30 windows over a full screen, against ~130 in parts of 16)
+        # (at most 40 windows over a full screen: test_paint_parts.py)
         starts = []
         a = a0
         while a > 0:
@@ -97,6 +101,13 @@ class Painting:
         self._paint(st, self.ring, a0, b0, B.HOP * a0)
         self.right = b0             # the next right part's first window
         self.lo = a0                # the left parts have painted from window lo on
+
+    def _raw(self):
+        """Where the finger is now in the region's samples, -1 lifted or unknown."""
+        if self._where is None:
+            return -1
+        p = self._where()
+        return p - self._offset if p >= 0 else -1
 
     def at(self):
         """The sample under the finger in the region, clamped to it (where it
@@ -123,10 +134,13 @@ class Painting:
         """Paint the next part; False once nothing is left."""
         if self.done:
             return False
-        # the side whose painted edge is nearer the finger now (one the finger is
-        # already past: nearer than any)
-        w = self.at() // B.HOP
-        if self.left and (self.right >= self.nw or w - self.lo < self.right - w):
+        # the side whose painted edge is nearer the finger now, in samples (one the
+        # finger is already past: nearer than any); the right edge is 3 windows short
+        # of the next right part's first window, whose samples it writes
+        at = self.at()
+        w = at // B.HOP
+        if self.left and (self.right >= self.nw or
+                          at - B.HOP * self.lo < B.HOP * self.right - 3 * B.HOP - at):
             a, st = self.left.pop(0)
             ring = self.lring
             B._native_c().zero(ring)              # a fresh start (memset)
@@ -146,9 +160,15 @@ class Painting:
     def finish(self):
         """Paint what is left. If a finish() before this one was stopped (an
         exception - Ctrl-C - between two statements: a part may be half
-        written, a state stepped on), paint the whole map again instead."""
+        written, a state stepped on), paint the whole map again instead, from
+        the generator's start, in the work array it has (nothing allocated but
+        the state). Once finished, nothing more."""
+        if self.out is None:
+            return
         if self.busy:
-            B.paint(self.brush, self.seed, self.n, self.out, "c")
+            ring = self.ring
+            B._native_c().zero(ring)
+            self._paint(B.state(Rng(self.seed)), ring, 0, self.nw, 0)
         else:
             self.busy = True
             while self.step():
