@@ -36,17 +36,20 @@ _tpf_A.stream(0)
 m = _tpf_A._rt.refresh.scene._bufs[0]
 r0 = _tpf_W.replied_us
 tu = _tpf_W.tidy_us
-on = bad = during = 0
+on = bad = during = bad_during = 0
 for t, p, a in tel:
     if p < 0 or a == %d:
         continue
     on += 1
-    d = time.ticks_diff(t, r0)
-    during += 0 <= d <= tu
-    bad += m[p >> 9][p & 511] != a
+    # from the swap (the first sample on the brush) to the painting's end
+    d = time.ticks_diff(t, r0) <= tu
+    miss = m[p >> 9][p & 511] != a
+    during += d
+    bad += miss
+    bad_during += d and miss
 sp = [abs(tel[i + 1][1] - tel[i][1]) * 1000000 // max(1, time.ticks_diff(tel[i + 1][0], tel[i][0]))
       for i in range(len(tel) - 1) if tel[i][1] >= 0 and tel[i + 1][1] >= 0]
-print(repr((len(tel), lost, on, during, bad, max(sp) if sp else 0)))
+print(repr((len(tel), lost, on, during, bad, bad_during, max(sp) if sp else 0)))
 ''' % CONST_U16
 
 
@@ -76,18 +79,19 @@ def one_speed(uf2: Path, period_s: float, pushes: int, say) -> dict[str, Any]:
                 F._request(b, const)
                 b.link.exec("_tpf_A.stream(%d)\n_tpf_A.telemetry()" % RATE_HZ, timeout=60)
                 r = F._request(b, F.brush_scene(display, k + 1))
-                n, lost, on, during, bad, speed = ast.literal_eval(
+                n, lost, on, during, bad, bad_during, speed = ast.literal_eval(
                     b.link.exec(CHECK, timeout=60).strip().splitlines()[-1])
                 row = {"seed": k + 1, "refused": r.get("refused"),
                        "playing_ms": (r.get("playing_us") or 0) / 1e3,
                        "after_answer_ms": (r.get("tidy_us") or 0) / 1e3,
                        "samples": n, "lost": lost, "on_brush": on, "during_painting": during,
-                       "unpainted": bad, "finger_samples_per_s": speed}
+                       "unpainted": bad, "unpainted_during_painting": bad_during,
+                       "finger_samples_per_s": speed}
                 say(".. period %g s, brush %d: %s" % (period_s, k + 1, row))
                 rows.append(row)
     ok = [r for r in rows if not r["refused"]]
-    speed = max((r["finger_samples_per_s"] for r in ok), default=0)
-    return {"period_s": period_s, "finger_mm_per_s": speed * display["dx_um"] / 1000.0,
+    mm = [r["finger_samples_per_s"] * display["dx_um"] / 1000.0 for r in ok]
+    return {"period_s": period_s, "finger_mm_per_s": [min(mm, default=0), max(mm, default=0)],
             "playing_ms_median": statistics.median(r["playing_ms"] for r in ok) if ok else None,
             "playing_ms_max": max((r["playing_ms"] for r in ok), default=None),
             "after_answer_ms_median": (statistics.median(r["after_answer_ms"] for r in ok)
@@ -95,6 +99,7 @@ def one_speed(uf2: Path, period_s: float, pushes: int, say) -> dict[str, Any]:
             "on_brush": sum(r["on_brush"] for r in ok),
             "during_painting": sum(r["during_painting"] for r in ok),
             "unpainted": sum(r["unpainted"] for r in ok),
+            "unpainted_during_painting": sum(r["unpainted_during_painting"] for r in ok),
             "lost": sum(r["lost"] for r in ok), "refused": len(rows) - len(ok), "rows": rows}
 
 
@@ -103,17 +108,20 @@ def report(res: dict[str, Any]) -> list[str]:
            "texelpad firmware, %s" % res["uf2"],
            "%d full-screen brush pushes a speed; telemetry: one refresh in %d ms"
            % (res["pushes"], 1000 // RATE_HZ), "",
-           "%-9s %10s %22s %18s %26s %10s" % ("sweep", "finger", "-> playing med/max",
+           "%-9s %15s %22s %18s %26s %20s" % ("sweep", "finger", "-> playing med/max",
                                               "after the answer", "sampled on brush (painting)",
-                                              "unpainted")]
+                                              "unpainted (painting)")]
     for s in res["speeds"]:
-        out.append("%-9s %7.0f mm/s %11.1f / %5.1f ms %12.1f ms %16d (%4d) %10d" % (
-            "%g s" % s["period_s"], s["finger_mm_per_s"], s["playing_ms_median"] or 0,
-            s["playing_ms_max"] or 0, s["after_answer_ms_median"] or 0, s["on_brush"],
-            s["during_painting"], s["unpainted"]))
-    out += ["", "finger: the fastest move between two samples (telemetry); after the answer: "
-            "the rest of the painting and the collection (texel.wire.tidy_us); unpainted: "
-            "sampled refreshes whose amplitude is not the finished map's at their position"]
+        out.append("%-9s %4.0f-%4.0f mm/s %11.1f / %5.1f ms %12.1f ms %16d (%4d) %13d (%4d)" % (
+            "%g s" % s["period_s"], s["finger_mm_per_s"][0], s["finger_mm_per_s"][1],
+            s["playing_ms_median"] or 0, s["playing_ms_max"] or 0,
+            s["after_answer_ms_median"] or 0, s["on_brush"], s["during_painting"],
+            s["unpainted"], s["unpainted_during_painting"]))
+    out += ["", "finger: the fastest move between two samples (telemetry), the least and the "
+            "most over the pushes; after the answer: the rest of the painting and the "
+            "collection (texel.wire.tidy_us); (painting): from the swap to the painting's end; "
+            "unpainted: sampled refreshes whose amplitude is not the finished map's at their "
+            "position"]
     return out
 
 

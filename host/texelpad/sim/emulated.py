@@ -259,8 +259,8 @@ class EmulatedPico:
 FINGERS = {
     "lifted": "(ch, t) => 0",
     "rest": "(ch, t) => ch === 0 ? 2031 : 0",               # mid-strip, still
-    # a swipe from end to end and back every 2 s (~100 mm/s on the board file 'pico': 107 at
-    # most between two telemetry samples, bench/brush_chase.py; it said 50.9), as the study's
+    # a swipe from end to end and back every 2 s (~100 mm/s on the board file 'pico': 103-115
+    # between two telemetry samples, bench/brush_chase.py; it said 50.9), as the study's
     # participants explored the plate
     "sweep": "(ch, t) => ch === 0 ? Math.round(125 + 3812 * (1 - Math.abs((t % 2) - 1))) : 0",
 }
