@@ -433,7 +433,7 @@ def _install(canonical, validate_us=0, checked=None):
     clock = getattr(rt.hw, "cost_ticks", rt.ticks)
     t0 = clock()
     silent = None
-    focus = _focus(rt)
+    focus = _finger if PAINT_NEAR_FINGER else None       # (scene.build's focus)
     sc = _build_beside(rt, canonical, disp, idle, checked, focus)
     if sc is None:
         # (outside the failed build's frame: MicroPython's collector scans the stack
@@ -478,11 +478,6 @@ MAKE_ROOM = True
 # (bench/brush_chase.py; docs/firmware.md). The unpainted rest plays amplitude 0
 # meanwhile. False: every map whole before the swap.
 PAINT_NEAR_FINGER = True
-
-
-def _focus(rt):
-    """scene.build's focus: _finger, or None (PAINT_NEAR_FINGER off)."""
-    return _finger if PAINT_NEAR_FINGER else None
 
 
 def _finger():

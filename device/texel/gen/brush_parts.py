@@ -69,7 +69,8 @@ class Painting:
         dt = ticks_diff(ticks_us(), t1)
         # (a finger on the display at both readings, and a setup long enough that the
         # sensor's jitter is not taken for a speed: ~7 ms on an RP2040)
-        if p1 >= 0 and p2 >= 0 and dt >= LEAD_MIN_US and p2 != p1:
+        if p1 is not None and p2 is not None and p1 >= 0 and p2 >= 0 and \
+                dt >= LEAD_MIN_US and p2 != p1:
             at += (p2 - p1) * LEAD_US // dt
             at = 0 if at < 0 else (n - 1 if at >= n else at)
         # the first part's samples centred there
@@ -103,20 +104,19 @@ class Painting:
         self.lo = a0                # the left parts have painted from window lo on
 
     def _raw(self):
-        """Where the finger is now in the region's samples, -1 lifted or unknown."""
+        """Where the finger is now in the region's samples (beyond its ends
+        too), None while lifted or where `at` was a sample."""
         if self._where is None:
-            return -1
+            return None
         p = self._where()
-        return p - self._offset if p >= 0 else -1
+        return p - self._offset if p >= 0 else None
 
     def at(self):
         """The sample under the finger in the region, clamped to it (where it
         was last, while the finger is lifted)."""
-        at = self._at
-        if self._where is not None:
-            p = self._where()
-            if p >= 0:
-                at = p - self._offset
+        at = self._raw()
+        if at is None:
+            at = self._at
         at = 0 if at < 0 else (self.n - 1 if at >= self.n else at)
         self._at = at
         return at
